@@ -1,0 +1,1 @@
+//! Exact unsigned distance from voxel centres to the mesh surface.

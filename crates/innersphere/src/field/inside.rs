@@ -1,0 +1,1 @@
+//! Deciding which voxel centres lie inside the mesh.

@@ -1,0 +1,39 @@
+//! # innersphere
+//!
+//! Collision detection, proximity and penetration volume between highly complex rigid
+//! 3D models at haptic rates (1 kHz and more), built on **Inner Sphere Trees** (IST).
+//!
+//! The pipeline, one module per stage:
+//!
+//! ```text
+//! mesh/       load STL/OBJ/PLY/OFF (+ .gz), weld, defect report, triangle BVH, winding number
+//! field/      cubic voxel grid, robust inside test, exact distance to the surface
+//! packing/    greedy packing of non-overlapping inner spheres
+//! hierarchy/  batch neural gas clustering, minimal enclosing spheres, flat layout
+//! tree/       the finished tree (structure of arrays) and its file format
+//! query/      poses, per-pair state and one file per query kind
+//! exact/      exact mesh-mesh distance (the accuracy reference)
+//! motion/     motion files and generated motions
+//! eval/       replay and benchmarks
+//! ```
+//!
+//! [`build::build_tree`] runs the whole build; [`tree::SphereTree`] is what queries use.
+
+pub mod build;
+pub mod error;
+pub mod eval;
+pub mod exact;
+pub mod field;
+pub mod hierarchy;
+pub mod mesh;
+pub mod motion;
+pub mod packing;
+pub mod progress;
+pub mod query;
+pub mod shapes;
+pub mod tree;
+
+pub use error::{Error, Result};
+pub use glam;
+pub use mesh::Mesh;
+pub use tree::SphereTree;

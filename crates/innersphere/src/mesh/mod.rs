@@ -1,0 +1,134 @@
+//! Triangle meshes: loading ([`io`]), welding, the defect report ([`report`]), the triangle
+//! BVH ([`bvh`]) and the generalized winding number ([`winding`]).
+
+pub mod bvh;
+pub mod io;
+pub mod report;
+pub mod winding;
+
+use glam::DVec3;
+
+
+
+/// An indexed triangle mesh in f64, with duplicate vertices welded.
+///
+/// Triangles are counter-clockwise seen from outside when the mesh is outward facing.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Mesh {
+    /// Vertex positions.
+    pub vertices: Vec<DVec3>,
+    /// Vertex indices of each triangle.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    /// The three corners of triangle `t`.
+    #[inline]
+    pub fn triangle(&self, t: usize) -> [DVec3; 3] {
+        let [a, b, c] = self.triangles[t];
+        [
+            self.vertices[a as usize],
+            self.vertices[b as usize],
+            self.vertices[c as usize],
+        ]
+    }
+
+    /// Axis-aligned bounding box `(min, max)` of the vertices used by triangles.
+    pub fn bbox(&self) -> (DVec3, DVec3) {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for t in &self.triangles {
+            for &i in t {
+                let v = self.vertices[i as usize];
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Signed enclosed volume (divergence theorem); positive when normals point outward.
+    pub fn signed_volume(&self) -> f64 {
+        let mut vol = 0.0;
+        for t in 0..self.triangles.len() {
+            let [a, b, c] = self.triangle(t);
+            vol += a.dot(b.cross(c));
+        }
+        vol / 6.0
+    }
+
+    /// Centre of mass of the enclosed solid (uniform density); falls back to the vertex
+    /// centroid when the volume is (nearly) zero.
+    pub fn center_of_mass(&self) -> DVec3 {
+        let mut vol = 0.0;
+        let mut acc = DVec3::ZERO;
+        for t in 0..self.triangles.len() {
+            let [a, b, c] = self.triangle(t);
+            let v = a.dot(b.cross(c));
+            vol += v;
+            acc += v * (a + b + c);
+        }
+        if vol.abs() > 1e-300 {
+            acc / (4.0 * vol)
+        } else if self.vertices.is_empty() {
+            DVec3::ZERO
+        } else {
+            self.vertices.iter().copied().sum::<DVec3>() / self.vertices.len() as f64
+        }
+    }
+
+    /// Reverses the orientation of every triangle (used for inward-facing meshes).
+    pub fn flip(&mut self) {
+        for t in &mut self.triangles {
+            t.swap(1, 2);
+        }
+    }
+
+    /// Builds a mesh from a triangle soup, welding vertices with identical coordinates.
+    pub fn from_soup(soup: &[[DVec3; 3]]) -> Mesh {
+        let mut map: std::collections::HashMap<[u64; 3], u32> =
+            std::collections::HashMap::with_capacity(soup.len() * 3 / 2);
+        let mut vertices = Vec::new();
+        let mut triangles = Vec::with_capacity(soup.len());
+        for tri in soup {
+            let mut idx = [0u32; 3];
+            for (k, v) in tri.iter().enumerate() {
+                // +0.0 so that -0.0 and 0.0 weld together.
+                let key = [
+                    (v.x + 0.0).to_bits(),
+                    (v.y + 0.0).to_bits(),
+                    (v.z + 0.0).to_bits(),
+                ];
+                idx[k] = *map.entry(key).or_insert_with(|| {
+                    vertices.push(*v);
+                    (vertices.len() - 1) as u32
+                });
+            }
+            triangles.push(idx);
+        }
+        Mesh {
+            vertices,
+            triangles,
+        }
+    }
+
+    /// Checks that the mesh can be used at all: not empty, finite coordinates, valid indices.
+    pub fn validate(&self) -> crate::Result<()> {
+        if self.triangles.is_empty() {
+            return Err(crate::Error::InvalidMesh("the mesh has no triangles".into()));
+        }
+        if let Some(i) = self.vertices.iter().position(|v| !v.is_finite()) {
+            return Err(crate::Error::InvalidMesh(format!(
+                "vertex {i} has a non-finite coordinate ({:?})",
+                self.vertices[i]
+            )));
+        }
+        let n = self.vertices.len() as u32;
+        if let Some(t) = self.triangles.iter().position(|t| t.iter().any(|&i| i >= n)) {
+            return Err(crate::Error::InvalidMesh(format!(
+                "triangle {t} refers to a vertex that does not exist"
+            )));
+        }
+        Ok(())
+    }
+}

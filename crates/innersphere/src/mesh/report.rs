@@ -1,0 +1,1 @@
+//! The defect report of a mesh (what `ist inspect` prints).

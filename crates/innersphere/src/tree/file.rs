@@ -1,0 +1,1 @@
+//! The tree file format.

@@ -1,0 +1,168 @@
+//! The finished Inner Sphere Tree: flat f32 arrays ready for traversal, and its file format
+//! ([`file`]).
+
+pub mod file;
+
+/// Build parameters and facts about the source mesh, kept with the tree.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TreeMeta {
+    /// Maximum children per inner node.
+    pub fanout: u32,
+    /// Voxel edge length used for the packing (model units).
+    pub voxel_size: f64,
+    /// Smallest inner-sphere radius kept (model units).
+    pub min_radius: f64,
+    /// Enclosed volume of the source mesh.
+    pub mesh_volume: f64,
+    /// Centre of mass of the source mesh (uniform density), for torques.
+    pub center_of_mass: [f64; 3],
+    /// Bounding box of the source mesh.
+    pub bbox_min: [f64; 3],
+    /// Bounding box of the source mesh.
+    pub bbox_max: [f64; 3],
+    /// Total inner-sphere volume / mesh volume.
+    pub coverage: f64,
+    /// True when the source mesh was closed (exact inside test), false when the generalized
+    /// winding number decided inside/outside.
+    pub mesh_closed: bool,
+}
+
+/// An Inner Sphere Tree in structure-of-arrays layout.
+///
+/// Node 0 is the root. The children of node `n` are the contiguous nodes
+/// `first_child[n] .. first_child[n] + child_count[n]`; a node with no children is a leaf and
+/// its sphere is one inner sphere of the packing (every leaf holds exactly one). Nodes are in
+/// breadth-first order, so a child's index is always greater than its parent's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SphereTree {
+    /// Sphere centre x of each node.
+    pub x: Vec<f32>,
+    /// Sphere centre y of each node.
+    pub y: Vec<f32>,
+    /// Sphere centre z of each node.
+    pub z: Vec<f32>,
+    /// Sphere radius of each node.
+    pub r: Vec<f32>,
+    /// Index of the first child (meaningless for leaves, stored as 0).
+    pub first_child: Vec<u32>,
+    /// Number of children; 0 for leaves.
+    pub child_count: Vec<u8>,
+    /// Parent index; `u32::MAX` for the root.
+    pub parent: Vec<u32>,
+    /// Depth below the root (root = 0).
+    pub depth: Vec<u16>,
+    /// Build parameters and mesh facts.
+    pub meta: TreeMeta,
+}
+
+/// Parent value of the root node.
+pub const NO_PARENT: u32 = u32::MAX;
+
+impl SphereTree {
+    /// Number of nodes.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.r.len()
+    }
+
+    /// True for a tree without nodes (never produced by the builder).
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.r.is_empty()
+    }
+
+    /// True when node `n` is a leaf (an inner sphere).
+    #[inline]
+    pub fn is_leaf(&self, n: usize) -> bool {
+        self.child_count[n] == 0
+    }
+
+    /// Sphere of node `n` as `(centre, radius)`.
+    #[inline]
+    pub fn sphere(&self, n: usize) -> (glam::Vec3, f32) {
+        (glam::Vec3::new(self.x[n], self.y[n], self.z[n]), self.r[n])
+    }
+
+    /// Children of node `n` as an index range.
+    #[inline]
+    pub fn children(&self, n: usize) -> std::ops::Range<usize> {
+        let f = self.first_child[n] as usize;
+        f..f + self.child_count[n] as usize
+    }
+
+    /// Indices of all leaves (inner spheres), ascending.
+    pub fn leaves(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..self.len()).filter(|&n| self.is_leaf(n))
+    }
+
+    /// Number of leaves (inner spheres).
+    pub fn leaf_count(&self) -> usize {
+        self.child_count.iter().filter(|&&c| c == 0).count()
+    }
+
+    /// Largest depth of any node.
+    pub fn max_depth(&self) -> u16 {
+        self.depth.iter().copied().max().unwrap_or(0)
+    }
+
+    /// Checks the structural invariants every query relies on: consistent array lengths,
+    /// children contiguous and after their parent, parents and depths consistent, finite
+    /// non-negative spheres. Loading a file runs this, so a corrupt file cannot make a
+    /// traversal misbehave.
+    pub fn validate_structure(&self) -> crate::Result<()> {
+        let n = self.r.len();
+        let bad = |m: String| Err(crate::Error::CorruptTree(m));
+        if n == 0 {
+            return bad("the tree has no nodes".into());
+        }
+        if [
+            self.x.len(),
+            self.y.len(),
+            self.z.len(),
+            self.first_child.len(),
+            self.child_count.len(),
+            self.parent.len(),
+            self.depth.len(),
+        ]
+        .iter()
+        .any(|&l| l != n)
+        {
+            return bad("node arrays have different lengths".into());
+        }
+        if self.parent[0] != NO_PARENT || self.depth[0] != 0 {
+            return bad("node 0 is not a root".into());
+        }
+        let mut seen_as_child = vec![false; n];
+        for i in 0..n {
+            if !(self.x[i].is_finite()
+                && self.y[i].is_finite()
+                && self.z[i].is_finite()
+                && self.r[i].is_finite()
+                && self.r[i] >= 0.0)
+            {
+                return bad(format!("node {i} has a non-finite or negative sphere"));
+            }
+            let c = self.child_count[i] as usize;
+            if c == 0 {
+                continue;
+            }
+            let f = self.first_child[i] as usize;
+            if f <= i || f + c > n {
+                return bad(format!("node {i} has children out of range"));
+            }
+            for ch in f..f + c {
+                if seen_as_child[ch] {
+                    return bad(format!("node {ch} has two parents"));
+                }
+                seen_as_child[ch] = true;
+                if self.parent[ch] as usize != i || self.depth[ch] != self.depth[i] + 1 {
+                    return bad(format!("node {ch} disagrees with its parent {i}"));
+                }
+            }
+        }
+        if let Some(orphan) = (1..n).find(|&i| !seen_as_child[i]) {
+            return bad(format!("node {orphan} is nobody's child"));
+        }
+        Ok(())
+    }
+}

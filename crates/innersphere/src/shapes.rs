@@ -1,1 +1,208 @@
-//! (in progress)
+//! Closed meshes the project generates itself: for tests, benchmarks and the demo, so that a
+//! fresh clone needs no data files.
+
+use crate::Mesh;
+use glam::DVec3;
+
+/// A unit icosphere with `subdivisions` loop subdivisions (20·4^s triangles), outward facing.
+pub fn icosphere(subdivisions: u32) -> Mesh {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut vertices: Vec<DVec3> = [
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| DVec3::new(x, y, z).normalize())
+    .collect();
+    let mut triangles: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..subdivisions {
+        let mut mid = std::collections::HashMap::new();
+        let mut midpoint = |a: u32, b: u32, vertices: &mut Vec<DVec3>| -> u32 {
+            let key = (a.min(b), a.max(b));
+            *mid.entry(key).or_insert_with(|| {
+                let m = ((vertices[a as usize] + vertices[b as usize]) * 0.5).normalize();
+                vertices.push(m);
+                (vertices.len() - 1) as u32
+            })
+        };
+        let mut next = Vec::with_capacity(triangles.len() * 4);
+        for &[a, b, c] in &triangles {
+            let ab = midpoint(a, b, &mut vertices);
+            let bc = midpoint(b, c, &mut vertices);
+            let ca = midpoint(c, a, &mut vertices);
+            next.extend_from_slice(&[[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        triangles = next;
+    }
+    Mesh {
+        vertices,
+        triangles,
+    }
+}
+
+/// A star-shaped closed mesh: the icosphere with each vertex `v` moved to `f(v)·v`.
+/// `f` must be positive, so the result stays closed and free of self-intersections.
+pub fn radial(subdivisions: u32, f: impl Fn(DVec3) -> f64) -> Mesh {
+    let mut m = icosphere(subdivisions);
+    for v in &mut m.vertices {
+        *v *= f(*v);
+    }
+    m
+}
+
+/// An axis-aligned ellipsoid with the given semi-axes, centred at the origin.
+pub fn ellipsoid(semi_axes: DVec3, subdivisions: u32) -> Mesh {
+    let mut m = icosphere(subdivisions);
+    for v in &mut m.vertices {
+        *v *= semi_axes;
+    }
+    m
+}
+
+/// An axis-aligned box `[-half, half]`, 12 triangles, outward facing.
+pub fn cuboid(half: DVec3) -> Mesh {
+    let vertices = (0..8)
+        .map(|i| {
+            DVec3::new(
+                if i & 1 == 0 { -half.x } else { half.x },
+                if i & 2 == 0 { -half.y } else { half.y },
+                if i & 4 == 0 { -half.z } else { half.z },
+            )
+        })
+        .collect();
+    let triangles = vec![
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
+    ];
+    Mesh {
+        vertices,
+        triangles,
+    }
+}
+
+/// A torus around the z axis with major radius `major` and tube radius `minor`.
+pub fn torus(major: f64, minor: f64, segments: u32, sides: u32) -> Mesh {
+    let (nu, nv) = (segments.max(3), sides.max(3));
+    let mut vertices = Vec::with_capacity((nu * nv) as usize);
+    for i in 0..nu {
+        let u = i as f64 / nu as f64 * std::f64::consts::TAU;
+        for j in 0..nv {
+            let v = j as f64 / nv as f64 * std::f64::consts::TAU;
+            let rr = major + minor * v.cos();
+            vertices.push(DVec3::new(rr * u.cos(), rr * u.sin(), minor * v.sin()));
+        }
+    }
+    let id = |i: u32, j: u32| (i % nu) * nv + (j % nv);
+    let mut triangles = Vec::with_capacity((2 * nu * nv) as usize);
+    for i in 0..nu {
+        for j in 0..nv {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            triangles.push([a, b, c]);
+            triangles.push([a, c, d]);
+        }
+    }
+    Mesh {
+        vertices,
+        triangles,
+    }
+}
+
+/// A molar-like tooth (units: millimetres, about 10 x 10 x 17 mm): a rounded crown with four
+/// cusps on top (+z) and a tapering root below, star-shaped and closed.
+/// `phase` turns the cusp pattern, so that an upper and a lower tooth can interlock.
+pub fn molar(subdivisions: u32, phase: f64) -> Mesh {
+    radial(subdivisions, |v| {
+        let (x, y, z) = (v.x, v.y, v.z);
+        let az = y.atan2(x) + phase;
+        // Crown: wide on top, with four cusps; root: narrower towards -z.
+        let width = if z > 0.0 {
+            5.0
+        } else {
+            5.0 * (1.0 + 0.45 * z)
+        };
+        let height = if z > 0.0 { 4.0 } else { 12.0 };
+        let cusps = if z > 0.2 {
+            1.0 + 0.22 * (z - 0.2) * (2.0 * az).cos().powi(2) * (1.0 - (2.0 * az).sin().abs() * 0.3)
+        } else {
+            1.0
+        };
+        // Radius of the ellipsoid-like base along direction v, times the cusp factor.
+        let base = 1.0 / ((x * x + y * y) / (width * width) + z * z / (height * height)).sqrt();
+        base * cusps
+    })
+}
+
+/// Two interlocking tooth-like bodies for the demo: a lower molar (cusps up) and an upper
+/// molar (cusps down, turned by 45°) placed so that, at the identity pose of the second
+/// in the frame of the first, the cusps interdigitate with a small overlap — like a bite.
+pub fn tooth_pair(subdivisions: u32) -> (Mesh, Mesh) {
+    let upper = {
+        let mut m = molar(subdivisions, std::f64::consts::FRAC_PI_4);
+        for v in &mut m.vertices {
+            // Mirror z (cusps down) and lift onto the lower tooth.
+            *v = DVec3::new(v.x, v.y, -v.z + 8.6);
+        }
+        m.flip();
+        m
+    };
+    (upper, molar(subdivisions, 0.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn generated_meshes_are_closed_with_the_expected_volume() {
+        let s = icosphere(4);
+        let v = s.signed_volume();
+        assert!((v - 4.0 / 3.0 * std::f64::consts::PI).abs() < 0.02, "{v}");
+        assert!((cuboid(DVec3::new(1.0, 2.0, 3.0)).signed_volume() - 48.0).abs() < 1e-12);
+        let t = torus(2.0, 0.5, 64, 32);
+        let exact = 2.0 * std::f64::consts::PI.powi(2) * 2.0 * 0.25;
+        assert!((t.signed_volume() - exact).abs() / exact < 0.01);
+        let (a, b) = tooth_pair(3);
+        assert!(a.signed_volume() > 100.0 && b.signed_volume() > 100.0);
+    }
+}

@@ -1,1 +1,273 @@
-//! (in progress)
+//! The hierarchy over the inner spheres: top-down batch neural gas clustering ([`bng`]),
+//! minimal enclosing spheres ([`enclosing`]) and the flat breadth-first layout of
+//! [`SphereTree`].
+//!
+//! Every node is split into at most `fanout` groups by BNG until each leaf holds exactly one
+//! inner sphere (no depth cap). A node's sphere is the minimal sphere enclosing its children's
+//! spheres. Spheres are rounded to f32 conservatively: leaves shrink (they stay inside the
+//! mesh and disjoint), parents are recomputed from the rounded children and rounded up (they
+//! still enclose them).
+
+pub mod bng;
+pub mod enclosing;
+
+use crate::packing::Sphere;
+use crate::tree::{SphereTree, TreeMeta, NO_PARENT};
+use enclosing::Ball;
+use glam::DVec3;
+
+/// Options of the hierarchy.
+#[derive(Debug, Clone, Copy)]
+pub struct HierarchyOptions {
+    /// Maximum children per inner node (2..=32).
+    pub fanout: u32,
+    /// BNG settings.
+    pub bng: bng::BngOptions,
+}
+
+impl Default for HierarchyOptions {
+    fn default() -> Self {
+        HierarchyOptions {
+            fanout: 4,
+            bng: bng::BngOptions::default(),
+        }
+    }
+}
+
+/// Facts about a built hierarchy.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct HierarchyStats {
+    /// Mean over inner nodes of (node radius / exact minimal radius enclosing its children),
+    /// the exact value from subset enumeration; 1.0 is optimal.
+    pub enclosing_ratio_mean: f64,
+    /// Largest such ratio.
+    pub enclosing_ratio_max: f64,
+    /// Inner nodes whose split fell back to a median split because BNG put every sphere in
+    /// one group.
+    pub fallback_splits: usize,
+}
+
+/// A node of the tree while it is being built (f64, pointer-free recursion result).
+struct Draft {
+    ball: Ball,
+    children: Vec<Draft>,
+}
+
+/// Builds the hierarchy over `spheres` and lays it out as a [`SphereTree`].
+pub fn build(
+    spheres: &[Sphere],
+    opts: &HierarchyOptions,
+    meta: TreeMeta,
+    progress: &dyn crate::progress::Progress,
+) -> crate::Result<(SphereTree, HierarchyStats)> {
+    if spheres.is_empty() {
+        return Err(crate::Error::InvalidMesh(
+            "no inner sphere could be placed (the mesh encloses no volume at this voxel size)"
+                .into(),
+        ));
+    }
+    if !(2..=bng::MAX_PROTOTYPES as u32).contains(&opts.fanout) {
+        return Err(crate::Error::InvalidOption(format!(
+            "fanout must be between 2 and {}, got {}",
+            bng::MAX_PROTOTYPES,
+            opts.fanout
+        )));
+    }
+    progress.start("clustering (BNG)", spheres.len() as u64);
+    // Leaf balls rounded to f32 conservatively first; all enclosing happens on those.
+    let leaves: Vec<Ball> = spheres.iter().map(|s| round_leaf(s.center, s.radius)).collect();
+    let mut idx: Vec<u32> = (0..spheres.len() as u32).collect();
+    let fallbacks = std::sync::atomic::AtomicUsize::new(0);
+    let root = split(&leaves, &mut idx, opts, progress, &fallbacks, 0);
+    progress.finish();
+    let (tree, ratio_mean, ratio_max) = flatten(root, meta);
+    Ok((
+        tree,
+        HierarchyStats {
+            enclosing_ratio_mean: ratio_mean,
+            enclosing_ratio_max: ratio_max,
+            fallback_splits: fallbacks.into_inner(),
+        },
+    ))
+}
+
+/// Rounds a leaf sphere to f32 so that the rounded sphere lies inside the original one.
+fn round_leaf(c: DVec3, r: f64) -> Ball {
+    let c32 = c.as_vec3().as_dvec3();
+    let shrunk = r - (c32 - c).length();
+    let mut r32 = shrunk.max(0.0) as f32;
+    while r32 > 0.0 && r32 as f64 > shrunk {
+        r32 = r32.next_down();
+    }
+    (c32, r32 as f64)
+}
+
+/// Rounds an enclosing sphere of `children` to f32 so that it still encloses them.
+fn round_parent(c: DVec3, children: &[Draft]) -> Ball {
+    let c32 = c.as_vec3().as_dvec3();
+    let need = children
+        .iter()
+        .map(|ch| (ch.ball.0 - c32).length() + ch.ball.1)
+        .fold(0.0, f64::max);
+    let mut r32 = need as f32;
+    while (r32 as f64) < need {
+        r32 = r32.next_up();
+    }
+    (c32, r32 as f64)
+}
+
+/// Below this depth BNG splits; deeper (only reached by degenerate, lopsided clusterings)
+/// balanced median splits take over, so the depth stays bounded.
+const MAX_BNG_DEPTH: u32 = 40;
+
+/// Parallelism threshold: subtrees with fewer spheres are built on one thread.
+const PAR_MIN: usize = 2048;
+
+fn split(
+    leaves: &[Ball],
+    idx: &mut [u32],
+    opts: &HierarchyOptions,
+    progress: &dyn crate::progress::Progress,
+    fallbacks: &std::sync::atomic::AtomicUsize,
+    depth: u32,
+) -> Draft {
+    if idx.len() == 1 {
+        progress.advance(1);
+        return Draft {
+            ball: leaves[idx[0] as usize],
+            children: Vec::new(),
+        };
+    }
+    let k = opts.fanout as usize;
+    // Group boundaries within idx after partitioning.
+    let mut bounds: Vec<usize> = Vec::with_capacity(k + 1);
+    if idx.len() <= k {
+        bounds.extend(0..=idx.len());
+    } else {
+        let points: Vec<DVec3> = idx.iter().map(|&i| leaves[i as usize].0).collect();
+        let weights: Vec<f64> = idx.iter().map(|&i| leaves[i as usize].1.powi(3).max(1e-300)).collect();
+        let labels = bng::cluster(&points, &weights, k, &opts.bng);
+        let mut order: Vec<(u8, u32)> = labels.iter().copied().zip(idx.iter().copied()).collect();
+        order.sort_by_key(|&(l, _)| l); // stable: keeps the input order within a group
+        for (slot, &(_, i)) in idx.iter_mut().zip(&order) {
+            *slot = i;
+        }
+        bounds.push(0);
+        for w in 1..order.len() {
+            if order[w].0 != order[w - 1].0 {
+                bounds.push(w);
+            }
+        }
+        bounds.push(order.len());
+        if bounds.len() == 2 || depth >= MAX_BNG_DEPTH {
+            // BNG found one group only (e.g. identical centres), or the tree is already
+            // suspiciously deep (a degenerate chain of lopsided splits): median split along
+            // the longest axis, k groups of (nearly) equal size, to guarantee progress and a
+            // logarithmic depth from here on.
+            fallbacks.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let (lo, hi) = idx.iter().fold(
+                (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
+                |(l, h), &i| (l.min(leaves[i as usize].0), h.max(leaves[i as usize].0)),
+            );
+            let axis = (hi - lo).max_position();
+            idx.sort_by(|&a, &b| {
+                leaves[a as usize].0[axis]
+                    .total_cmp(&leaves[b as usize].0[axis])
+                    .then(a.cmp(&b))
+            });
+            bounds.clear();
+            let n = idx.len();
+            bounds.extend((0..=k).map(|g| g * n / k));
+            bounds.dedup();
+        }
+    }
+    // Recurse into the groups (in parallel for big ones; results keep group order).
+    let mut groups: Vec<&mut [u32]> = Vec::with_capacity(bounds.len() - 1);
+    let mut rest = &mut idx[..];
+    let mut taken = 0;
+    for w in bounds.windows(2) {
+        let (g, r) = rest.split_at_mut(w[1] - taken);
+        taken = w[1];
+        groups.push(g);
+        rest = r;
+    }
+    let children: Vec<Draft> = if groups.iter().map(|g| g.len()).sum::<usize>() >= PAR_MIN {
+        use rayon::prelude::*;
+        groups
+            .into_par_iter()
+            .map(|g| split(leaves, g, opts, progress, fallbacks, depth + 1))
+            .collect()
+    } else {
+        groups
+            .into_iter()
+            .map(|g| split(leaves, g, opts, progress, fallbacks, depth + 1))
+            .collect()
+    };
+    let balls: Vec<Ball> = children.iter().map(|c| c.ball).collect();
+    let (c, _) = enclosing::enclose(&balls);
+    Draft {
+        ball: round_parent(c, &children),
+        children,
+    }
+}
+
+/// Lays the draft tree out breadth-first into flat arrays; also measures how tight the
+/// enclosing spheres are (against exact subset enumeration, for nodes with ≤ 8 children).
+fn flatten(root: Draft, meta: TreeMeta) -> (SphereTree, f64, f64) {
+    let mut t = SphereTree {
+        x: Vec::new(),
+        y: Vec::new(),
+        z: Vec::new(),
+        r: Vec::new(),
+        first_child: Vec::new(),
+        child_count: Vec::new(),
+        parent: Vec::new(),
+        depth: Vec::new(),
+        meta,
+    };
+    let push = |t: &mut SphereTree, b: Ball, parent: u32, depth: u16| {
+        t.x.push(b.0.x as f32);
+        t.y.push(b.0.y as f32);
+        t.z.push(b.0.z as f32);
+        t.r.push(b.1 as f32);
+        t.first_child.push(0);
+        t.child_count.push(0);
+        t.parent.push(parent);
+        t.depth.push(depth);
+    };
+    let mut ratio_sum = 0.0;
+    let mut ratio_n = 0usize;
+    let mut ratio_max = 1.0f64;
+    push(&mut t, root.ball, NO_PARENT, 0);
+    let mut queue = std::collections::VecDeque::new();
+    queue.push_back((0usize, root));
+    while let Some((n, draft)) = queue.pop_front() {
+        if draft.children.is_empty() {
+            continue;
+        }
+        if draft.children.len() <= 8 {
+            let balls: Vec<Ball> = draft.children.iter().map(|c| c.ball).collect();
+            let exact = enclosing::enclose_brute_force(&balls).1;
+            if exact > 0.0 {
+                let ratio = draft.ball.1 / exact;
+                ratio_sum += ratio;
+                ratio_n += 1;
+                ratio_max = ratio_max.max(ratio);
+            }
+        }
+        t.first_child[n] = t.len() as u32;
+        t.child_count[n] = draft.children.len() as u8;
+        let depth = t.depth[n] + 1;
+        for child in draft.children {
+            let id = t.len();
+            push(&mut t, child.ball, n as u32, depth);
+            queue.push_back((id, child));
+        }
+    }
+    let mean = if ratio_n > 0 {
+        ratio_sum / ratio_n as f64
+    } else {
+        1.0
+    };
+    (t, mean, ratio_max)
+}

@@ -1,6 +1,7 @@
 //! The finished Inner Sphere Tree: flat f32 arrays ready for traversal, and its file format
 //! ([`file`]).
 
+// pub mod check;
 pub mod file;
 
 /// Build parameters and facts about the source mesh, kept with the tree.

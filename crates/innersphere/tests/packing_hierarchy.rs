@@ -1,0 +1,221 @@
+//! Packing and hierarchy invariants on analytic distance fields (boxes and balls), so that
+//! they are tested independently of the mesh pipeline.
+
+use glam::DVec3;
+use innersphere::field::{DistanceField, InsideMethod, VoxelGrid};
+use innersphere::hierarchy::{self, HierarchyOptions};
+use innersphere::packing::{self, PackingOptions, Sphere};
+use innersphere::progress::Silent;
+use innersphere::tree::{file, SphereTree, TreeMeta};
+use proptest::prelude::*;
+
+/// The distance field of an analytic solid given by its signed distance (positive inside).
+fn analytic_field(lo: DVec3, hi: DVec3, h: f64, sdf: impl Fn(DVec3) -> f64) -> DistanceField {
+    let grid = VoxelGrid::covering(lo, hi, h).unwrap();
+    let mut inside = Vec::new();
+    let mut dist = Vec::new();
+    for idx in 0..grid.len() {
+        let d = sdf(grid.center_of(idx));
+        if d > 0.0 {
+            inside.push(idx as u32);
+            dist.push(d);
+        }
+    }
+    DistanceField {
+        grid,
+        inside,
+        dist,
+        method: InsideMethod::ClosedExact,
+    }
+}
+
+fn box_sdf(half: DVec3) -> impl Fn(DVec3) -> f64 {
+    move |p: DVec3| (half - p.abs()).min_element()
+}
+
+fn ball_sdf(r: f64) -> impl Fn(DVec3) -> f64 {
+    move |p: DVec3| r - p.length()
+}
+
+fn meta() -> TreeMeta {
+    TreeMeta {
+        fanout: 4,
+        voxel_size: 0.1,
+        min_radius: 0.0,
+        mesh_volume: 1.0,
+        center_of_mass: [0.0; 3],
+        bbox_min: [0.0; 3],
+        bbox_max: [0.0; 3],
+        coverage: 0.0,
+        mesh_closed: true,
+    }
+}
+
+fn assert_packing_invariants(spheres: &[Sphere], sdf: &dyn Fn(DVec3) -> f64) {
+    for s in spheres {
+        assert!(s.radius > 0.0);
+        assert!(
+            s.radius <= sdf(s.center) + 1e-12,
+            "sphere {s:?} pokes out: distance {}",
+            sdf(s.center)
+        );
+    }
+    for (i, a) in spheres.iter().enumerate() {
+        for b in &spheres[i + 1..] {
+            let gap = (a.center - b.center).length() - a.radius - b.radius;
+            assert!(gap >= -1e-12, "overlap {gap} between {a:?} and {b:?}");
+        }
+    }
+}
+
+fn assert_tree_invariants(tree: &SphereTree, spheres: &[Sphere]) {
+    tree.validate_structure().unwrap();
+    assert_eq!(tree.leaf_count(), spheres.len(), "every leaf holds exactly one sphere");
+    for n in 0..tree.len() {
+        let (cp, rp) = tree.sphere(n);
+        for ch in tree.children(n) {
+            let (cc, rc) = tree.sphere(ch);
+            let need = (cc.as_dvec3() - cp.as_dvec3()).length() + rc as f64;
+            assert!(need <= rp as f64, "node {n} does not enclose child {ch}");
+        }
+    }
+    // Leaves (f32) stay inside their f64 spheres, hence inside the solid and disjoint.
+    let mut leaf_spheres: Vec<(DVec3, f64)> = tree
+        .leaves()
+        .map(|n| {
+            let (c, r) = tree.sphere(n);
+            (c.as_dvec3(), r as f64)
+        })
+        .collect();
+    let mut orig: Vec<(DVec3, f64)> = spheres.iter().map(|s| (s.center, s.radius)).collect();
+    let key = |a: &(DVec3, f64)| (a.0.x.to_bits(), a.0.y.to_bits(), a.0.z.to_bits());
+    leaf_spheres.sort_by(|a, b| a.1.total_cmp(&b.1).then(key(a).cmp(&key(b))));
+    orig.sort_by(|a, b| a.1.total_cmp(&b.1).then(key(a).cmp(&key(b))));
+    for l in &leaf_spheres {
+        assert!(
+            orig.iter()
+                .any(|o| (o.0 - l.0).length() + l.1 <= o.1 + 1e-12),
+            "leaf {l:?} is not inside any packed sphere"
+        );
+    }
+}
+
+#[test]
+fn box_packing_and_tree() {
+    let half = DVec3::new(1.0, 0.6, 0.4);
+    let sdf = box_sdf(half);
+    let field = analytic_field(-half, half, 0.05, &sdf);
+    let spheres = packing::pack(&field, &PackingOptions::default(), &Silent);
+    assert!(spheres.len() > 100);
+    assert_packing_invariants(&spheres, &sdf);
+    // The first sphere is the largest possible one.
+    assert!((spheres[0].radius - 0.4).abs() < 0.05);
+    let (tree, stats) =
+        hierarchy::build(&spheres, &HierarchyOptions::default(), meta(), &Silent).unwrap();
+    assert_tree_invariants(&tree, &spheres);
+    assert!(stats.enclosing_ratio_mean < 1.0 + 1e-6, "{stats:?}");
+    // Coverage of a box is substantial.
+    let cov = packing::total_volume(&spheres) / (8.0 * half.x * half.y * half.z);
+    assert!(cov > 0.5 && cov < 1.0, "coverage {cov}");
+}
+
+#[test]
+fn min_radius_and_max_count_are_respected() {
+    let half = DVec3::new(1.0, 0.7, 0.5);
+    let sdf = box_sdf(half);
+    let field = analytic_field(-half, half, 0.05, &sdf);
+    let opts = PackingOptions {
+        min_radius: 0.1,
+        max_spheres: usize::MAX,
+    };
+    let spheres = packing::pack(&field, &opts, &Silent);
+    assert!(spheres.len() > 5);
+    assert!(spheres.iter().all(|s| s.radius >= 0.1));
+    let capped = packing::pack(
+        &field,
+        &PackingOptions {
+            min_radius: 0.0,
+            max_spheres: 7,
+        },
+        &Silent,
+    );
+    assert_eq!(capped.len(), 7);
+}
+
+#[test]
+fn hierarchy_is_deterministic_and_round_trips_through_the_file_format() {
+    let half = DVec3::new(1.0, 0.7, 0.5);
+    let sdf = box_sdf(half);
+    let field = analytic_field(-half, half, 0.04, &sdf);
+    let spheres = packing::pack(&field, &PackingOptions::default(), &Silent);
+    for fanout in [2, 4, 8] {
+        let opts = HierarchyOptions {
+            fanout,
+            ..Default::default()
+        };
+        let (a, _) = hierarchy::build(&spheres, &opts, meta(), &Silent).unwrap();
+        let (b, _) = hierarchy::build(&spheres, &opts, meta(), &Silent).unwrap();
+        let bytes = file::to_bytes(&a);
+        assert_eq!(bytes, file::to_bytes(&b), "fanout {fanout}: not deterministic");
+        assert!(a.child_count.iter().all(|&c| c as u32 <= fanout));
+        assert_tree_invariants(&a, &spheres);
+        let back = file::from_bytes(&bytes).unwrap();
+        assert_eq!(back, a);
+    }
+}
+
+#[test]
+fn corrupt_tree_files_are_errors() {
+    let half = DVec3::new(1.0, 0.7, 0.5);
+    let sdf = box_sdf(half);
+    let field = analytic_field(-half, half, 0.1, &sdf);
+    let spheres = packing::pack(&field, &PackingOptions::default(), &Silent);
+    let (tree, _) =
+        hierarchy::build(&spheres, &HierarchyOptions::default(), meta(), &Silent).unwrap();
+    let bytes = file::to_bytes(&tree);
+    // Every truncation.
+    for len in (0..bytes.len()).step_by(7) {
+        assert!(file::from_bytes(&bytes[..len]).is_err(), "truncated to {len}");
+    }
+    // Every single-byte flip is caught (checksum, magic or size).
+    for pos in (0..bytes.len()).step_by(5) {
+        let mut b = bytes.clone();
+        b[pos] ^= 0x5a;
+        assert!(file::from_bytes(&b).is_err(), "flip at {pos} undetected");
+    }
+    // A lying node count does not allocate: it is rejected by size.
+    let mut b = bytes.clone();
+    b[16..24].copy_from_slice(&u64::MAX.to_le_bytes());
+    assert!(file::from_bytes(&b).is_err());
+    // A valid checksum over a broken structure is still rejected.
+    let mut broken = tree.clone();
+    broken.first_child[0] = 0;
+    assert!(file::from_bytes(&file::to_bytes(&broken)).is_err());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+    #[test]
+    fn packing_invariants_on_random_boxes_and_balls(
+        hx in 0.2..1.0f64, hy in 0.2..1.0f64, hz in 0.2..1.0f64,
+        h in 0.04..0.15f64, min_r in 0.0..0.1f64, ball in any::<bool>(),
+        fanout in 2u32..9,
+    ) {
+        let half = DVec3::new(hx, hy, hz);
+        let sdf: Box<dyn Fn(DVec3) -> f64> = if ball {
+            Box::new(ball_sdf(hx))
+        } else {
+            Box::new(box_sdf(half))
+        };
+        let ext = if ball { DVec3::splat(hx) } else { half };
+        let field = analytic_field(-ext, ext, h, &sdf);
+        prop_assume!(!field.inside.is_empty());
+        let opts = PackingOptions { min_radius: min_r, max_spheres: usize::MAX };
+        let spheres = packing::pack(&field, &opts, &Silent);
+        assert_packing_invariants(&spheres, &sdf);
+        prop_assume!(!spheres.is_empty());
+        let hopts = HierarchyOptions { fanout, ..Default::default() };
+        let (tree, _) = hierarchy::build(&spheres, &hopts, meta(), &Silent).unwrap();
+        assert_tree_invariants(&tree, &spheres);
+    }
+}

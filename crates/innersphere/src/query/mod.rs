@@ -1,1 +1,5 @@
-//! (in progress)
+//! Queries between two Inner Sphere Trees under rigid poses.
+
+pub mod pose;
+
+pub use pose::Pose;

@@ -1,10 +1,39 @@
-//! `ist check`.
+//! `ist check`: verify a tree against its mesh; exit code 1 when an invariant fails.
+
+use std::path::PathBuf;
 
 /// Arguments of `ist check`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Tree file written by `ist build`.
+    tree: PathBuf,
+    /// The mesh the tree was built from.
+    #[arg(long)]
+    mesh: PathBuf,
+    /// Print JSON.
+    #[arg(long)]
+    json: bool,
+}
 
-/// Runs the subcommand; returns the process exit code.
-pub fn run(_args: Args) -> anyhow::Result<i32> {
-    anyhow::bail!("not yet implemented")
+/// Runs the subcommand; returns the process exit code (1 when not ok).
+pub fn run(args: Args) -> anyhow::Result<i32> {
+    let tree = innersphere::tree::file::load(&args.tree)?;
+    let mesh = innersphere::mesh::io::load(&args.mesh)?;
+    let report = innersphere::tree::check::check(&tree, &mesh)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "{}: {} spheres, {} nodes, max protrusion {:.3e}, max overlap {:.3e}, {} enclosure violations, {} centres outside (tolerance {:.1e})",
+            if report.ok { "ok" } else { "FAILED" },
+            report.spheres,
+            report.nodes,
+            report.max_protrusion,
+            report.max_overlap,
+            report.enclosure_violations,
+            report.centers_outside,
+            report.tolerance
+        );
+    }
+    Ok(if report.ok { 0 } else { 1 })
 }

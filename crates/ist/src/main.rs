@@ -1,11 +1,12 @@
 //! `ist`: the command-line shell over the `innersphere` library. One file per subcommand;
 //! every piece of logic lives in the library.
 
-mod build;
-mod check;
+// Enabled once the mesh loaders and field land:
+// mod build;
+// mod check;
 mod export;
-mod inspect;
-mod progress;
+// mod inspect;
+// mod progress;
 mod query;
 
 use clap::{Parser, Subcommand};
@@ -20,12 +21,6 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Build the Inner Sphere Tree of a mesh and write it to a tree file.
-    Build(build::Args),
-    /// Print the defect report of a mesh.
-    Inspect(inspect::Args),
-    /// Verify a tree against its mesh (spheres inside, disjoint, parents enclosing children).
-    Check(check::Args),
     /// Write the inner spheres of a tree as PLY or CSV for viewers.
     Export(export::Args),
     /// Run one query between two trees.
@@ -35,9 +30,6 @@ enum Command {
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Build(a) => build::run(a),
-        Command::Inspect(a) => inspect::run(a),
-        Command::Check(a) => check::run(a),
         Command::Export(a) => export::run(a),
         Command::Query(a) => query::run(a),
     };

@@ -2,6 +2,7 @@
 //! ([`file`]).
 
 // pub mod check;
+pub mod export;
 pub mod file;
 
 /// Build parameters and facts about the source mesh, kept with the tree.

@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# The `ist` binary on every real model: closed meshes build and pass `ist check`; every bad
+# input gives a tree with a warning or a clear error, never a panic (exit code 101).
+set -euo pipefail
+DATA="$1"
+IST=target/release/ist
+cargo build --release -q -p ist
+OUT=$(mktemp -d)
+trap 'rm -rf "$OUT"' EXIT
+
+for f in "$DATA"/small/*.stl "$DATA"/classic/*.stl "$DATA"/jaw/*molar.stl; do
+  name=$(basename "$f")
+  "$IST" build "$f" -o "$OUT/$name.ist" --resolution 96 --quiet > /dev/null
+  "$IST" check "$OUT/$name.ist" --mesh "$f" --json > "$OUT/check.json" || {
+    echo "FAILED: ist check on $name"; cat "$OUT/check.json"; exit 1; }
+  echo "ok: $name"
+done
+
+# One real jaw arch at the issue's voxel size.
+f="$DATA/jaw/ofj_p26_mandible_teeth.stl.gz"
+"$IST" build "$f" -o "$OUT/mandible.ist" --voxel-size 0.15 --json > "$OUT/mandible.json"
+grep -E '"(spheres|seconds|coverage)"' "$OUT/mandible.json"
+"$IST" check "$OUT/mandible.ist" --mesh "$f" --json > "$OUT/check.json" || {
+  echo "FAILED: ist check on the mandible"; cat "$OUT/check.json"; exit 1; }
+echo "ok: mandible arch"
+
+for f in "$DATA"/bad/*.stl; do
+  name=$(basename "$f")
+  set +e
+  "$IST" build "$f" -o "$OUT/$name.ist" --resolution 64 --quiet > "$OUT/out.txt" 2> "$OUT/err.txt"
+  code=$?
+  set -e
+  if [ $code -eq 101 ] || grep -q "panicked" "$OUT/err.txt"; then
+    echo "FAILED: $name panicked"; cat "$OUT/err.txt"; exit 1
+  fi
+  if [ $code -eq 0 ]; then
+    grep -q "warning" "$OUT/err.txt" || { echo "FAILED: $name built without a warning"; exit 1; }
+    echo "ok (built, with warning): $name: $(head -1 "$OUT/err.txt")"
+  else
+    grep -q "error" "$OUT/err.txt" || { echo "FAILED: $name failed without a clear error"; exit 1; }
+    echo "ok (clear error): $name: $(head -1 "$OUT/err.txt")"
+  fi
+done
+# Corrupt tree files are clear errors.
+head -c 1000 "$OUT/mandible.ist" > "$OUT/truncated.ist"
+if "$IST" check "$OUT/truncated.ist" --mesh "$f" 2> "$OUT/err.txt"; then echo "FAILED: truncated tree accepted"; exit 1; fi
+grep -q "corrupt tree file" "$OUT/err.txt" || { echo "FAILED: no clear error for a truncated tree"; cat "$OUT/err.txt"; exit 1; }
+echo "ok: truncated tree rejected"

@@ -1,0 +1,34 @@
+//! Times packing and hierarchy on an analytic field (a wavy slab) with millions of voxels.
+use glam::DVec3;
+use innersphere::field::{DistanceField, InsideMethod, VoxelGrid};
+use innersphere::progress::Silent;
+use std::time::Instant;
+
+fn main() {
+    let h: f64 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(0.01);
+    let half = DVec3::new(1.0, 0.7, 0.3);
+    let grid = VoxelGrid::covering(-half, half, h).unwrap();
+    let sdf = |p: DVec3| {
+        // a box with a wavy top: many small spheres near the waves
+        let wave = 0.05 * (p.x * 40.0).sin() * (p.y * 30.0).cos();
+        (half - p.abs()).min_element().min(half.z - wave - p.z)
+    };
+    let mut inside = Vec::new();
+    let mut dist = Vec::new();
+    for idx in 0..grid.len() {
+        let d = sdf(grid.center_of(idx));
+        if d > 0.0 {
+            inside.push(idx as u32);
+            dist.push(d);
+        }
+    }
+    let field = DistanceField { grid, inside, dist, method: InsideMethod::ClosedExact };
+    let t = Instant::now();
+    let spheres = innersphere::packing::pack(&field, &Default::default(), &Silent);
+    println!("voxels {} spheres {} packing {:.2}s", field.inside.len(), spheres.len(), t.elapsed().as_secs_f64());
+    let t = Instant::now();
+    let meta = innersphere::tree::TreeMeta { fanout: 4, voxel_size: h, min_radius: 0.0, mesh_volume: 1.0, center_of_mass: [0.0;3], bbox_min: [0.0;3], bbox_max: [0.0;3], coverage: 0.0, mesh_closed: true };
+    let (tree, stats) = innersphere::hierarchy::build(&spheres, &Default::default(), meta, &Silent).unwrap();
+    println!("nodes {} depth {} hierarchy {:.2}s {:?}", tree.len(), tree.max_depth(), t.elapsed().as_secs_f64(), stats);
+    println!("peak {:?} MB", innersphere::eval::sysinfo::peak_memory_bytes().map(|b| b >> 20));
+}

@@ -24,7 +24,7 @@ fn main() {
     }
     let field = DistanceField { grid, inside, dist, method: InsideMethod::ClosedExact };
     let t = Instant::now();
-    let spheres = innersphere::packing::pack(&field, &Default::default(), &Silent);
+    let spheres = innersphere::packing::pack(&field, &Default::default(), None, &Silent);
     println!("voxels {} spheres {} packing {:.2}s", field.inside.len(), spheres.len(), t.elapsed().as_secs_f64());
     let t = Instant::now();
     let meta = innersphere::tree::TreeMeta { fanout: 4, voxel_size: h, min_radius: 0.0, mesh_volume: 1.0, center_of_mass: [0.0;3], bbox_min: [0.0;3], bbox_max: [0.0;3], coverage: 0.0, mesh_closed: true };

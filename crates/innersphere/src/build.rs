@@ -3,6 +3,7 @@
 
 use crate::field::{self, InsideMethod, VoxelGrid};
 use crate::hierarchy::{self, HierarchyOptions};
+use crate::mesh::bvh::TriangleBvh;
 use crate::mesh::MeshReport;
 use crate::packing::{self, PackingOptions};
 use crate::progress::Progress;
@@ -182,7 +183,8 @@ pub fn build_tree(
     }
 
     let t2 = Instant::now();
-    let spheres = packing::pack(&field, &opts.packing, progress);
+    let surface = (opts.packing.refine_steps > 0).then(|| TriangleBvh::new(&mesh));
+    let spheres = packing::pack(&field, &opts.packing, surface.as_ref(), progress);
     let t_pack = t2.elapsed().as_secs_f64();
     if spheres.is_empty() {
         return Err(Error::InvalidMesh(format!(

@@ -105,7 +105,7 @@ fn box_packing_and_tree() {
     let half = DVec3::new(1.0, 0.6, 0.4);
     let sdf = box_sdf(half);
     let field = analytic_field(-half, half, 0.05, &sdf);
-    let spheres = packing::pack(&field, &PackingOptions::default(), &Silent);
+    let spheres = packing::pack(&field, &PackingOptions::default(), None, &Silent);
     assert!(spheres.len() > 100);
     assert_packing_invariants(&spheres, &sdf);
     // The first sphere is the largest possible one.
@@ -126,17 +126,18 @@ fn min_radius_and_max_count_are_respected() {
     let field = analytic_field(-half, half, 0.05, &sdf);
     let opts = PackingOptions {
         min_radius: 0.1,
-        max_spheres: usize::MAX,
+        ..Default::default()
     };
-    let spheres = packing::pack(&field, &opts, &Silent);
+    let spheres = packing::pack(&field, &opts, None, &Silent);
     assert!(spheres.len() > 5);
     assert!(spheres.iter().all(|s| s.radius >= 0.1));
     let capped = packing::pack(
         &field,
         &PackingOptions {
-            min_radius: 0.0,
             max_spheres: 7,
+            ..Default::default()
         },
+        None,
         &Silent,
     );
     assert_eq!(capped.len(), 7);
@@ -147,7 +148,7 @@ fn hierarchy_is_deterministic_and_round_trips_through_the_file_format() {
     let half = DVec3::new(1.0, 0.7, 0.5);
     let sdf = box_sdf(half);
     let field = analytic_field(-half, half, 0.04, &sdf);
-    let spheres = packing::pack(&field, &PackingOptions::default(), &Silent);
+    let spheres = packing::pack(&field, &PackingOptions::default(), None, &Silent);
     for fanout in [2, 4, 8] {
         let opts = HierarchyOptions {
             fanout,
@@ -169,7 +170,7 @@ fn corrupt_tree_files_are_errors() {
     let half = DVec3::new(1.0, 0.7, 0.5);
     let sdf = box_sdf(half);
     let field = analytic_field(-half, half, 0.1, &sdf);
-    let spheres = packing::pack(&field, &PackingOptions::default(), &Silent);
+    let spheres = packing::pack(&field, &PackingOptions::default(), None, &Silent);
     let (tree, _) =
         hierarchy::build(&spheres, &HierarchyOptions::default(), meta(), &Silent).unwrap();
     let bytes = file::to_bytes(&tree);
@@ -210,12 +211,36 @@ proptest! {
         let ext = if ball { DVec3::splat(hx) } else { half };
         let field = analytic_field(-ext, ext, h, &sdf);
         prop_assume!(!field.inside.is_empty());
-        let opts = PackingOptions { min_radius: min_r, max_spheres: usize::MAX };
-        let spheres = packing::pack(&field, &opts, &Silent);
+        let opts = PackingOptions { min_radius: min_r, ..Default::default() };
+        let spheres = packing::pack(&field, &opts, None, &Silent);
         assert_packing_invariants(&spheres, &sdf);
         prop_assume!(!spheres.is_empty());
         let hopts = HierarchyOptions { fanout, ..Default::default() };
         let (tree, _) = hierarchy::build(&spheres, &hopts, meta(), &Silent).unwrap();
+        assert_tree_invariants(&tree, &spheres);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(12))]
+    /// Off-grid refinement keeps every invariant: spheres inside, disjoint, tree valid.
+    #[test]
+    fn refined_packing_keeps_the_invariants(
+        hx in 0.3..1.0f64, hy in 0.3..1.0f64, hz in 0.3..1.0f64,
+        h in 0.05..0.15f64, min_r in 0.0..0.05f64, steps in 1u32..10,
+    ) {
+        let half = DVec3::new(hx, hy, hz);
+        let sdf = box_sdf(half);
+        let field = analytic_field(-half, half, h, &sdf);
+        let bvh = innersphere::mesh::bvh::TriangleBvh::new(&innersphere::shapes::cuboid(half));
+        let opts = PackingOptions { min_radius: min_r, refine_steps: steps, ..Default::default() };
+        let spheres = packing::pack(&field, &opts, Some(&bvh), &Silent);
+        prop_assume!(!spheres.is_empty());
+        assert_packing_invariants(&spheres, &sdf);
+        let plain = packing::pack(&field, &PackingOptions { min_radius: min_r, ..Default::default() }, None, &Silent);
+        let (vr, vp) = (packing::total_volume(&spheres), packing::total_volume(&plain));
+        prop_assert!(vr >= 0.9 * vp, "refined coverage {} much below plain {}", vr, vp);
+        let (tree, _) = hierarchy::build(&spheres, &HierarchyOptions::default(), meta(), &Silent).unwrap();
         assert_tree_invariants(&tree, &spheres);
     }
 }

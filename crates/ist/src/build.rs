@@ -41,6 +41,9 @@ pub struct BuildArgs {
     /// Stop after this many inner spheres.
     #[arg(long)]
     pub max_spheres: Option<usize>,
+    /// Off-grid refinement steps per sphere (0 = centres on voxel centres, as in the paper).
+    #[arg(long, default_value_t = 0)]
+    pub refine_steps: u32,
     /// Children per inner node.
     #[arg(long, default_value_t = 4)]
     pub fanout: u32,
@@ -58,6 +61,7 @@ impl BuildArgs {
             packing: PackingOptions {
                 min_radius: self.min_radius,
                 max_spheres: self.max_spheres.unwrap_or(usize::MAX),
+                refine_steps: self.refine_steps,
             },
             hierarchy: HierarchyOptions {
                 fanout: self.fanout,

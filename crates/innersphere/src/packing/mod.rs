@@ -7,7 +7,10 @@
 //! the voxels within twice the new radius are visited: a voxel farther away has a remaining
 //! distance ≤ the new radius < its distance to the new sphere, so it cannot change.
 
+mod refine;
+
 use crate::field::DistanceField;
+use crate::mesh::bvh::TriangleBvh;
 use glam::DVec3;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -28,6 +31,10 @@ pub struct PackingOptions {
     pub min_radius: f64,
     /// Stop after this many spheres.
     pub max_spheres: usize,
+    /// Let each sphere's centre move off the voxel centre toward the local maximum of the free
+    /// radius (ProtoSphere-style: step away from the nearest obstacle while the sphere grows),
+    /// at most this many steps; 0 keeps centres on voxel centres (the paper's packing).
+    pub refine_steps: u32,
 }
 
 impl Default for PackingOptions {
@@ -35,6 +42,7 @@ impl Default for PackingOptions {
         PackingOptions {
             min_radius: 0.0,
             max_spheres: usize::MAX,
+            refine_steps: 0,
         }
     }
 }
@@ -62,9 +70,13 @@ impl Ord for Entry {
 /// Packs inner spheres into `field`. Every sphere's radius is at most the exact distance of its
 /// centre to the surface and to every earlier sphere, so the spheres lie inside the mesh and do
 /// not overlap. Deterministic.
+///
+/// With `opts.refine_steps > 0` the surface BVH `surface` is needed to measure the exact
+/// distance to the surface at off-grid centres; without it refinement is skipped.
 pub fn pack(
     field: &DistanceField,
     opts: &PackingOptions,
+    surface: Option<&TriangleBvh>,
     progress: &dyn crate::progress::Progress,
 ) -> Vec<Sphere> {
     let grid = &field.grid;
@@ -84,6 +96,10 @@ pub fn pack(
     let h = grid.h;
     let dims = grid.dims;
     let mut covered_since_report = 0u64;
+    let mut refiner = match surface {
+        Some(bvh) if opts.refine_steps > 0 => Some(refine::Refiner::new(grid, bvh, opts.refine_steps)),
+        _ => None,
+    };
     while let Some(Entry { value, cell }) = heap.pop() {
         if spheres.len() >= opts.max_spheres {
             break;
@@ -99,33 +115,45 @@ pub fn pack(
             }
             continue;
         }
-        let radius = value;
         let [ci, cj, ck] = grid.coords(cell as usize);
-        let center = grid.center(ci, cj, ck);
+        let voxel = grid.center(ci, cj, ck);
+        let (center, radius) = match refiner.as_mut() {
+            Some(r) => r.refine(voxel, value, &spheres),
+            None => (voxel, value),
+        };
+        if let Some(r) = refiner.as_mut() {
+            r.insert(spheres.len() as u32, center, radius);
+        }
         spheres.push(Sphere { center, radius });
+        // The sphere may sit off the voxel grid: measure from its real centre. The popped
+        // voxel is always covered (refinement keeps it inside the sphere).
+        let fc = (center - grid.origin) / h;
+        let (ci, cj, ck) = (fc.x.round() as u32, fc.y.round() as u32, fc.z.round() as u32);
 
         // Visit the cells within 2·radius of the centre, row by row.
         let reach = 2.0 * radius;
         let reach_cells = (reach / h).floor() as i64;
         let reach_sq = reach * reach;
         let r_sq = radius * radius;
+        // One extra cell of reach covers the rounding of an off-grid centre.
+        let reach_cells = reach_cells + 1;
         let (ci, cj, ck) = (ci as i64, cj as i64, ck as i64);
         for k in (ck - reach_cells).max(0)..=(ck + reach_cells).min(dims[2] as i64 - 1) {
-            let dz = (k - ck) as f64 * h;
+            let dz = grid.origin.z + k as f64 * h - center.z;
             for j in (cj - reach_cells).max(0)..=(cj + reach_cells).min(dims[1] as i64 - 1) {
-                let dy = (j - cj) as f64 * h;
+                let dy = grid.origin.y + j as f64 * h - center.y;
                 let dyz = dy * dy + dz * dz;
                 if dyz > reach_sq {
                     continue;
                 }
-                let span = ((reach_sq - dyz).sqrt() / h).floor() as i64;
+                let span = ((reach_sq - dyz).sqrt() / h).floor() as i64 + 1;
                 let row = grid.index(0, j as u32, k as u32);
                 for i in (ci - span).max(0)..=(ci + span).min(dims[0] as i64 - 1) {
                     let slot = &mut remaining[row + i as usize];
                     if *slot < 0.0 {
                         continue;
                     }
-                    let dx = (i - ci) as f64 * h;
+                    let dx = grid.origin.x + i as f64 * h - center.x;
                     let d_sq = dx * dx + dyz;
                     if d_sq <= r_sq {
                         *slot = -1.0;

@@ -1,0 +1,137 @@
+//! Off-grid sphere centres (ProtoSphere-style, Weller & Zachmann 2010): starting at the voxel
+//! centre the greedy packing picked, step away from the nearest obstacle — the surface or an
+//! already placed sphere — while the free radius grows. Steps are at most half the current free
+//! radius, so the centre never leaves the free ball it is in (it stays inside the mesh and
+//! outside every sphere), and the popped voxel stays inside the final sphere, so the packing
+//! always makes progress.
+
+use super::Sphere;
+use crate::field::VoxelGrid;
+use crate::mesh::bvh::TriangleBvh;
+use glam::DVec3;
+
+/// Placed spheres bucketed in a coarse uniform grid, plus the surface BVH.
+pub(super) struct Refiner<'a> {
+    bvh: &'a TriangleBvh,
+    origin: DVec3,
+    cell: f64,
+    dims: [i64; 3],
+    buckets: Vec<Vec<u32>>,
+    steps: u32,
+    h: f64,
+    /// Spheres too large to bucket cheaply: always checked.
+    big: Vec<u32>,
+}
+
+impl<'a> Refiner<'a> {
+    pub(super) fn new(grid: &VoxelGrid, bvh: &'a TriangleBvh, steps: u32) -> Self {
+        let cell = 4.0 * grid.h;
+        let dims = grid.dims.map(|d| (d as i64 + 3) / 4 + 1);
+        let n = (dims[0] * dims[1] * dims[2]) as usize;
+        Refiner {
+            bvh,
+            origin: grid.origin - DVec3::splat(grid.h),
+            cell,
+            dims,
+            buckets: vec![Vec::new(); n],
+            steps,
+            h: grid.h,
+            big: Vec::new(),
+        }
+    }
+
+    fn cell_of(&self, p: DVec3) -> [i64; 3] {
+        let q = ((p - self.origin) / self.cell).floor();
+        [
+            (q.x as i64).clamp(0, self.dims[0] - 1),
+            (q.y as i64).clamp(0, self.dims[1] - 1),
+            (q.z as i64).clamp(0, self.dims[2] - 1),
+        ]
+    }
+
+    /// Registers a placed sphere.
+    pub(super) fn insert(&mut self, id: u32, c: DVec3, r: f64) {
+        if r > 8.0 * self.cell {
+            self.big.push(id);
+            return;
+        }
+        let a = self.cell_of(c - r);
+        let b = self.cell_of(c + r);
+        for z in a[2]..=b[2] {
+            for y in a[1]..=b[1] {
+                for x in a[0]..=b[0] {
+                    let i = (x + self.dims[0] * (y + self.dims[1] * z)) as usize;
+                    self.buckets[i].push(id);
+                }
+            }
+        }
+    }
+
+    /// Free radius at `c` (distance to the surface and to every placed sphere) and the nearest
+    /// obstacle point.
+    fn free(&self, c: DVec3, spheres: &[Sphere]) -> (f64, DVec3) {
+        let hit = self.bvh.closest_point(c, f64::INFINITY);
+        let (mut best, mut at) = match hit {
+            Some(h) => (h.dist_sq.sqrt(), h.point),
+            None => (f64::INFINITY, c),
+        };
+        let consider = |id: u32, best: &mut f64, at: &mut DVec3| {
+            let s = spheres[id as usize];
+            let d = (c - s.center).length();
+            let gap = d - s.radius;
+            if gap < *best {
+                *best = gap;
+                *at = if d > 0.0 {
+                    s.center + (c - s.center) * (s.radius / d)
+                } else {
+                    c
+                };
+            }
+        };
+        for &id in &self.big {
+            consider(id, &mut best, &mut at);
+        }
+        let reach = best.max(0.0);
+        let a = self.cell_of(c - reach);
+        let b = self.cell_of(c + reach);
+        for z in a[2]..=b[2] {
+            for y in a[1]..=b[1] {
+                for x in a[0]..=b[0] {
+                    let i = (x + self.dims[0] * (y + self.dims[1] * z)) as usize;
+                    for &id in &self.buckets[i] {
+                        consider(id, &mut best, &mut at);
+                    }
+                }
+            }
+        }
+        (best, at)
+    }
+
+    /// Moves the centre from voxel centre `v` (free radius `rho`) toward a larger free ball.
+    pub(super) fn refine(&mut self, v: DVec3, rho: f64, spheres: &[Sphere]) -> (DVec3, f64) {
+        let (mut f, mut q) = self.free(v, spheres);
+        // The grid value is exact, but never trust a refinement that would shrink the sphere.
+        if !(f >= rho) {
+            return (v, rho);
+        }
+        let mut c = v;
+        let mut step = 0.5 * self.h;
+        for _ in 0..self.steps {
+            let away = c - q;
+            let len = away.length();
+            if len <= 0.0 || step < self.h / 64.0 {
+                break;
+            }
+            let cand = c + away * (step.min(0.5 * f) / len);
+            let (fc, qc) = self.free(cand, spheres);
+            if fc > f && (cand - v).length() <= fc {
+                c = cand;
+                f = fc;
+                q = qc;
+            } else {
+                step *= 0.5;
+            }
+        }
+        (c, f)
+    }
+}

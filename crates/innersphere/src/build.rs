@@ -154,6 +154,14 @@ pub fn build_tree(
             mesh.to_mut().flip();
         }
     } else {
+        // The winding number fills holes in a surface; it cannot invent a surface. When most
+        // edges are open the triangles bound nothing (a soup), and any "inside" would be noise.
+        if report.boundary_edges * 2 > report.edges {
+            return Err(Error::InvalidMesh(format!(
+                "the mesh encloses no volume: {} of its {} edges are open boundary edges and it has {} separate pieces (a triangle soup?)",
+                report.boundary_edges, report.edges, report.components
+            )));
+        }
         warnings.push(format!(
             "the mesh is not closed ({} boundary edges, {} non-manifold edges): inside/outside decided by the generalized winding number",
             report.boundary_edges, report.nonmanifold_edges

@@ -19,7 +19,7 @@
 //!
 //! [`build::build_tree`] runs the whole build; [`tree::SphereTree`] is what queries use.
 
-// pub mod build; (enabled once mesh and field land)
+pub mod build;
 pub mod error;
 pub mod eval;
 pub mod exact;

@@ -1,12 +1,13 @@
 //! `ist`: the command-line shell over the `innersphere` library. One file per subcommand;
 //! every piece of logic lives in the library.
 
-// Enabled once the mesh loaders and field land:
-// mod build;
-// mod check;
+mod bench;
+mod build;
+mod check;
+mod demo;
 mod export;
-// mod inspect;
-// mod progress;
+mod inspect;
+mod progress;
 mod query;
 
 use clap::{Parser, Subcommand};
@@ -21,16 +22,31 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// The main job on a built-in model: generate two tooth-like bodies and build their trees.
+    Demo(demo::Args),
+    /// Build the Inner Sphere Tree of a mesh and write it to a tree file.
+    Build(build::Args),
+    /// Print the defect report of a mesh.
+    Inspect(inspect::Args),
+    /// Verify a tree against its mesh (spheres inside, disjoint, parents enclosing children).
+    Check(check::Args),
     /// Write the inner spheres of a tree as PLY or CSV for viewers.
     Export(export::Args),
     /// Run one query between two trees.
     Query(query::Args),
+    /// Benchmarks (build).
+    Bench(bench::Args),
 }
 
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Demo(a) => demo::run(a),
+        Command::Build(a) => build::run(a),
+        Command::Inspect(a) => inspect::run(a),
+        Command::Check(a) => check::run(a),
         Command::Export(a) => export::run(a),
+        Command::Bench(a) => bench::run(a),
         Command::Query(a) => query::run(a),
     };
     match result {

@@ -1,1 +1,527 @@
 //! A bounding-volume hierarchy over the triangles of a mesh.
+//!
+//! A flat f64 AABB tree: nodes in one `Vec` in depth-first order (the first child of an inner
+//! node directly follows it), triangles reordered so that every leaf owns a contiguous range,
+//! and the triangle corners copied in that order so that queries never chase indices.
+//! Built with a binned surface-area heuristic, in parallel for the top levels; the result
+//! depends only on the input, never on thread scheduling.
+
+use super::closest::closest_point_on_triangle;
+use crate::Mesh;
+use glam::DVec3;
+
+/// Most triangles in a leaf.
+pub const LEAF_SIZE: usize = 4;
+/// Number of SAH bins per axis.
+const BINS: usize = 16;
+/// Subtrees with more triangles than this are built in parallel.
+const PAR_THRESHOLD: usize = 8192;
+/// Below this depth splits follow the SAH; deeper ones split at the median, which bounds the
+/// depth by `MEDIAN_DEPTH + log2(n)`.
+const MEDIAN_DEPTH: u32 = 40;
+/// Upper bound of the tree depth (sizes the traversal stacks).
+pub const MAX_DEPTH: usize = MEDIAN_DEPTH as usize + 34;
+
+/// One node of a [`TriangleBvh`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BvhNode {
+    /// Minimum corner of the box around every triangle below this node.
+    pub lo: DVec3,
+    /// Maximum corner of the box.
+    pub hi: DVec3,
+    /// Leaf: first slot of its triangles in [`TriangleBvh::tris`] / [`TriangleBvh::order`].
+    /// Inner node: index of its second child (the first child is the next node).
+    pub start: u32,
+    /// Leaf: number of triangles (≥ 1). Inner node: 0.
+    pub count: u32,
+}
+
+impl BvhNode {
+    /// True when the node holds triangles rather than children.
+    #[inline]
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+
+    /// Squared distance from `p` to the node's box (0 inside).
+    #[inline]
+    pub fn dist_sq(&self, p: DVec3) -> f64 {
+        (self.lo - p).max(p - self.hi).max(DVec3::ZERO).length_squared()
+    }
+}
+
+/// A flat AABB tree over triangles. Node 0 is the root (no nodes for an empty mesh).
+#[derive(Debug, Clone, Default)]
+pub struct TriangleBvh {
+    /// Nodes in depth-first order: an inner node `i` has children `i + 1` and `nodes[i].start`.
+    pub nodes: Vec<BvhNode>,
+    /// The original triangle index of each slot.
+    pub order: Vec<u32>,
+    /// The corners of the triangle in each slot (BVH order).
+    pub tris: Vec<[DVec3; 3]>,
+}
+
+/// The answer of [`TriangleBvh::closest_point`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Closest {
+    /// Squared distance from the query point to `point`.
+    pub dist_sq: f64,
+    /// The closest point on the surface.
+    pub point: DVec3,
+    /// Index of the triangle it lies on, in the original mesh.
+    pub triangle: u32,
+    /// The triangle's slot in the tree ([`TriangleBvh::tris`]); handy as a seed for the
+    /// next, nearby query.
+    pub slot: u32,
+}
+
+#[derive(Clone, Copy)]
+struct Prim {
+    lo: DVec3,
+    hi: DVec3,
+    c: DVec3,
+    idx: u32,
+}
+
+#[derive(Clone, Copy)]
+struct Bin {
+    lo: DVec3,
+    hi: DVec3,
+    n: usize,
+}
+
+impl Bin {
+    const EMPTY: Bin = Bin {
+        lo: DVec3::splat(f64::INFINITY),
+        hi: DVec3::splat(f64::NEG_INFINITY),
+        n: 0,
+    };
+}
+
+#[inline]
+fn half_area(lo: DVec3, hi: DVec3) -> f64 {
+    let e = (hi - lo).max(DVec3::ZERO);
+    e.x * e.y + e.y * e.z + e.z * e.x
+}
+
+impl TriangleBvh {
+    /// Builds the tree over all triangles of `mesh` (whose indices must be valid).
+    pub fn new(mesh: &Mesh) -> Self {
+        let tris: Vec<[DVec3; 3]> = (0..mesh.triangles.len()).map(|t| mesh.triangle(t)).collect();
+        Self::from_triangles(&tris)
+    }
+
+    /// Builds the tree over a triangle soup; triangle `i` of the answers is `tris[i]`.
+    pub fn from_triangles(tris: &[[DVec3; 3]]) -> Self {
+        let mut prims: Vec<Prim> = tris
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let lo = t[0].min(t[1]).min(t[2]);
+                let hi = t[0].max(t[1]).max(t[2]);
+                Prim {
+                    lo,
+                    hi,
+                    c: (lo + hi) * 0.5,
+                    idx: i as u32,
+                }
+            })
+            .collect();
+        let mut nodes = Vec::with_capacity((2 * prims.len()).saturating_sub(1));
+        if !prims.is_empty() {
+            build(&mut prims, 0, 0, &mut nodes);
+        }
+        let order: Vec<u32> = prims.iter().map(|p| p.idx).collect();
+        let tris = order.iter().map(|&i| tris[i as usize]).collect();
+        TriangleBvh { nodes, order, tris }
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// True when the tree holds no triangle.
+    pub fn is_empty(&self) -> bool {
+        self.tris.is_empty()
+    }
+
+    /// Bounding box `(lo, hi)` of all triangles (`None` when empty).
+    pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
+        self.nodes.first().map(|n| (n.lo, n.hi))
+    }
+
+    /// The corners of the triangle in BVH slot `slot` (its mesh index is `order[slot]`).
+    #[inline]
+    pub fn slot_triangle(&self, slot: usize) -> [DVec3; 3] {
+        self.tris[slot]
+    }
+
+    /// The nearest surface point to `p` whose squared distance is at most `upper_bound_sq`
+    /// (`f64::INFINITY` for no bound), or `None` when no triangle is that close.
+    ///
+    /// Ordered depth-first descent (nearer child first) that prunes boxes farther than the
+    /// best triangle found so far. Ties keep the first triangle found; the distance is the
+    /// exact minimum over all triangles of [`closest_point_on_triangle`].
+    pub fn closest_point(&self, p: DVec3, upper_bound_sq: f64) -> Option<Closest> {
+        let mut best = upper_bound_sq;
+        let mut found: Option<(usize, DVec3)> = None;
+        let root = self.nodes.first()?;
+        if !(root.dist_sq(p) <= best) {
+            return None;
+        }
+        let mut stack = [(0u32, 0.0f64); MAX_DEPTH + 2];
+        let mut sp = 0usize;
+        let mut node = 0usize;
+        loop {
+            let n = &self.nodes[node];
+            let mut next = None;
+            if n.is_leaf() {
+                let s = n.start as usize;
+                for (slot, &[a, b, c]) in self.tris[s..s + n.count as usize].iter().enumerate() {
+                    // The triangle's own box first: a cheap, exactly conservative bound.
+                    let lo = a.min(b).min(c);
+                    let hi = a.max(b).max(c);
+                    if (lo - p).max(p - hi).max(DVec3::ZERO).length_squared() > best {
+                        continue;
+                    }
+                    let q = closest_point_on_triangle(p, a, b, c);
+                    let d = (p - q).length_squared();
+                    if d < best || (found.is_none() && d <= best) {
+                        best = d;
+                        found = Some((s + slot, q));
+                    }
+                }
+            } else {
+                let (l, r) = (node + 1, n.start as usize);
+                let dl = self.nodes[l].dist_sq(p);
+                let dr = self.nodes[r].dist_sq(p);
+                let (near, dn, far, df) = if dl <= dr {
+                    (l, dl, r, dr)
+                } else {
+                    (r, dr, l, dl)
+                };
+                if df <= best {
+                    stack[sp] = (far as u32, df);
+                    sp += 1;
+                }
+                if dn <= best {
+                    next = Some(near);
+                }
+            }
+            match next {
+                Some(nx) => node = nx,
+                None => loop {
+                    if sp == 0 {
+                        return found.map(|(slot, point)| Closest {
+                            dist_sq: best,
+                            point,
+                            triangle: self.order[slot],
+                            slot: slot as u32,
+                        });
+                    }
+                    sp -= 1;
+                    let (idx, d) = stack[sp];
+                    if d <= best {
+                        node = idx as usize;
+                        break;
+                    }
+                },
+            }
+        }
+    }
+
+    /// Like [`closest_point`](Self::closest_point) with the bound taken from the triangle in
+    /// `hint_slot` (typically the answer for a nearby point): always finds the nearest triangle,
+    /// but prunes most of the tree from the start.
+    pub fn closest_point_from(&self, p: DVec3, hint_slot: u32) -> Option<Closest> {
+        let bound = match self.tris.get(hint_slot as usize) {
+            Some(&[a, b, c]) => (p - closest_point_on_triangle(p, a, b, c)).length_squared(),
+            None => f64::INFINITY,
+        };
+        self.closest_point(p, bound)
+    }
+
+    /// Squared distance from `p` to the nearest triangle (`f64::INFINITY` when empty).
+    pub fn distance_sq(&self, p: DVec3) -> f64 {
+        self.closest_point(p, f64::INFINITY)
+            .map_or(f64::INFINITY, |c| c.dist_sq)
+    }
+}
+
+/// Builds the subtree over `prims` (whose first slot is `first`) and appends it to `out`.
+fn build(prims: &mut [Prim], first: u32, depth: u32, out: &mut Vec<BvhNode>) {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    let mut clo = lo;
+    let mut chi = hi;
+    for p in prims.iter() {
+        lo = lo.min(p.lo);
+        hi = hi.max(p.hi);
+        clo = clo.min(p.c);
+        chi = chi.max(p.c);
+    }
+    let n = prims.len();
+    if n <= LEAF_SIZE {
+        out.push(BvhNode {
+            lo,
+            hi,
+            start: first,
+            count: n as u32,
+        });
+        return;
+    }
+    let mid = split(prims, clo, chi, depth);
+    let me = out.len();
+    out.push(BvhNode {
+        lo,
+        hi,
+        start: 0,
+        count: 0,
+    });
+    let (left, right) = prims.split_at_mut(mid);
+    let rfirst = first + mid as u32;
+    if n > PAR_THRESHOLD {
+        let (ln, rn) = rayon::join(
+            || {
+                let mut v = Vec::with_capacity(2 * left.len());
+                build(left, first, depth + 1, &mut v);
+                v
+            },
+            || {
+                let mut v = Vec::with_capacity(2 * right.len());
+                build(right, rfirst, depth + 1, &mut v);
+                v
+            },
+        );
+        append_shifted(out, &ln);
+        out[me].start = out.len() as u32;
+        append_shifted(out, &rn);
+    } else {
+        build(left, first, depth + 1, out);
+        out[me].start = out.len() as u32;
+        build(right, rfirst, depth + 1, out);
+    }
+}
+
+/// Appends a subtree built in its own vector, shifting its child links.
+fn append_shifted(out: &mut Vec<BvhNode>, sub: &[BvhNode]) {
+    let base = out.len() as u32;
+    out.extend(sub.iter().map(|n| {
+        let mut n = *n;
+        if !n.is_leaf() {
+            n.start += base;
+        }
+        n
+    }));
+}
+
+/// Reorders `prims` into two non-empty halves and returns the size of the first.
+fn split(prims: &mut [Prim], clo: DVec3, chi: DVec3, depth: u32) -> usize {
+    let n = prims.len();
+    let ext = chi - clo;
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    if !(ext[axis] > 0.0) {
+        // All centroids coincide (or are not finite): split by position in the list.
+        return n / 2;
+    }
+    if depth < MEDIAN_DEPTH {
+        if let Some(m) = sah_split(prims, clo, ext) {
+            return m;
+        }
+    }
+    // Median split along the longest axis (total order, so deterministic).
+    let mid = n / 2;
+    prims.select_nth_unstable_by(mid, |a, b| {
+        a.c[axis]
+            .total_cmp(&b.c[axis])
+            .then(a.idx.cmp(&b.idx))
+    });
+    mid
+}
+
+/// Binned SAH over the three axes; `None` when no bin boundary separates the centroids.
+fn sah_split(prims: &mut [Prim], clo: DVec3, ext: DVec3) -> Option<usize> {
+    let mut bins = [[Bin::EMPTY; BINS]; 3];
+    let scale = DVec3::new(
+        if ext.x > 0.0 { BINS as f64 / ext.x } else { 0.0 },
+        if ext.y > 0.0 { BINS as f64 / ext.y } else { 0.0 },
+        if ext.z > 0.0 { BINS as f64 / ext.z } else { 0.0 },
+    );
+    let bin_of = |c: f64, a: usize| -> usize {
+        // NaN casts to 0; the `min` keeps the maximum centroid in the last bin.
+        (((c - clo[a]) * scale[a]) as usize).min(BINS - 1)
+    };
+    for p in prims.iter() {
+        for (a, axis_bins) in bins.iter_mut().enumerate() {
+            let b = &mut axis_bins[bin_of(p.c[a], a)];
+            b.lo = b.lo.min(p.lo);
+            b.hi = b.hi.max(p.hi);
+            b.n += 1;
+        }
+    }
+    let mut best: Option<(f64, usize, usize)> = None; // (cost, axis, bins on the left)
+    for (a, axis_bins) in bins.iter().enumerate() {
+        if !(ext[a] > 0.0) {
+            continue;
+        }
+        // Sweep from the right to get suffix areas and counts.
+        let mut right_cost = [0.0f64; BINS];
+        let (mut lo, mut hi, mut cnt) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY), 0);
+        for i in (1..BINS).rev() {
+            let b = &axis_bins[i];
+            lo = lo.min(b.lo);
+            hi = hi.max(b.hi);
+            cnt += b.n;
+            right_cost[i] = if cnt > 0 {
+                half_area(lo, hi) * cnt as f64
+            } else {
+                0.0
+            };
+        }
+        let (mut lo, mut hi, mut cnt) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY), 0);
+        for i in 0..BINS - 1 {
+            let b = &axis_bins[i];
+            lo = lo.min(b.lo);
+            hi = hi.max(b.hi);
+            cnt += b.n;
+            if cnt == 0 || cnt == prims.len() {
+                continue;
+            }
+            let cost = half_area(lo, hi) * cnt as f64 + right_cost[i + 1];
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, a, i + 1));
+            }
+        }
+    }
+    let (_, axis, nl) = best?;
+    // In-place partition: bins < nl to the front.
+    let mut i = 0;
+    let mut j = prims.len();
+    while i < j {
+        if bin_of(prims[i].c[axis], axis) < nl {
+            i += 1;
+        } else {
+            j -= 1;
+            prims.swap(i, j);
+        }
+    }
+    (i > 0 && i < prims.len()).then_some(i)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::closest::point_triangle_distance_sq;
+    use proptest::prelude::*;
+
+    fn brute(tris: &[[DVec3; 3]], p: DVec3) -> f64 {
+        tris.iter()
+            .map(|t| point_triangle_distance_sq(p, t[0], t[1], t[2]))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    fn check_structure(bvh: &TriangleBvh, n: usize) {
+        assert_eq!(bvh.len(), n);
+        let mut seen = vec![false; n];
+        for &o in &bvh.order {
+            assert!(!seen[o as usize]);
+            seen[o as usize] = true;
+        }
+        let mut covered = 0;
+        for (i, node) in bvh.nodes.iter().enumerate() {
+            if node.is_leaf() {
+                assert!(node.count as usize <= LEAF_SIZE);
+                covered += node.count as usize;
+                for t in &bvh.tris[node.start as usize..(node.start + node.count) as usize] {
+                    for v in t {
+                        assert!(v.cmpge(node.lo).all() && v.cmple(node.hi).all());
+                    }
+                }
+            } else {
+                for c in [i + 1, node.start as usize] {
+                    assert!(c > i && c < bvh.nodes.len());
+                    let ch = &bvh.nodes[c];
+                    assert!(ch.lo.cmpge(node.lo).all() && ch.hi.cmple(node.hi).all());
+                }
+            }
+        }
+        assert_eq!(covered, n);
+    }
+
+    fn v3(r: f64) -> impl Strategy<Value = DVec3> {
+        (-r..r, -r..r, -r..r).prop_map(|(x, y, z)| DVec3::new(x, y, z))
+    }
+
+    proptest! {
+        #[test]
+        fn closest_equals_brute_force(
+            tris in prop::collection::vec((v3(1.0), v3(0.3), v3(0.3)), 1..120),
+            pts in prop::collection::vec(v3(1.5), 1..20),
+            bound in prop::sample::select(vec![f64::INFINITY, 0.01, 0.1, 0.5]),
+        ) {
+            let tris: Vec<[DVec3; 3]> = tris.iter().map(|&(a, b, c)| [a, a + b, a + c]).collect();
+            let bvh = TriangleBvh::from_triangles(&tris);
+            check_structure(&bvh, tris.len());
+            for &p in &pts {
+                let r = brute(&tris, p);
+                match bvh.closest_point(p, bound) {
+                    Some(c) => {
+                        prop_assert!(c.dist_sq <= bound);
+                        prop_assert!((c.dist_sq - r).abs() <= 1e-12 * (1.0 + r), "{} vs {}", c.dist_sq, r);
+                        let t = tris[c.triangle as usize];
+                        prop_assert_eq!(point_triangle_distance_sq(p, t[0], t[1], t[2]), c.dist_sq);
+                        prop_assert!(((c.point - p).length_squared() - c.dist_sq).abs() <= 1e-12);
+                        prop_assert_eq!(bvh.order[c.slot as usize], c.triangle);
+                        // Seeding with any triangle gives the same distance.
+                        for hint in [0, c.slot, (tris.len() / 2) as u32, u32::MAX] {
+                            let s = bvh.closest_point_from(p, hint).unwrap();
+                            prop_assert_eq!(s.dist_sq, bvh.distance_sq(p));
+                        }
+                    }
+                    None => prop_assert!(r > bound * (1.0 - 1e-12), "missed {} <= {}", r, bound),
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn degenerate_inputs() {
+        assert!(TriangleBvh::from_triangles(&[]).closest_point(DVec3::ZERO, f64::INFINITY).is_none());
+        // Many identical triangles and point triangles: no panic, a valid tree.
+        let t = [DVec3::ZERO, DVec3::X, DVec3::Y];
+        let mut tris = vec![t; 1000];
+        tris.extend(std::iter::repeat_n([DVec3::ONE; 3], 500));
+        let bvh = TriangleBvh::from_triangles(&tris);
+        check_structure(&bvh, tris.len());
+        let c = bvh.closest_point(DVec3::new(0.2, 0.2, 1.0), f64::INFINITY).unwrap();
+        assert!((c.dist_sq - 1.0).abs() < 1e-15);
+        // Exponentially spaced triangles (a bad case for SAH depth).
+        let tris: Vec<[DVec3; 3]> = (0..2000)
+            .map(|i| {
+                let x = 1.01f64.powi(i);
+                [DVec3::new(x, 0.0, 0.0), DVec3::new(x, 1.0, 0.0), DVec3::new(x, 0.0, 1.0)]
+            })
+            .collect();
+        let bvh = TriangleBvh::from_triangles(&tris);
+        check_structure(&bvh, tris.len());
+        let p = DVec3::new(3.3, 0.1, 0.1);
+        assert_eq!(bvh.distance_sq(p), brute(&tris, p));
+    }
+
+    #[test]
+    fn deterministic_parallel_build() {
+        let m = crate::shapes::icosphere(5);
+        let a = TriangleBvh::new(&m);
+        let b = TriangleBvh::new(&m);
+        assert_eq!(a.nodes, b.nodes);
+        assert_eq!(a.order, b.order);
+        check_structure(&a, m.triangles.len());
+    }
+}

@@ -2,9 +2,13 @@
 //! BVH ([`bvh`]) and the generalized winding number ([`winding`]).
 
 pub mod bvh;
+pub mod closest;
 pub mod io;
 pub mod report;
 pub mod winding;
+
+pub use io::{load, load_bytes, save_obj, save_stl, Format};
+pub use report::MeshReport;
 
 use glam::DVec3;
 

@@ -1,5 +1,49 @@
 //! Queries between two Inner Sphere Trees under rigid poses.
+//!
+//! Every query takes the two trees, the world pose of each and the [`PairState`] of the pair
+//! (created once per pair with [`PairState::new`]). Internally a query works in A's frame:
+//! the relative pose of B is converted to f32 once per query and only the B nodes a traversal
+//! actually visits are transformed. The state carries what temporal coherence needs and all
+//! scratch memory, so that a query allocates nothing and takes no lock in steady state; list
+//! results are slices borrowed from the state. Trees are immutable and shared freely between
+//! threads; one state serves one pair on one thread at a time.
+//!
+//! | query | function | answer |
+//! |---|---|---|
+//! | exact proximity of the sphere sets (best-first branch and bound) | [`proximity`] | distance, closest points, leaf pair |
+//! | the paper's distance traversal (III-A) | [`distance_traversal`] | contact yes/no, a contact, a separation bound |
+//! | the paper's backtracking traversal (III-B, Alg. 1–2) | [`backtracking`] | same, restarting from last frame's contact |
+//! | the paper's multipoint traversal (III-C) | [`multipoint`] | up to `k` contacts, one per split-depth node |
+//! | penetration volume, force, torque, patches | [`penetration`] | exact volume of the intersection of the sphere unions |
+//! | time-critical penetration volume | [`penetration_budgeted`] | volume found so far and an upper bound |
+//!
+//! Broad phase and safe motion: every query first rejects on the root spheres, and a query
+//! that proved the bodies separated by `d` lets the contact queries skip later frames until
+//! the relative motion could have closed `d` ([`PairState::safe_separation`]).
+//!
+//! [`brute`] holds O(n·m) references over all leaf pairs that the tests compare against.
 
+pub mod brute;
+mod geometry;
+mod heap;
+mod info;
+mod parse;
+mod penetration;
 pub mod pose;
+mod proximity;
+mod state;
+mod traversal;
 
+pub use geometry::{lens_volume, Contact};
+pub use info::TreeInfo;
+pub use parse::parse_pose;
+pub use penetration::{
+    penetration, penetration_budgeted, BudgetedVolume, Patch, Penetration, PenetrationOptions,
+};
 pub use pose::Pose;
+pub use proximity::{proximity, Proximity, ProximityOptions};
+pub use state::{PairState, SeparationRecord};
+pub use traversal::{
+    backtracking, distance_traversal, multipoint, ContactOptions, ContactQuery, MultipointOptions,
+    MultipointResult,
+};

@@ -1,7 +1,7 @@
 //! The finished Inner Sphere Tree: flat f32 arrays ready for traversal, and its file format
 //! ([`file`]).
 
-// pub mod check;
+pub mod check;
 pub mod export;
 pub mod file;
 

@@ -10,9 +10,7 @@ use std::path::PathBuf;
 pub fn data_dir() -> PathBuf {
     let dir = std::env::var_os("INNERSPHERE_DATA")
         .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data")
-        });
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
     assert!(
         dir.join("README.md").is_file(),
         "real test data is missing: expected ../shared/data beside the repository (or set INNERSPHERE_DATA); looked in {}",

@@ -1,0 +1,263 @@
+//! Small geometry shared by the queries: the f32 relative transform, sphere–sphere lens
+//! volumes and centroids, contacts of leaf pairs.
+
+use super::Pose;
+use crate::SphereTree;
+use glam::{DMat3, DVec3};
+
+/// The pose of B in A's frame in f32, applied to B's node centres during a traversal.
+///
+/// Every query and every brute-force reference transforms B's centres with [`Rel32::apply`],
+/// so that they see bit-identical coordinates.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Rel32 {
+    m: [f32; 9],
+    t: [f32; 3],
+}
+
+impl Rel32 {
+    /// The f32 matrix and translation of `p`.
+    pub(crate) fn new(p: &Pose) -> Rel32 {
+        let m = DMat3::from_quat(p.rotation);
+        let (c0, c1, c2) = (m.x_axis, m.y_axis, m.z_axis);
+        Rel32 {
+            m: [
+                c0.x as f32,
+                c1.x as f32,
+                c2.x as f32,
+                c0.y as f32,
+                c1.y as f32,
+                c2.y as f32,
+                c0.z as f32,
+                c1.z as f32,
+                c2.z as f32,
+            ],
+            t: [
+                p.translation.x as f32,
+                p.translation.y as f32,
+                p.translation.z as f32,
+            ],
+        }
+    }
+
+    /// `R·p + t` in f32, always with the same operation order.
+    #[inline(always)]
+    pub(crate) fn apply(&self, x: f32, y: f32, z: f32) -> [f32; 3] {
+        let m = &self.m;
+        [
+            m[0] * x + m[1] * y + m[2] * z + self.t[0],
+            m[3] * x + m[4] * y + m[5] * z + self.t[1],
+            m[6] * x + m[7] * y + m[8] * z + self.t[2],
+        ]
+    }
+
+    /// Length of the translation.
+    pub(crate) fn translation_len(&self) -> f32 {
+        (self.t[0] * self.t[0] + self.t[1] * self.t[1] + self.t[2] * self.t[2]).sqrt()
+    }
+}
+
+/// Extra radius added to every pruning test on inner nodes of a query, covering the f32
+/// rounding of B's transform and of the distance itself, so that an inner-node test never
+/// rejects a pair whose leaves overlap under the exact leaf test (`|Δ|² < (ra + rb)²` on the
+/// transformed f32 centres). Leaf tests use no slack: they define the answer.
+#[inline]
+pub(crate) fn pruning_slack(extent_a: f32, extent_b: f32, rel: &Rel32) -> f32 {
+    16.0 * f32::EPSILON * (extent_a + extent_b + rel.translation_len())
+}
+
+/// Volume of the intersection of two balls of radii `ra`, `rb` whose centres are `d` apart
+/// (the spherical lens; the smaller ball when one contains the other; 0 when disjoint).
+pub fn lens_volume(ra: f64, rb: f64, d: f64) -> f64 {
+    lens(ra, rb, d).0
+}
+
+/// Volume of a spherical cap of height `h` of a ball of radius `r`.
+#[inline]
+fn cap_volume(r: f64, h: f64) -> f64 {
+    std::f64::consts::PI * h * h * (3.0 * r - h) / 3.0
+}
+
+/// Distance of a cap's centroid from its ball's centre.
+#[inline]
+fn cap_centroid(r: f64, h: f64) -> f64 {
+    let k = 3.0 * r - h;
+    if k <= 0.0 {
+        0.0
+    } else {
+        3.0 * (2.0 * r - h) * (2.0 * r - h) / (4.0 * k)
+    }
+}
+
+/// Lens volume and the distance of its centroid from A's centre along the centre line.
+#[inline]
+pub(crate) fn lens(ra: f64, rb: f64, d: f64) -> (f64, f64) {
+    if d >= ra + rb {
+        return (0.0, 0.0);
+    }
+    if d <= (ra - rb).abs() {
+        let r = ra.min(rb);
+        let at = if ra <= rb { 0.0 } else { d };
+        return (4.0 / 3.0 * std::f64::consts::PI * r * r * r, at);
+    }
+    // The intersection circle lies at distance x from A's centre.
+    let x = (d * d + ra * ra - rb * rb) / (2.0 * d);
+    let ha = (ra - x).clamp(0.0, 2.0 * ra);
+    let hb = (rb - (d - x)).clamp(0.0, 2.0 * rb);
+    let va = cap_volume(ra, ha);
+    let vb = cap_volume(rb, hb);
+    let v = va + vb;
+    if v <= 0.0 {
+        return (0.0, x);
+    }
+    let ga = cap_centroid(ra, ha);
+    let gb = d - cap_centroid(rb, hb);
+    (v, (va * ga + vb * gb) / v)
+}
+
+/// One contact between a leaf sphere of A and a leaf sphere of B.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Contact {
+    /// Leaf (node index) of tree A.
+    pub leaf_a: u32,
+    /// Leaf (node index) of tree B.
+    pub leaf_b: u32,
+    /// World point in the middle of the overlap, on the line through both centres.
+    pub point: DVec3,
+    /// World unit direction from A's sphere centre to B's (zero when the centres coincide).
+    pub normal: DVec3,
+    /// Overlap of the two spheres along the centre line, `ra + rb − |cb − ca|` (> 0).
+    pub depth: f64,
+}
+
+/// Centre (A's frame, f64 of the f32 values) and radius of leaf `la` of A and of leaf `lb` of
+/// B whose transformed centre is `cb`.
+#[inline]
+pub(crate) fn leaf_pair(
+    a: &SphereTree,
+    la: u32,
+    b: &SphereTree,
+    lb: u32,
+    cb: [f32; 3],
+) -> (DVec3, f64, DVec3, f64) {
+    let i = la as usize;
+    let ca = DVec3::new(a.x[i] as f64, a.y[i] as f64, a.z[i] as f64);
+    let cb = DVec3::new(cb[0] as f64, cb[1] as f64, cb[2] as f64);
+    (ca, a.r[i] as f64, cb, b.r[lb as usize] as f64)
+}
+
+/// Unit vector from `ca` to `cb` (zero when they coincide) and their distance.
+#[inline]
+pub(crate) fn direction(ca: DVec3, cb: DVec3) -> (DVec3, f64) {
+    let v = cb - ca;
+    let d = v.length();
+    if d > 0.0 {
+        (v / d, d)
+    } else {
+        (DVec3::ZERO, 0.0)
+    }
+}
+
+/// The world contact of an (overlapping) leaf pair.
+pub(crate) fn make_contact(
+    a: &SphereTree,
+    la: u32,
+    b: &SphereTree,
+    lb: u32,
+    cb: [f32; 3],
+    pose_a: &Pose,
+) -> Contact {
+    let (ca, ra, cb, rb) = leaf_pair(a, la, b, lb, cb);
+    let (u, d) = direction(ca, cb);
+    let depth = ra + rb - d;
+    let p = ca + u * (ra - 0.5 * depth);
+    Contact {
+        leaf_a: la,
+        leaf_b: lb,
+        point: pose_a.transform_point(p),
+        normal: pose_a.transform_vector(u),
+        depth,
+    }
+}
+
+/// True when the f32 spheres overlap (the exact leaf predicate of every query).
+#[inline(always)]
+pub(crate) fn overlaps(ax: f32, ay: f32, az: f32, ar: f32, b: [f32; 3], br: f32) -> bool {
+    let dx = b[0] - ax;
+    let dy = b[1] - ay;
+    let dz = b[2] - az;
+    let s = ar + br;
+    dx * dx + dy * dy + dz * dz < s * s
+}
+
+/// Signed distance `|Δ| − ra − rb` of two f32 spheres (the exact leaf distance of every query).
+#[inline(always)]
+pub(crate) fn sphere_distance(ax: f32, ay: f32, az: f32, ar: f32, b: [f32; 3], br: f32) -> f32 {
+    let dx = b[0] - ax;
+    let dy = b[1] - ay;
+    let dz = b[2] - az;
+    (dx * dx + dy * dy + dz * dz).sqrt() - (ar + br)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn lens_limits_and_symmetry() {
+        assert_eq!(lens_volume(1.0, 1.0, 2.0), 0.0);
+        assert!((lens_volume(1.0, 0.5, 0.2) - 4.0 / 3.0 * PI * 0.125).abs() < 1e-12);
+        assert!((lens_volume(1.0, 1.0, 1e-9) - 4.0 / 3.0 * PI).abs() < 1e-6);
+        for &(ra, rb, d) in &[(1.0, 0.7, 1.2), (0.3, 0.9, 0.8), (1.0, 1.0, 1.0)] {
+            let v1 = lens_volume(ra, rb, d);
+            let v2 = lens_volume(rb, ra, d);
+            assert!((v1 - v2).abs() < 1e-12);
+            // The classic closed form.
+            let f = PI
+                * (ra + rb - d).powi(2)
+                * (d * d + 2.0 * d * (ra + rb) - 3.0 * (ra - rb).powi(2))
+                / (12.0 * d);
+            assert!((v1 - f).abs() < 1e-12, "{v1} vs {f}");
+            // Centroid between the two centres, mirrored when swapped.
+            let (_, g1) = lens(ra, rb, d);
+            let (_, g2) = lens(rb, ra, d);
+            assert!((g1 + g2 - d).abs() < 1e-12);
+        }
+        // Equal radii: the centroid is half-way.
+        assert!((lens(1.0, 1.0, 1.3).1 - 0.65).abs() < 1e-12);
+    }
+
+    #[test]
+    fn lens_by_monte_carlo() {
+        let (ra, rb, d) = (1.0f64, 0.6f64, 1.1f64);
+        let mut state = 12345u64;
+        let mut rnd = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64) / ((1u64 << 53) as f64)
+        };
+        let n = 400_000;
+        let (mut hits, mut gx) = (0usize, 0.0);
+        for _ in 0..n {
+            let p = DVec3::new(
+                rnd() * 2.0 - 1.0 + 0.5,
+                rnd() * 2.0 - 1.0,
+                rnd() * 2.0 - 1.0,
+            );
+            if p.length() < ra && (p - DVec3::new(d, 0.0, 0.0)).length() < rb {
+                hits += 1;
+                gx += p.x;
+            }
+        }
+        let vol = 8.0 * hits as f64 / n as f64;
+        let (v, g) = lens(ra, rb, d);
+        assert!((vol - v).abs() < 0.02 * v + 1e-3, "{vol} vs {v}");
+        assert!(
+            (gx / hits as f64 - g).abs() < 0.01,
+            "{} vs {g}",
+            gx / hits as f64
+        );
+    }
+}

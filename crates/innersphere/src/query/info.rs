@@ -1,0 +1,78 @@
+//! Per-tree facts the queries need beyond the tree itself, computed once per tree.
+
+use crate::SphereTree;
+use glam::DVec3;
+
+/// Query-side facts about one tree, computed once ([`TreeInfo::new`], O(nodes)) and shared
+/// by every [`PairState`](super::PairState) that involves the tree.
+#[derive(Debug, Clone)]
+pub struct TreeInfo {
+    /// Number of nodes of the tree it was made for.
+    pub nodes: usize,
+    /// Number of leaves (inner spheres).
+    pub leaves: usize,
+    /// Largest node depth.
+    pub max_depth: u16,
+    /// Largest child count of any node.
+    pub max_children: usize,
+    /// Centre of the root sphere (model frame).
+    pub root_center: DVec3,
+    /// Largest distance of any point of any leaf sphere from the root centre (≤ root radius):
+    /// the body radius of the safe-motion bound.
+    pub radius: f64,
+    /// Largest `|c| + r` of any node (model frame), for the f32 rounding slack.
+    pub extent: f32,
+    /// Centre of mass of the mesh (model frame), for torques.
+    pub center_of_mass: DVec3,
+    /// Total volume of the leaf spheres below each node (rounded up to f32), the
+    /// time-critical query's per-node upper bound on any intersection volume.
+    pub subtree_volume: Vec<f32>,
+}
+
+/// Rounds a non-negative f64 up to the next f32.
+fn f32_up(v: f64) -> f32 {
+    let f = v as f32;
+    if (f as f64) < v {
+        f32::from_bits(f.to_bits() + 1)
+    } else {
+        f
+    }
+}
+
+impl TreeInfo {
+    /// Computes the facts of `tree`.
+    pub fn new(tree: &SphereTree) -> TreeInfo {
+        let n = tree.len();
+        let mut vol = vec![0.0f64; n];
+        for i in (0..n).rev() {
+            if tree.is_leaf(i) {
+                let r = tree.r[i] as f64;
+                vol[i] = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+            } else {
+                vol[i] = tree.children(i).map(|c| vol[c]).sum();
+            }
+        }
+        let (root_center, _) = tree.sphere(0);
+        let root_center = root_center.as_dvec3();
+        let mut radius = 0.0f64;
+        let mut extent = 0.0f32;
+        for i in 0..n {
+            let (c, r) = tree.sphere(i);
+            extent = extent.max(c.length() + r);
+            if tree.is_leaf(i) {
+                radius = radius.max((c.as_dvec3() - root_center).length() + r as f64);
+            }
+        }
+        TreeInfo {
+            nodes: n,
+            leaves: tree.leaf_count(),
+            max_depth: tree.max_depth(),
+            max_children: tree.child_count.iter().copied().max().unwrap_or(0) as usize,
+            root_center,
+            radius,
+            extent,
+            center_of_mass: DVec3::from_array(tree.meta.center_of_mass),
+            subtree_volume: vol.into_iter().map(f32_up).collect(),
+        }
+    }
+}

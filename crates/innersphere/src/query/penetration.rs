@@ -1,0 +1,413 @@
+//! Penetration volume, force, torque and contact patches (beyond the paper), and its
+//! time-critical variant.
+//!
+//! Leaves within one tree are disjoint, so the sum of the lens volumes of all overlapping
+//! leaf pairs is exactly the volume of the intersection of the two sphere unions.
+
+use super::geometry::{direction, leaf_pair, lens};
+use super::heap::Entry;
+use super::state::{expand_larger, test_pair, PairState, StackEntry};
+use super::Pose;
+use crate::SphereTree;
+use glam::DVec3;
+
+/// Options of [`penetration`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PenetrationOptions {
+    /// Force per unit of penetration volume (force = stiffness × volume).
+    pub stiffness: f64,
+    /// At most this many contact patches (0 = none).
+    pub max_patches: usize,
+    /// A pair joins the patch whose first point is nearest when within this distance (model
+    /// units); 0 = automatic: 1/8 of the smaller root-sphere radius.
+    pub patch_radius: f64,
+    /// Skip (answer "no penetration") while the last proved separation holds.
+    pub safe_motion: bool,
+}
+
+impl Default for PenetrationOptions {
+    fn default() -> Self {
+        PenetrationOptions {
+            stiffness: 1.0,
+            max_patches: 8,
+            patch_radius: 0.0,
+            safe_motion: true,
+        }
+    }
+}
+
+/// A cluster of overlapping leaf pairs (world frame).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Patch {
+    /// Volume-weighted centroid of the pairs' lenses.
+    pub point: DVec3,
+    /// Unit volume-weighted direction from A into B (the direction B is pushed).
+    pub normal: DVec3,
+    /// Largest pair overlap `ra + rb − d` in the patch.
+    pub depth: f64,
+    /// Sum of the pairs' lens volumes.
+    pub volume: f64,
+    /// Number of leaf pairs.
+    pub pairs: u32,
+}
+
+/// Running sums of one patch (A's frame).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PatchAcc {
+    seed: DVec3,
+    vol: f64,
+    vg: DVec3,
+    vu: DVec3,
+    depth: f64,
+    pairs: u32,
+}
+
+/// Result of [`penetration`]; the patches are borrowed from the [`PairState`].
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Penetration<'s> {
+    /// Volume of the intersection of the two inner-sphere unions: the sum of the lens
+    /// volumes of all overlapping leaf pairs.
+    pub volume: f64,
+    /// Number of overlapping leaf pairs.
+    pub pairs: usize,
+    /// Largest leaf-pair overlap `ra + rb − d`.
+    pub max_depth: f64,
+    /// Contact normal (world): unit `Σ vᵢ·uᵢ`, `uᵢ` the direction from A's sphere centre to
+    /// B's of pair `i` and `vᵢ` its lens volume. Zero without penetration.
+    pub normal: DVec3,
+    /// Force on B (world): `stiffness × volume × normal`. The force on A is its opposite.
+    pub force: DVec3,
+    /// Torque on A about A's centre of mass (world).
+    pub torque_a: DVec3,
+    /// Torque on B about B's centre of mass (world).
+    pub torque_b: DVec3,
+    /// Contact patches.
+    pub patches: &'s [Patch],
+    /// 0 with penetration; otherwise a proved lower bound on the separation.
+    pub distance: f64,
+    /// Node pairs tested.
+    pub visits: u64,
+    /// True when the safe-motion bound answered without a traversal.
+    pub skipped: bool,
+}
+
+/// Sums over the overlapping leaf pairs (A's frame).
+#[derive(Debug, Default, Clone, Copy)]
+pub(crate) struct Sums {
+    pub volume: f64,
+    /// Σ v·u.
+    pub vu: DVec3,
+    /// Σ v·(g × u), g the lens centroid.
+    pub vgu: DVec3,
+    pub max_depth: f64,
+    pub pairs: usize,
+}
+
+impl Sums {
+    /// Adds one overlapping leaf pair; returns its (volume, centroid, direction, depth).
+    #[inline]
+    pub(crate) fn add(
+        &mut self,
+        a: &SphereTree,
+        la: u32,
+        b: &SphereTree,
+        lb: u32,
+        cb: [f32; 3],
+    ) -> (f64, DVec3, DVec3, f64) {
+        let (ca, ra, cbd, rb) = leaf_pair(a, la, b, lb, cb);
+        let (u, d) = direction(ca, cbd);
+        let (v, g) = lens(ra, rb, d);
+        let p = ca + u * g;
+        let depth = ra + rb - d;
+        self.pairs += 1;
+        self.volume += v;
+        self.vu += u * v;
+        self.vgu += p.cross(u) * v;
+        self.max_depth = self.max_depth.max(depth);
+        (v, p, u, depth)
+    }
+
+    /// (normal, force on B, torque on A, torque on B) in A's frame, torques about `com_a`
+    /// and `com_b` (A's frame). The per-pair forces `s·vᵢ·uᵢ` are scaled so that they sum to
+    /// the force `k·V·n`.
+    pub(crate) fn wrench(
+        &self,
+        k: f64,
+        com_a: DVec3,
+        com_b: DVec3,
+    ) -> (DVec3, DVec3, DVec3, DVec3) {
+        let len = self.vu.length();
+        if len <= 0.0 || self.volume <= 0.0 {
+            return (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+        }
+        let n = self.vu / len;
+        let s = k * self.volume / len;
+        let force = n * (k * self.volume);
+        let torque_b = (self.vgu - com_b.cross(self.vu)) * s;
+        let torque_a = -(self.vgu - com_a.cross(self.vu)) * s;
+        (n, force, torque_a, torque_b)
+    }
+}
+
+/// Adds a pair to the nearest patch within `radius`, or opens a new one while fewer than
+/// `max` exist, else adds it to the nearest.
+#[inline]
+fn assign_patch(
+    acc: &mut Vec<PatchAcc>,
+    max: usize,
+    r2: f64,
+    v: f64,
+    p: DVec3,
+    u: DVec3,
+    depth: f64,
+) {
+    if max == 0 {
+        return;
+    }
+    let mut best = usize::MAX;
+    let mut bd = f64::INFINITY;
+    for (i, pa) in acc.iter().enumerate() {
+        let dd = (pa.seed - p).length_squared();
+        if dd < bd {
+            bd = dd;
+            best = i;
+        }
+    }
+    if best == usize::MAX || (bd > r2 && acc.len() < max) {
+        acc.push(PatchAcc {
+            seed: p,
+            vol: 0.0,
+            vg: DVec3::ZERO,
+            vu: DVec3::ZERO,
+            depth: 0.0,
+            pairs: 0,
+        });
+        best = acc.len() - 1;
+    }
+    let pa = &mut acc[best];
+    pa.vol += v;
+    pa.vg += p * v;
+    pa.vu += u * v;
+    pa.depth = pa.depth.max(depth);
+    pa.pairs += 1;
+}
+
+/// Penetration volume of `a` at `pose_a` and `b` at `pose_b` (world poses), with the contact
+/// normal, force, torques about both centres of mass and contact patches.
+///
+/// Depth-first over the overlapping node pairs (larger sphere refined first), summing the
+/// exact lens volume of every overlapping leaf pair.
+pub fn penetration<'s>(
+    a: &SphereTree,
+    pose_a: &Pose,
+    b: &SphereTree,
+    pose_b: &Pose,
+    st: &'s mut PairState,
+    opts: &PenetrationOptions,
+) -> Penetration<'s> {
+    let ctx = st.begin(a, pose_a, b, pose_b);
+    st.patch_acc.clear();
+    st.patches.clear();
+    let mut visits = 0u64;
+    let mut min_sep = f32::INFINITY;
+    let mut sums = Sums::default();
+    let mut skipped = false;
+    let safe = if opts.safe_motion {
+        st.safe_separation_rel(&ctx.rel).filter(|&s| s > 0.0)
+    } else {
+        None
+    };
+    if let Some(d) = safe {
+        skipped = true;
+        min_sep = d as f32;
+    } else {
+        let (ov, lbr) = test_pair(&ctx, 0, 0, st.tb.get(0));
+        visits += 1;
+        let r2 = {
+            let r = if opts.patch_radius > 0.0 {
+                opts.patch_radius
+            } else {
+                0.125 * (a.r[0].min(b.r[0]) as f64)
+            };
+            r * r
+        };
+        let maxp = opts.max_patches;
+        if !ov {
+            min_sep = lbr;
+        } else if a.is_leaf(0) && b.is_leaf(0) {
+            let (v, p, u, depth) = sums.add(a, 0, b, 0, st.tb.get(0));
+            assign_patch(&mut st.patch_acc, maxp, r2, v, p, u, depth);
+        } else {
+            st.stack.clear();
+            st.stack.push(StackEntry {
+                a: 0,
+                b: 0,
+                depth: 0,
+            });
+            let stack = &mut st.stack;
+            let patch_acc = &mut st.patch_acc;
+            while let Some(e) = stack.pop() {
+                expand_larger(&ctx, &mut st.tb, e.a, e.b, |i, j, cb, d2, s, leafs| {
+                    visits += 1;
+                    if d2 < s * s {
+                        if leafs {
+                            let (v, p, u, depth) = sums.add(a, i, b, j, cb);
+                            assign_patch(patch_acc, maxp, r2, v, p, u, depth);
+                        } else {
+                            stack.push(StackEntry {
+                                a: i,
+                                b: j,
+                                depth: 0,
+                            });
+                        }
+                    } else {
+                        let lb = d2.sqrt() - s;
+                        if lb < min_sep {
+                            min_sep = lb;
+                        }
+                    }
+                });
+            }
+        }
+    }
+    let com_a = st.ia.center_of_mass;
+    let com_b = ctx.rel.transform_point(st.ib.center_of_mass);
+    let (n, f, ta, tb) = sums.wrench(opts.stiffness, com_a, com_b);
+    let rot = |v: DVec3| pose_a.transform_vector(v);
+    for pa in &st.patch_acc {
+        st.patches.push(Patch {
+            point: pose_a.transform_point(if pa.vol > 0.0 {
+                pa.vg / pa.vol
+            } else {
+                pa.seed
+            }),
+            normal: rot(pa.vu.normalize_or_zero()),
+            depth: pa.depth,
+            volume: pa.vol,
+            pairs: pa.pairs,
+        });
+    }
+    let distance = if sums.pairs > 0 {
+        if !skipped {
+            st.separation = None;
+        }
+        0.0
+    } else {
+        let d = min_sep.max(0.0) as f64;
+        if !skipped {
+            st.record_separation(&ctx, d);
+        }
+        d
+    };
+    Penetration {
+        volume: sums.volume,
+        pairs: sums.pairs,
+        max_depth: sums.max_depth,
+        normal: rot(n),
+        force: rot(f),
+        torque_a: rot(ta),
+        torque_b: rot(tb),
+        patches: &st.patches,
+        distance,
+        visits,
+        skipped,
+    }
+}
+
+/// Result of [`penetration_budgeted`].
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct BudgetedVolume {
+    /// Sum of the lens volumes of the overlapping leaf pairs found (≤ the exact volume).
+    pub volume: f64,
+    /// Proved upper bound on the exact volume (= `volume` when complete).
+    pub upper_bound: f64,
+    /// Node pairs tested (the budget may be exceeded by less than one refinement).
+    pub visits: u64,
+    /// True when every overlapping pair was refined: `volume` is exact.
+    pub complete: bool,
+}
+
+/// Time-critical penetration volume: refines node pairs in order of an upper bound of the
+/// volume still hidden below them, `min(lens of the node spheres, leaf volume below A's node,
+/// leaf volume below B's node)`, until `budget` node-pair tests are spent; returns the volume
+/// found so far and `found + Σ bounds of the unrefined pairs` as an upper bound. With an
+/// unlimited budget (`u64::MAX`) the volume is the exact one of [`penetration`].
+pub fn penetration_budgeted(
+    a: &SphereTree,
+    pose_a: &Pose,
+    b: &SphereTree,
+    pose_b: &Pose,
+    st: &mut PairState,
+    budget: u64,
+) -> BudgetedVolume {
+    let ctx = st.begin(a, pose_a, b, pose_b);
+    st.heap.clear();
+    let mut visits = 1u64;
+    let mut found = 0.0f64;
+    let (ov, _) = test_pair(&ctx, 0, 0, st.tb.get(0));
+    let va = &st.ia.subtree_volume;
+    let vb = &st.ib.subtree_volume;
+    let h = 0.5 * ctx.slack as f64;
+    let bound = |i: u32, j: u32, d2: f32| -> f32 {
+        let (ra, rb) = (a.r[i as usize] as f64 + h, b.r[j as usize] as f64 + h);
+        let (l, _) = lens(ra, rb, (d2 as f64).sqrt());
+        let ub = (l * (1.0 + 1e-6))
+            .min(va[i as usize] as f64)
+            .min(vb[j as usize] as f64);
+        let f = ub as f32;
+        if (f as f64) < ub {
+            f32::from_bits(f.to_bits() + 1)
+        } else {
+            f
+        }
+    };
+    if ov {
+        if a.is_leaf(0) && b.is_leaf(0) {
+            let mut s = Sums::default();
+            s.add(a, 0, b, 0, st.tb.get(0));
+            found = s.volume;
+        } else {
+            let cb = st.tb.get(0);
+            let dx = cb[0] - a.x[0];
+            let dy = cb[1] - a.y[0];
+            let dz = cb[2] - a.z[0];
+            st.heap.push(Entry {
+                key: -bound(0, 0, dx * dx + dy * dy + dz * dz),
+                a: 0,
+                b: 0,
+            });
+        }
+    }
+    let heap = &mut st.heap;
+    while visits < budget {
+        let Some(e) = heap.pop() else { break };
+        expand_larger(&ctx, &mut st.tb, e.a, e.b, |i, j, cb, d2, s, leafs| {
+            visits += 1;
+            if d2 < s * s {
+                if leafs {
+                    let mut s = Sums::default();
+                    s.add(a, i, b, j, cb);
+                    found += s.volume;
+                } else {
+                    heap.push(Entry {
+                        key: -bound(i, j, d2),
+                        a: i,
+                        b: j,
+                    });
+                }
+            }
+        });
+    }
+    let rest: f64 = heap.entries().iter().map(|e| -e.key as f64).sum();
+    let complete = heap.len() == 0;
+    BudgetedVolume {
+        volume: found,
+        upper_bound: if complete {
+            found
+        } else {
+            found + rest * (1.0 + 1e-12)
+        },
+        visits,
+        complete,
+    }
+}

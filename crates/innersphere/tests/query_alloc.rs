@@ -1,0 +1,136 @@
+//! Queries allocate nothing and take no lock in steady state: a counting global allocator
+//! (this test binary only) sees zero allocations while every query kind runs many times
+//! along a motion after a warm-up pass.
+
+mod query_util;
+
+use glam::DVec3;
+use innersphere::query::{
+    backtracking, distance_traversal, multipoint, penetration, penetration_budgeted, proximity,
+    ContactOptions, MultipointOptions, PairState, PenetrationOptions, ProximityOptions,
+};
+use query_util::*;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+struct Counting;
+
+static ALLOCS: AtomicU64 = AtomicU64::new(0);
+
+thread_local! {
+    static COUNTING: Cell<bool> = const { Cell::new(false) };
+}
+
+fn note() {
+    if COUNTING.with(|c| c.get()) {
+        ALLOCS.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        note();
+        unsafe { System.alloc(l) }
+    }
+    unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
+        note();
+        unsafe { System.alloc_zeroed(l) }
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
+        note();
+        unsafe { System.realloc(p, l, n) }
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        unsafe { System.dealloc(p, l) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Runs every query kind once per frame; returns a checksum so nothing is optimized away.
+fn run_all(
+    a: &innersphere::SphereTree,
+    b: &innersphere::SphereTree,
+    frames: &[(innersphere::query::Pose, innersphere::query::Pose)],
+    states: &mut [PairState],
+) -> f64 {
+    let mut sum = 0.0;
+    let on = ContactOptions { safe_motion: true };
+    let off = ContactOptions { safe_motion: false };
+    for (pa, pb) in frames {
+        let [s0, s1, s2, s3, s4, s5, s6, s7, s8] = states else { unreachable!() };
+        sum += proximity(a, pa, b, pb, s0, &ProximityOptions::default()).distance;
+        sum += proximity(a, pa, b, pb, s0, &ProximityOptions { signed: true, ..Default::default() }).distance;
+        sum += proximity(a, pa, b, pb, s0, &ProximityOptions { rel_tolerance: 0.1, abs_tolerance: 0.01, ..Default::default() }).distance;
+        sum += distance_traversal(a, pa, b, pb, s1, &off).distance;
+        sum += backtracking(a, pa, b, pb, s2, &off).distance;
+        sum += backtracking(a, pa, b, pb, s3, &on).distance;
+        for (k, split) in [(1, 3), (4, 2), (16, 5), (300, 8)] {
+            let m = multipoint(a, pa, b, pb, s4, &MultipointOptions { k, split_depth: split, ..Default::default() });
+            sum += m.contacts.len() as f64;
+        }
+        let m = multipoint(a, pa, b, pb, s5, &MultipointOptions { k: 16, split_depth: 4, reuse: false, safe_motion: false });
+        sum += m.contacts.len() as f64;
+        let p = penetration(a, pa, b, pb, s6, &PenetrationOptions { safe_motion: false, ..Default::default() });
+        sum += p.volume + p.patches.len() as f64 + p.torque_a.x;
+        let p = penetration(a, pa, b, pb, s7, &PenetrationOptions { max_patches: 3, ..Default::default() });
+        sum += p.force.length();
+        sum += penetration_budgeted(a, pa, b, pb, s8, 200).upper_bound;
+        sum += penetration_budgeted(a, pa, b, pb, s8, u64::MAX).volume;
+    }
+    sum
+}
+
+#[test]
+fn queries_allocate_nothing_in_steady_state() {
+    let t = trees();
+    for (ia, ib) in [(0, 2), (1, 3), (2, 2)] {
+        let (a, b) = (&t[ia], &t[ib]);
+        let frames = motion(a, b, DVec3::new(1.0, 0.3, 0.2), DVec3::Y, DVec3::new(0.2, 1.0, 0.1), 0.01, 300);
+        let mut states: Vec<PairState> = (0..9).map(|_| PairState::new(a, b)).collect();
+        // Warm-up: buffers reach their steady-state capacity.
+        let warm = run_all(a, b, &frames, &mut states);
+        ALLOCS.store(0, Ordering::Relaxed);
+        COUNTING.with(|c| c.set(true));
+        let mut again = 0.0;
+        for _ in 0..3 {
+            again += run_all(a, b, &frames, &mut states);
+        }
+        COUNTING.with(|c| c.set(false));
+        let n = ALLOCS.load(Ordering::Relaxed);
+        assert_eq!(n, 0, "{n} allocations in steady state (trees {ia}, {ib})");
+        assert!(warm.is_finite() && again.is_finite());
+    }
+}
+
+/// The counting allocator does count (the test above is not vacuous).
+#[test]
+fn the_counter_counts() {
+    COUNTING.with(|c| c.set(true));
+    let before = ALLOCS.load(Ordering::Relaxed);
+    let v = std::hint::black_box(vec![1u8; 10]);
+    let after = ALLOCS.load(Ordering::Relaxed);
+    COUNTING.with(|c| c.set(false));
+    assert!(after > before && v.len() == 10);
+}
+
+/// No lock anywhere on the query path: the query sources use no Mutex, RwLock, Once,
+/// Condvar or lock call.
+#[test]
+fn no_locks_in_the_query_sources() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/query");
+    let mut checked = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "rs") {
+            let s = std::fs::read_to_string(&p).unwrap();
+            for bad in ["Mutex", "RwLock", "Condvar", "OnceLock", "std::sync::Once", ".lock()"] {
+                assert!(!s.contains(bad), "{} uses {bad}", p.display());
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked >= 5);
+}

@@ -1,0 +1,109 @@
+//! Penetration volume, force, torque and patches against the brute-force sum over all leaf
+//! pairs, and the time-critical mode's bounds (found ≤ exact ≤ upper bound).
+
+mod query_util;
+
+use glam::DVec3;
+use innersphere::query::{
+    brute, penetration, penetration_budgeted, PairState, PenetrationOptions,
+};
+use proptest::prelude::*;
+use query_util::*;
+
+fn vec3() -> impl Strategy<Value = DVec3> {
+    [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64].prop_map(DVec3::from_array)
+}
+
+fn close_vec(x: DVec3, y: DVec3, scale: f64) -> bool {
+    (x - y).length() <= 1e-9 * scale + 1e-12
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// Volume, pair count, deepest overlap, normal, force and torques equal the brute-force
+    /// sums over all leaf pairs; the patches partition the pairs and the volume.
+    #[test]
+    fn penetration_equals_brute_force(
+        ia in 0usize..4, ib in 0usize..4,
+        qa in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+        qb in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+        off in vec3(),
+        stiffness in 0.1..1000.0f64,
+        max_patches in 0usize..6,
+        patch_radius in prop_oneof![Just(0.0), 0.05..1.0f64],
+    ) {
+        let t = trees();
+        let (a, b) = (&t[ia], &t[ib]);
+        let scale = (a.r[0] + b.r[0]) as f64;
+        let (pa, pb) = pair_poses(a, b, pose([1.0, 2.0, -0.5], qa), quat(qb[0], qb[1], qb[2], qb[3]), off * 0.9 * scale);
+        let want = brute::penetration(a, &pa, b, &pb, stiffness);
+        let mut st = PairState::new(a, b);
+        let opts = PenetrationOptions { stiffness, max_patches, patch_radius, safe_motion: false };
+        let p = penetration(a, &pa, b, &pb, &mut st, &opts);
+        prop_assert_eq!(p.pairs, want.pairs);
+        prop_assert!(close(p.volume, want.volume, 1e-10, 1e-15), "{} vs {}", p.volume, want.volume);
+        prop_assert_eq!(p.max_depth, want.max_depth);
+        let f = stiffness * want.volume;
+        prop_assert!(close_vec(p.normal, want.normal, 1e-3 + 0.0 * f));
+        prop_assert!(close_vec(p.force, want.force, f * 1e3), "{} vs {}", p.force, want.force);
+        let tscale = f * 10.0 * scale * (1.0 + want.normal.length() * 1e3);
+        prop_assert!(close_vec(p.torque_a, want.torque_a, tscale), "{} vs {}", p.torque_a, want.torque_a);
+        prop_assert!(close_vec(p.torque_b, want.torque_b, tscale), "{} vs {}", p.torque_b, want.torque_b);
+        if want.pairs > 0 {
+            prop_assert!((p.force.length() - f).abs() <= 1e-9 * f + 1e-15);
+            prop_assert!((p.normal.length() - 1.0).abs() < 1e-9 || p.force == DVec3::ZERO);
+            prop_assert_eq!(p.distance, 0.0);
+            prop_assert!(p.patches.len() <= max_patches);
+            if max_patches > 0 {
+                prop_assert!(!p.patches.is_empty());
+                let pv: f64 = p.patches.iter().map(|q| q.volume).sum();
+                let pn: u32 = p.patches.iter().map(|q| q.pairs).sum();
+                prop_assert!(close(pv, p.volume, 1e-9, 1e-15));
+                prop_assert_eq!(pn as usize, p.pairs);
+                for q in p.patches {
+                    prop_assert!(q.depth > 0.0 && q.depth <= p.max_depth);
+                }
+            }
+        } else {
+            prop_assert_eq!(p.volume, 0.0);
+            prop_assert!(p.patches.is_empty());
+            let (bd, _, _) = brute::min_distance(a, &pa, b, &pb);
+            prop_assert!(p.distance <= bd);
+        }
+    }
+
+    /// Time-critical mode: found ≤ exact ≤ upper bound for any budget, and an unlimited
+    /// budget gives the exact volume.
+    #[test]
+    fn budgeted_volume_bounds(
+        ia in 0usize..4, ib in 0usize..4,
+        qb in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+        off in vec3(),
+    ) {
+        let t = trees();
+        let (a, b) = (&t[ia], &t[ib]);
+        let scale = (a.r[0] + b.r[0]) as f64;
+        let (pa, pb) = pair_poses(a, b, Default::default(), quat(qb[0], qb[1], qb[2], qb[3]), off * 0.8 * scale);
+        let mut st = PairState::new(a, b);
+        let exact = penetration(a, &pa, b, &pb, &mut st, &PenetrationOptions { safe_motion: false, ..Default::default() }).volume;
+        let tol = 1e-9 * exact + 1e-15;
+        let mut last_visits = 0;
+        for budget in [0u64, 1, 5, 20, 100, 400, 2000, 10_000, u64::MAX] {
+            let r = penetration_budgeted(a, &pa, b, &pb, &mut st, budget);
+            prop_assert!(r.volume <= exact + tol, "budget {}: found {} > exact {}", budget, r.volume, exact);
+            prop_assert!(exact <= r.upper_bound + tol, "budget {}: exact {} > upper {}", budget, exact, r.upper_bound);
+            prop_assert!(r.volume <= r.upper_bound);
+            prop_assert!(r.visits >= last_visits);
+            last_visits = r.visits;
+            if budget == u64::MAX {
+                prop_assert!(r.complete);
+                prop_assert!(close(r.volume, exact, 1e-10, 1e-15));
+                prop_assert_eq!(r.upper_bound, r.volume);
+            } else {
+                // At most one refinement (≤ fan-out² tests) past the budget.
+                prop_assert!(r.visits <= budget.max(1) + 64);
+            }
+        }
+    }
+}

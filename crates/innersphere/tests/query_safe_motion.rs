@@ -1,0 +1,88 @@
+//! Broad phase and safe motion: skipping queries while the last proved separation cannot
+//! have been closed never misses a contact that a full query finds, and the bound itself is
+//! below the true separation.
+
+mod query_util;
+
+use glam::DVec3;
+use innersphere::query::{
+    backtracking, brute, distance_traversal, multipoint, penetration, proximity, ContactOptions,
+    MultipointOptions, PairState, PenetrationOptions, ProximityOptions,
+};
+use proptest::prelude::*;
+use query_util::*;
+
+fn vec3() -> impl Strategy<Value = DVec3> {
+    [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64].prop_map(DVec3::from_array)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(40))]
+
+    /// Along motions, every contact query with the safe-motion skip on reports contact on
+    /// exactly the frames where a full query (skip off) does; skipped frames really are
+    /// separated, by at least the reported bound.
+    #[test]
+    fn safe_motion_never_misses_a_contact(
+        ia in 0usize..4, ib in 0usize..4,
+        dir in vec3(), side in vec3(), axis in vec3(),
+        spin in -0.03..0.03f64,
+        frames in 150usize..400,
+        with_proximity in any::<bool>(),
+    ) {
+        let t = trees();
+        let (a, b) = (&t[ia], &t[ib]);
+        let motion = motion(a, b, dir, side, axis, spin, frames);
+        let on = ContactOptions { safe_motion: true };
+        let off = ContactOptions { safe_motion: false };
+        let mut s_bt = PairState::new(a, b);
+        let mut s_dt = PairState::new(a, b);
+        let mut s_mp = PairState::new(a, b);
+        let mut s_pen = PairState::new(a, b);
+        let mut s_ref = PairState::new(a, b);
+        let mut skipped = 0;
+        for (f, (pa, pb)) in motion.iter().enumerate() {
+            if with_proximity && f % 7 == 0 {
+                // A proximity query records its exact separation too.
+                proximity(a, pa, b, pb, &mut s_bt, &ProximityOptions::default());
+            }
+            let truth = distance_traversal(a, pa, b, pb, &mut s_ref, &off).in_contact();
+            let bound = s_bt.safe_separation(pa, pb);
+            let q = backtracking(a, pa, b, pb, &mut s_bt, &on);
+            prop_assert_eq!(q.in_contact(), truth, "backtracking, frame {}", f);
+            let (bd, _, _) = brute::min_distance(a, pa, b, pb);
+            if let Some(s) = bound {
+                prop_assert!(s <= bd.max(0.0) + 1e-12, "safe bound {} above the separation {}", s, bd);
+            }
+            if q.skipped {
+                skipped += 1;
+                prop_assert!(q.distance > 0.0 && q.distance <= bd);
+            }
+            prop_assert_eq!(distance_traversal(a, pa, b, pb, &mut s_dt, &on).in_contact(), truth, "distance traversal, frame {}", f);
+            let m = multipoint(a, pa, b, pb, &mut s_mp, &MultipointOptions { k: 3, split_depth: 2, ..Default::default() });
+            prop_assert_eq!(!m.contacts.is_empty(), truth, "multipoint, frame {}", f);
+            let p = penetration(a, pa, b, pb, &mut s_pen, &PenetrationOptions::default());
+            prop_assert_eq!(p.pairs > 0, truth, "penetration, frame {}", f);
+        }
+        // The motions are slow enough that separated stretches get skipped.
+        prop_assert!(skipped > 0 || motion.iter().all(|(pa, pb)| brute::min_distance(a, pa, b, pb).0 < 0.05));
+    }
+}
+
+/// Root-sphere rejection: far apart, every query answers after one node-pair test.
+#[test]
+fn root_spheres_reject_far_pairs() {
+    let t = trees();
+    let (a, b) = (&t[0], &t[2]);
+    let (pa, pb) = pair_poses(a, b, Default::default(), Default::default(), DVec3::new(10.0, 0.0, 0.0));
+    let mut st = PairState::new(a, b);
+    let off = ContactOptions { safe_motion: false };
+    assert_eq!(distance_traversal(a, &pa, b, &pb, &mut st, &off).visits, 1);
+    assert_eq!(backtracking(a, &pa, b, &pb, &mut st, &off).visits, 1);
+    let p = penetration(a, &pa, b, &pb, &mut st, &PenetrationOptions { safe_motion: false, ..Default::default() });
+    assert_eq!((p.visits, p.volume), (1, 0.0));
+    // And the next frame, barely moved, is skipped.
+    let (pa2, pb2) = pair_poses(a, b, Default::default(), Default::default(), DVec3::new(9.99, 0.0, 0.0));
+    let q = distance_traversal(a, &pa2, b, &pb2, &mut st, &ContactOptions::default());
+    assert!(q.skipped && q.distance > 5.0);
+}

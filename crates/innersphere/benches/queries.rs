@@ -17,8 +17,9 @@
 
 use innersphere::build::{build_tree, BuildOptions, Resolution};
 use innersphere::query::{
-    backtracking, distance_traversal, multipoint, penetration, penetration_budgeted, proximity,
-    ContactOptions, MultipointOptions, PairState, PenetrationOptions, Pose, ProximityOptions,
+    backtracking, contact, distance_traversal, multipoint, penetration, penetration_budgeted,
+    proximity, ContactOptions, MultipointOptions, PairState, PenetrationOptions, Pose,
+    ProximityOptions,
 };
 use innersphere::tree::file;
 use innersphere::SphereTree;
@@ -158,12 +159,28 @@ fn main() {
         split_depth: 4,
         reuse: true,
         safe_motion: true,
+        tracking: false,
+    };
+    let mpt = |k: usize| MultipointOptions {
+        tracking: true,
+        ..mp(k)
     };
     let queries: Vec<(&str, Query)> = vec![
         (
             "proximity (exact, ours)",
             Box::new(|p, st| {
                 let r = proximity(a, &id, b, p, st, &ProximityOptions::default());
+                (r.overlapping, r.visits)
+            }),
+        ),
+        (
+            "proximity best-first",
+            Box::new(|p, st| {
+                let o = ProximityOptions {
+                    best_first: true,
+                    ..Default::default()
+                };
+                let r = proximity(a, &id, b, p, st, &o);
                 (r.overlapping, r.visits)
             }),
         ),
@@ -207,6 +224,13 @@ fn main() {
             }),
         ),
         (
+            "contact (kinetic front, ours)",
+            Box::new(|p, st| {
+                let r = contact(a, &id, b, p, st, &on);
+                (r.in_contact(), r.visits)
+            }),
+        ),
+        (
             "multipoint k=1",
             Box::new(move |p, st| {
                 let r = multipoint(a, &id, b, p, st, &mp(1));
@@ -228,7 +252,32 @@ fn main() {
             }),
         ),
         (
-            "penetration+force+torque",
+            "multipoint k=4 front",
+            Box::new(move |p, st| {
+                let r = multipoint(a, &id, b, p, st, &mpt(4));
+                (!r.contacts.is_empty(), r.visits)
+            }),
+        ),
+        (
+            "multipoint k=16 front",
+            Box::new(move |p, st| {
+                let r = multipoint(a, &id, b, p, st, &mpt(16));
+                (!r.contacts.is_empty(), r.visits)
+            }),
+        ),
+        (
+            "penetration traversal",
+            Box::new(|p, st| {
+                let o = PenetrationOptions {
+                    tracking: false,
+                    ..Default::default()
+                };
+                let r = penetration(a, &id, b, p, st, &o);
+                (r.pairs > 0, r.visits)
+            }),
+        ),
+        (
+            "penetration front (default)",
             Box::new(|p, st| {
                 let r = penetration(a, &id, b, p, st, &PenetrationOptions::default());
                 (r.pairs > 0, r.visits)
@@ -243,8 +292,8 @@ fn main() {
         ),
     ];
     println!(
-        "{:<30} {:<10} {:>6} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>7}",
-        "query", "phase", "frames", "median", "p99", "max", "mean", ">1ms", "visits", "contact"
+        "{:<30} {:<10} {:>6} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>9} {:>7}",
+        "query", "phase", "frames", "median", "p99", "max", "mean", ">1ms", "visits", "p99 vis", "contact"
     );
     println!("{:<30} {:<10} {:>6} {:>9} {:>9} {:>9} {:>9}", "", "", "", "µs", "µs", "µs", "µs");
     let mut st = PairState::new(a, b);
@@ -290,14 +339,15 @@ fn main() {
             v.sort_unstable();
             let nc = frames.iter().filter(|&&f| contact[f]).count();
             println!(
-                "{name:<30} {ph:<10} {:>6} {med:>9.1} {p99:>9.1} {max:>9.1} {mean:>9.1} {over:>7} {:>9} {nc:>7}",
+                "{name:<30} {ph:<10} {:>6} {med:>9.1} {p99:>9.1} {max:>9.1} {mean:>9.1} {over:>7} {:>9} {:>9} {nc:>7}",
                 frames.len(),
                 v[v.len() / 2],
+                v[((v.len() - 1) as f64 * 0.99).round() as usize],
             );
         }
     }
     println!(
-        "(times: per frame the {} of {passes} timed passes; visits: median node-pair tests; contact: frames in contact)",
+        "(times: per frame the {} of {passes} timed passes; visits: median and p99 of node-pair tests; contact: frames in contact)",
         if best { "best" } else { "worst" }
     );
 }

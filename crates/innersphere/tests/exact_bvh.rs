@@ -156,7 +156,11 @@ fn nested_bodies_and_far_apart() {
     // Small one inside the big one: no surface crossing, still intersecting.
     let r = distance(&big, &Pose::IDENTITY, &small, &at(0.1), &mut s);
     assert!(r.intersecting && r.distance == 0.0);
-    assert!((r.surface_distance - 0.6).abs() < 0.02, "{}", r.surface_distance);
+    assert!(
+        (r.surface_distance - 0.6).abs() < 0.02,
+        "{}",
+        r.surface_distance
+    );
     assert!(intersects(&big, &Pose::IDENTITY, &small, &at(0.1), &mut s));
     assert!(intersects(&small, &at(0.1), &big, &Pose::IDENTITY, &mut s));
     let p = penetration(&big, &Pose::IDENTITY, &small, &at(0.1), &mut s);
@@ -177,7 +181,10 @@ fn nested_bodies_and_far_apart() {
     let r = distance(&big, &Pose::IDENTITY, &small, &at(3.0), &mut s);
     assert!(!r.intersecting);
     assert!((r.distance - 1.7).abs() < 1e-3, "{}", r.distance);
-    assert_eq!(penetration_depth(&big, &Pose::IDENTITY, &small, &at(3.0), &mut s), 0.0);
+    assert_eq!(
+        penetration_depth(&big, &Pose::IDENTITY, &small, &at(3.0), &mut s),
+        0.0
+    );
     // Two unit spheres overlapping by 0.3: depth about 0.3.
     let p = penetration(&big, &Pose::IDENTITY, &big, &at(1.7), &mut s);
     assert!((p.depth - 0.3).abs() < 0.01, "{}", p.depth);
@@ -191,7 +198,10 @@ fn nested_bodies_and_far_apart() {
     let _ = penetration(&big, &Pose::IDENTITY, &small, &bad, &mut s);
     // Invalid meshes are rejected, not panicked on.
     assert!(ExactMesh::new(&Mesh::default()).is_err());
-    let broken = Mesh { vertices: vec![DVec3::ZERO], triangles: vec![[0, 1, 2]] };
+    let broken = Mesh {
+        vertices: vec![DVec3::ZERO],
+        triangles: vec![[0, 1, 2]],
+    };
     assert!(ExactMesh::new(&broken).is_err());
 }
 
@@ -201,20 +211,101 @@ fn degenerate_mesh_triangles() {
     let mut soup = Vec::new();
     for i in 0..50 {
         let x = i as f64 * 0.05 - 1.2;
-        soup.push([DVec3::new(x, 0.0, 0.0), DVec3::new(x, 0.0, 0.0), DVec3::new(x, 0.0, 0.0)]);
-        soup.push([DVec3::new(x, 0.5, 0.0), DVec3::new(x + 0.3, 0.5, 0.0), DVec3::new(x + 0.15, 0.5, 0.0)]);
-        soup.push([DVec3::new(x, 0.0, 1.5), DVec3::new(x, 0.2, 1.5), DVec3::new(x, 0.1, 1.5 + 1e-300)]);
+        soup.push([
+            DVec3::new(x, 0.0, 0.0),
+            DVec3::new(x, 0.0, 0.0),
+            DVec3::new(x, 0.0, 0.0),
+        ]);
+        soup.push([
+            DVec3::new(x, 0.5, 0.0),
+            DVec3::new(x + 0.3, 0.5, 0.0),
+            DVec3::new(x + 0.15, 0.5, 0.0),
+        ]);
+        soup.push([
+            DVec3::new(x, 0.0, 1.5),
+            DVec3::new(x, 0.2, 1.5),
+            DVec3::new(x, 0.1, 1.5 + 1e-300),
+        ]);
     }
     let needles = ExactMesh::new(&Mesh::from_soup(&soup)).unwrap();
     let cube = ExactMesh::new(&shapes::cuboid(DVec3::splat(0.4))).unwrap();
     let mut s = ExactScratch::new();
     for k in 0..20 {
-        let pb = Pose::new(DVec3::new(0.1 * k as f64 - 1.0, 0.3, 0.2 * k as f64 - 1.0), DQuat::from_rotation_y(0.3 * k as f64)).unwrap();
+        let pb = Pose::new(
+            DVec3::new(0.1 * k as f64 - 1.0, 0.3, 0.2 * k as f64 - 1.0),
+            DQuat::from_rotation_y(0.3 * k as f64),
+        )
+        .unwrap();
         let r = distance(&needles, &Pose::IDENTITY, &cube, &pb, &mut s);
         let bf = brute_force_distance(&needles, &Pose::IDENTITY, &cube, &pb);
         assert!(r.distance.is_finite());
         assert_eq!(r.intersecting, bf.intersecting);
-        assert!(close(r.distance, bf.distance), "{} {}", r.distance, bf.distance);
+        assert!(
+            close(r.distance, bf.distance),
+            "{} {}",
+            r.distance,
+            bf.distance
+        );
         let _ = penetration(&needles, &Pose::IDENTITY, &cube, &pb, &mut s);
+    }
+}
+
+#[test]
+fn near_contact_equals_brute_force() {
+    // Bodies brought within a hair of touching (found by bisection), where rounding and
+    // the pruning bounds matter most; then nudged to exactly around the contact.
+    let ma = body(
+        0,
+        3,
+        &[0.3, -0.2, 0.5, 0.0, -0.7],
+        DVec3::new(1.0, 0.8, 1.2),
+    );
+    let mb = shapes::torus(0.9, 0.3, 24, 12);
+    let a = ExactMesh::new(&ma).unwrap();
+    let b = ExactMesh::new(&mb).unwrap();
+    let mut warm = ExactScratch::new();
+    let mut cold = ExactScratch::cold();
+    for k in 0..8 {
+        let ang = k as f64 * 1.3;
+        let dir = DVec3::new(ang.cos(), ang.sin(), 0.3 * (k as f64 - 6.0) / 6.0).normalize();
+        let rot = DQuat::from_axis_angle(
+            DVec3::new(0.2, 1.0, 0.1 * k as f64).normalize(),
+            0.4 * k as f64,
+        );
+        let at = |s: f64| Pose::new(dir * s, rot).unwrap();
+        // Bisection on the crossing state: inside at 0, apart at 5.
+        let (mut lo, mut hi) = (0.0, 5.0);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if intersects(&a, &Pose::IDENTITY, &b, &at(mid), &mut cold) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        for s in [hi, lo, hi + 1e-9, hi + 1e-6, hi + 1e-3] {
+            let pb = at(s);
+            let r = distance(&a, &Pose::IDENTITY, &b, &pb, &mut warm);
+            let c = distance(&a, &Pose::IDENTITY, &b, &pb, &mut cold);
+            let bf = brute_force_distance(&a, &Pose::IDENTITY, &b, &pb);
+            assert_eq!(r.intersecting, bf.intersecting, "k {k} s {s}");
+            assert_eq!(c.intersecting, bf.intersecting, "k {k} s {s}");
+            assert!(
+                close(r.distance, bf.distance),
+                "k {k} s {s}: {} vs {}",
+                r.distance,
+                bf.distance
+            );
+            assert!(
+                close(c.distance, bf.distance),
+                "k {k} s {s}: {} vs {}",
+                c.distance,
+                bf.distance
+            );
+            assert_eq!(
+                intersects(&a, &Pose::IDENTITY, &b, &pb, &mut warm),
+                bf.intersecting
+            );
+        }
     }
 }

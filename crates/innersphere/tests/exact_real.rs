@@ -2,7 +2,9 @@
 
 mod common;
 
-use innersphere::exact::{distance, intersects, penetration, triangle_distance, ExactMesh, ExactScratch};
+use innersphere::exact::{
+    distance, intersects, penetration, triangle_distance, ExactMesh, ExactScratch,
+};
 use innersphere::glam::{DQuat, DVec3};
 use innersphere::mesh::bvh::TriangleBvh;
 use innersphere::query::Pose;
@@ -35,7 +37,12 @@ fn shell_brute_force(a: &Mesh, b: &Mesh, rel: &Pose, bound: f64) -> f64 {
     let na = near(&ta, &bvh_b);
     let nb = near(&tb, &bvh_a);
     assert!(!na.is_empty() && !nb.is_empty());
-    assert!(na.len() * nb.len() < 50_000_000, "shell too thick: {} x {}", na.len(), nb.len());
+    assert!(
+        na.len() * nb.len() < 50_000_000,
+        "shell too thick: {} x {}",
+        na.len(),
+        nb.len()
+    );
     let mut best = f64::INFINITY;
     for x in &na {
         let (xl, xh) = (x[0].min(x[1]).min(x[2]), x[0].max(x[1]).max(x[2]));
@@ -69,15 +76,25 @@ fn molars_distance_equals_brute_force() {
     let up = DVec3::new(0.036, -0.059, 0.998).normalize();
     let centre = mb.bbox().0 * 0.5 + mb.bbox().1 * 0.5;
     let mut separated = 0;
-    for (k, (drop, side, angle)) in [(0.4, 0.0, 0.0), (0.8, 0.3, 0.02), (1.5, -0.5, -0.05), (3.0, 1.0, 0.1), (0.3, 0.2, 0.03)]
-        .into_iter()
-        .enumerate()
+    for (k, (drop, side, angle)) in [
+        (0.4, 0.0, 0.0),
+        (0.8, 0.3, 0.02),
+        (1.5, -0.5, -0.05),
+        (3.0, 1.0, 0.1),
+        (0.3, 0.2, 0.03),
+    ]
+    .into_iter()
+    .enumerate()
     {
         let rot = DQuat::from_axis_angle(DVec3::new(1.0, 0.3, -0.2).normalize(), angle);
         // Rotate about the molar's centre, then translate.
         let t = centre - rot * centre - up * drop + DVec3::X * side;
         let pb = Pose::new(t, rot).unwrap();
-        let pa = Pose::new(DVec3::new(3.0, -2.0, 1.0) * k as f64, DQuat::from_rotation_z(0.1 * k as f64)).unwrap();
+        let pa = Pose::new(
+            DVec3::new(3.0, -2.0, 1.0) * k as f64,
+            DQuat::from_rotation_z(0.1 * k as f64),
+        )
+        .unwrap();
         let pb_world = pa.then(&pb);
         let r = distance(&a, &pa, &b, &pb_world, &mut s);
         let cold = distance(&a, &pa, &b, &pb_world, &mut ExactScratch::cold());
@@ -89,7 +106,12 @@ fn molars_distance_equals_brute_force() {
         }
         separated += 1;
         let want = shell_brute_force(&ma, &mb, &pb, r.distance);
-        assert!((r.distance - want).abs() <= 1e-9 * want, "bvh {} brute {}", r.distance, want);
+        assert!(
+            (r.distance - want).abs() <= 1e-9 * want,
+            "bvh {} brute {}",
+            r.distance,
+            want
+        );
         assert!(!intersects(&a, &pa, &b, &pb_world, &mut s));
         assert_eq!(penetration(&a, &pa, &b, &pb_world, &mut s).depth, 0.0);
     }
@@ -108,13 +130,23 @@ fn jaw_bite_penetration() {
     let p = penetration(&a, &Pose::IDENTITY, &b, &Pose::IDENTITY, &mut s);
     println!("jaw bite: {p:?} in {:?}", t.elapsed());
     // The data's README: 911 lower-tooth vertices inside upper teeth, deepest tooth pair 0.30 mm.
-    assert!(p.b_vertices_in_a.abs_diff(911) <= 20, "{}", p.b_vertices_in_a);
+    assert!(
+        p.b_vertices_in_a.abs_diff(911) <= 20,
+        "{}",
+        p.b_vertices_in_a
+    );
     assert!(p.depth > 0.25 && p.depth < 0.4, "{}", p.depth);
     let r = distance(&a, &Pose::IDENTITY, &b, &Pose::IDENTITY, &mut s);
     assert!(r.intersecting && r.distance == 0.0);
     // 10 mm apart: separated, about 10 mm minus the overlap.
     let open = Pose::from_translation(DVec3::new(0.0, 0.0, -10.0));
     let r = distance(&a, &Pose::IDENTITY, &b, &open, &mut s);
-    assert!(!r.intersecting && r.distance > 5.0 && r.distance < 10.0, "{r:?}");
-    assert_eq!(penetration(&a, &Pose::IDENTITY, &b, &open, &mut s).depth, 0.0);
+    assert!(
+        !r.intersecting && r.distance > 5.0 && r.distance < 10.0,
+        "{r:?}"
+    );
+    assert_eq!(
+        penetration(&a, &Pose::IDENTITY, &b, &open, &mut s).depth,
+        0.0
+    );
 }

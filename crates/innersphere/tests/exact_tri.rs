@@ -196,20 +196,44 @@ proptest! {
 
 #[test]
 fn exact_touching_and_degenerate_cases() {
-    let t = [DVec3::ZERO, DVec3::new(4.0, 0.0, 0.0), DVec3::new(0.0, 4.0, 0.0)];
+    let t = [
+        DVec3::ZERO,
+        DVec3::new(4.0, 0.0, 0.0),
+        DVec3::new(0.0, 4.0, 0.0),
+    ];
     // Vertex exactly on the face, edge exactly on the face, edge touching an edge.
-    let on_face = [DVec3::new(1.0, 1.0, 0.0), DVec3::new(1.0, 1.0, 1.0), DVec3::new(2.0, 1.0, 1.0)];
+    let on_face = [
+        DVec3::new(1.0, 1.0, 0.0),
+        DVec3::new(1.0, 1.0, 1.0),
+        DVec3::new(2.0, 1.0, 1.0),
+    ];
     assert!(triangles_intersect(&t, &on_face));
     let lifted = on_face.map(|v| v + DVec3::Z * f64::EPSILON);
     assert!(!triangles_intersect(&t, &lifted));
     assert!(triangle_distance(&t, &lifted).dist_sq > 0.0);
-    let edge_on_face = [DVec3::new(1.0, 1.0, 0.0), DVec3::new(2.0, 1.0, 0.0), DVec3::new(1.0, 1.0, 3.0)];
+    let edge_on_face = [
+        DVec3::new(1.0, 1.0, 0.0),
+        DVec3::new(2.0, 1.0, 0.0),
+        DVec3::new(1.0, 1.0, 3.0),
+    ];
     assert!(triangles_intersect(&t, &edge_on_face));
-    let edge_edge = [DVec3::new(2.0, -1.0, 0.0), DVec3::new(2.0, 1.0, 0.0), DVec3::new(2.0, 0.0, -3.0)];
+    let edge_edge = [
+        DVec3::new(2.0, -1.0, 0.0),
+        DVec3::new(2.0, 1.0, 0.0),
+        DVec3::new(2.0, 0.0, -3.0),
+    ];
     assert!(triangles_intersect(&t, &edge_edge));
     // Edges crossing at one point in space, the triangles otherwise apart.
-    let a = [DVec3::new(-1.0, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.0), DVec3::new(0.0, 0.0, -1.0)];
-    let b = [DVec3::new(0.0, -1.0, 0.0), DVec3::new(0.0, 1.0, 0.0), DVec3::new(0.0, 0.0, 1.0)];
+    let a = [
+        DVec3::new(-1.0, 0.0, 0.0),
+        DVec3::new(1.0, 0.0, 0.0),
+        DVec3::new(0.0, 0.0, -1.0),
+    ];
+    let b = [
+        DVec3::new(0.0, -1.0, 0.0),
+        DVec3::new(0.0, 1.0, 0.0),
+        DVec3::new(0.0, 0.0, 1.0),
+    ];
     assert!(triangles_intersect(&a, &b));
     let b_up = b.map(|v| v + DVec3::Z * 1e-12);
     assert!(!triangles_intersect(&a, &b_up));
@@ -219,13 +243,38 @@ fn exact_touching_and_degenerate_cases() {
     assert!(triangles_intersect(&t, &[t[0], t[1], t[1]]));
     assert!(triangles_intersect(&[DVec3::ZERO; 3], &[DVec3::ZERO; 3]));
     assert!(!triangles_intersect(&[DVec3::ZERO; 3], &[DVec3::X; 3]));
-    assert_eq!(triangle_distance(&[DVec3::ZERO; 3], &[DVec3::X; 3]).dist_sq, 1.0);
+    assert_eq!(
+        triangle_distance(&[DVec3::ZERO; 3], &[DVec3::X; 3]).dist_sq,
+        1.0
+    );
     assert!(is_collinear(DVec3::ZERO, DVec3::ONE, DVec3::ONE * 3.0));
-    assert!(!is_collinear(DVec3::ZERO, DVec3::ONE, DVec3::new(3.0, 3.0, 3.0 + 1e-15)));
+    assert!(!is_collinear(
+        DVec3::ZERO,
+        DVec3::ONE,
+        DVec3::new(3.0, 3.0, 3.0 + 1e-15)
+    ));
     // Segment through a vertex / along an edge.
-    assert!(segment_triangle_intersect(DVec3::new(0.0, 0.0, -1.0), DVec3::new(0.0, 0.0, 1.0), t[0], t[1], t[2]));
-    assert!(segment_triangle_intersect(DVec3::new(-1.0, 0.0, 0.0), DVec3::new(9.0, 0.0, 0.0), t[0], t[1], t[2]));
-    assert!(!segment_triangle_intersect(DVec3::new(3.0, 3.0, -1.0), DVec3::new(3.0, 3.0, 1.0), t[0], t[1], t[2]));
+    assert!(segment_triangle_intersect(
+        DVec3::new(0.0, 0.0, -1.0),
+        DVec3::new(0.0, 0.0, 1.0),
+        t[0],
+        t[1],
+        t[2]
+    ));
+    assert!(segment_triangle_intersect(
+        DVec3::new(-1.0, 0.0, 0.0),
+        DVec3::new(9.0, 0.0, 0.0),
+        t[0],
+        t[1],
+        t[2]
+    ));
+    assert!(!segment_triangle_intersect(
+        DVec3::new(3.0, 3.0, -1.0),
+        DVec3::new(3.0, 3.0, 1.0),
+        t[0],
+        t[1],
+        t[2]
+    ));
     // Non-finite input gives no panic.
     let nan = [DVec3::NAN, DVec3::X, DVec3::Y];
     let _ = triangle_distance(&nan, &t);

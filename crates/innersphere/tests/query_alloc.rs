@@ -6,8 +6,9 @@ mod query_util;
 
 use glam::DVec3;
 use innersphere::query::{
-    backtracking, distance_traversal, multipoint, penetration, penetration_budgeted, proximity,
-    ContactOptions, MultipointOptions, PairState, PenetrationOptions, ProximityOptions,
+    backtracking, contact, distance_traversal, multipoint, penetration, penetration_budgeted,
+    proximity, ContactOptions, MultipointOptions, PairState, PenetrationOptions,
+    ProximityOptions,
 };
 use query_util::*;
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -60,7 +61,7 @@ fn run_all(
     let on = ContactOptions { safe_motion: true };
     let off = ContactOptions { safe_motion: false };
     for (pa, pb) in frames {
-        let [s0, s1, s2, s3, s4, s5, s6, s7, s8] = states else { unreachable!() };
+        let [s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10] = states else { unreachable!() };
         sum += proximity(a, pa, b, pb, s0, &ProximityOptions::default()).distance;
         sum += proximity(a, pa, b, pb, s0, &ProximityOptions { signed: true, ..Default::default() }).distance;
         sum += proximity(a, pa, b, pb, s0, &ProximityOptions { rel_tolerance: 0.1, abs_tolerance: 0.01, ..Default::default() }).distance;
@@ -71,9 +72,12 @@ fn run_all(
             let m = multipoint(a, pa, b, pb, s4, &MultipointOptions { k, split_depth: split, ..Default::default() });
             sum += m.contacts.len() as f64;
         }
-        let m = multipoint(a, pa, b, pb, s5, &MultipointOptions { k: 16, split_depth: 4, reuse: false, safe_motion: false });
+        let m = multipoint(a, pa, b, pb, s5, &MultipointOptions { k: 16, split_depth: 4, reuse: false, safe_motion: false, tracking: false });
         sum += m.contacts.len() as f64;
-        let p = penetration(a, pa, b, pb, s6, &PenetrationOptions { safe_motion: false, ..Default::default() });
+        let m = multipoint(a, pa, b, pb, s10, &MultipointOptions { k: 16, split_depth: 4, tracking: true, ..Default::default() });
+        sum += m.contacts.len() as f64;
+        sum += contact(a, pa, b, pb, s9, &on).distance;
+        let p = penetration(a, pa, b, pb, s6, &PenetrationOptions { safe_motion: false, tracking: false, ..Default::default() });
         sum += p.volume + p.patches.len() as f64 + p.torque_a.x;
         let p = penetration(a, pa, b, pb, s7, &PenetrationOptions { max_patches: 3, ..Default::default() });
         sum += p.force.length();
@@ -89,7 +93,7 @@ fn queries_allocate_nothing_in_steady_state() {
     for (ia, ib) in [(0, 2), (1, 3), (2, 2)] {
         let (a, b) = (&t[ia], &t[ib]);
         let frames = motion(a, b, DVec3::new(1.0, 0.3, 0.2), DVec3::Y, DVec3::new(0.2, 1.0, 0.1), 0.01, 300);
-        let mut states: Vec<PairState> = (0..9).map(|_| PairState::new(a, b)).collect();
+        let mut states: Vec<PairState> = (0..11).map(|_| PairState::new(a, b)).collect();
         // Warm-up: buffers reach their steady-state capacity.
         let warm = run_all(a, b, &frames, &mut states);
         ALLOCS.store(0, Ordering::Relaxed);

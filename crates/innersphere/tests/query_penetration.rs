@@ -32,6 +32,7 @@ proptest! {
         stiffness in 0.1..1000.0f64,
         max_patches in 0usize..6,
         patch_radius in prop_oneof![Just(0.0), 0.05..1.0f64],
+        tracking in any::<bool>(),
     ) {
         let t = trees();
         let (a, b) = (&t[ia], &t[ib]);
@@ -39,7 +40,7 @@ proptest! {
         let (pa, pb) = pair_poses(a, b, pose([1.0, 2.0, -0.5], qa), quat(qb[0], qb[1], qb[2], qb[3]), off * 0.9 * scale);
         let want = brute::penetration(a, &pa, b, &pb, stiffness);
         let mut st = PairState::new(a, b);
-        let opts = PenetrationOptions { stiffness, max_patches, patch_radius, safe_motion: false };
+        let opts = PenetrationOptions { stiffness, max_patches, patch_radius, safe_motion: false, tracking };
         let p = penetration(a, &pa, b, &pb, &mut st, &opts);
         prop_assert_eq!(p.pairs, want.pairs);
         prop_assert!(close(p.volume, want.volume, 1e-10, 1e-15), "{} vs {}", p.volume, want.volume);
@@ -86,7 +87,7 @@ proptest! {
         let scale = (a.r[0] + b.r[0]) as f64;
         let (pa, pb) = pair_poses(a, b, Default::default(), quat(qb[0], qb[1], qb[2], qb[3]), off * 0.8 * scale);
         let mut st = PairState::new(a, b);
-        let exact = penetration(a, &pa, b, &pb, &mut st, &PenetrationOptions { safe_motion: false, ..Default::default() }).volume;
+        let exact = penetration(a, &pa, b, &pb, &mut st, &PenetrationOptions { safe_motion: false, tracking: false, ..Default::default() }).volume;
         let tol = 1e-9 * exact + 1e-15;
         let mut last_visits = 0;
         for budget in [0u64, 1, 5, 20, 100, 400, 2000, 10_000, u64::MAX] {
@@ -104,6 +105,31 @@ proptest! {
                 // At most one refinement (≤ fan-out² tests) past the budget.
                 prop_assert!(r.visits <= budget.max(1) + 64);
             }
+        }
+    }
+
+    /// Along a motion, the kinetic front (tracking) gives the same overlapping pairs and
+    /// volume as a traversal from the roots on every frame.
+    #[test]
+    fn tracked_penetration_equals_traversal_along_motions(
+        ia in 0usize..4, ib in 0usize..4,
+        dir in vec3(), side in vec3(), axis in vec3(),
+        spin in -0.04..0.04f64,
+    ) {
+        let t = trees();
+        let (a, b) = (&t[ia], &t[ib]);
+        let frames = motion(a, b, dir, side, axis, spin, 120);
+        let mut tracked = PairState::new(a, b);
+        let mut plain = PairState::new(a, b);
+        let topt = PenetrationOptions { tracking: true, ..Default::default() };
+        let popt = PenetrationOptions { tracking: false, safe_motion: false, ..Default::default() };
+        for (f, (pa, pb)) in frames.iter().enumerate() {
+            let q = penetration(a, pa, b, pb, &mut tracked, &topt);
+            let (qv, qp, qf) = (q.volume, q.pairs, q.force);
+            let r = penetration(a, pa, b, pb, &mut plain, &popt);
+            prop_assert_eq!(qp, r.pairs, "frame {}", f);
+            prop_assert!(close(qv, r.volume, 1e-10, 1e-15), "frame {}: {} vs {}", f, qv, r.volume);
+            prop_assert!((qf - r.force).length() <= 1e-8 * r.force.length() + 1e-15);
         }
     }
 }

@@ -37,8 +37,8 @@ proptest! {
         let (pa, pb) = pair_poses(a, b, pose(ta, qa), quat(qb[0], qb[1], qb[2], qb[3]), off * scale);
         let (bd, _, _) = brute::min_distance(a, &pa, b, &pb);
         let mut st = PairState::new(a, b);
-        for coherence in [false, true, true] {
-            let opts = ProximityOptions { coherence, ..Default::default() };
+        for (coherence, best_first) in [(false, false), (true, false), (true, false), (false, true), (true, true)] {
+            let opts = ProximityOptions { coherence, best_first, ..Default::default() };
             let p = proximity(a, &pa, b, &pb, &mut st, &opts);
             prop_assert_eq!(p.overlapping, bd < 0.0);
             prop_assert_eq!(p.distance, bd.max(0.0));
@@ -53,7 +53,7 @@ proptest! {
                 prop_assert!(brute::leaves_overlap(a, p.leaf_a, &pa, b, p.leaf_b, &pb));
                 prop_assert!(p.pair_distance < 0.0);
             }
-            let s = proximity(a, &pa, b, &pb, &mut st, &ProximityOptions { signed: true, coherence, ..Default::default() });
+            let s = proximity(a, &pa, b, &pb, &mut st, &ProximityOptions { signed: true, coherence, best_first, ..Default::default() });
             prop_assert_eq!(s.distance, bd);
             prop_assert_eq!(s.pair_distance, bd);
         }
@@ -67,6 +67,7 @@ proptest! {
         qb in quat_strategy(),
         off in offset_strategy(),
         abs in 0.0..0.2f64, rel in 0.0..0.5f64,
+        best_first in any::<bool>(),
     ) {
         let t = trees();
         let (a, b) = (&t[ia], &t[ib]);
@@ -74,7 +75,7 @@ proptest! {
         let (pa, pb) = pair_poses(a, b, Default::default(), quat(qb[0], qb[1], qb[2], qb[3]), off * 1.5 * scale);
         let (bd, _, _) = brute::min_distance(a, &pa, b, &pb);
         let mut st = PairState::new(a, b);
-        let opts = ProximityOptions { abs_tolerance: abs, rel_tolerance: rel, coherence: false, signed: false };
+        let opts = ProximityOptions { abs_tolerance: abs, rel_tolerance: rel, coherence: false, signed: false, best_first };
         let p = proximity(a, &pa, b, &pb, &mut st, &opts);
         let truth = bd.max(0.0);
         let slop = 1e-6 * scale;

@@ -6,8 +6,8 @@ mod query_util;
 
 use glam::DVec3;
 use innersphere::query::{
-    backtracking, brute, distance_traversal, multipoint, penetration, proximity, ContactOptions,
-    MultipointOptions, PairState, PenetrationOptions, ProximityOptions,
+    backtracking, brute, contact, distance_traversal, multipoint, penetration, proximity,
+    ContactOptions, MultipointOptions, PairState, PenetrationOptions, ProximityOptions,
 };
 use proptest::prelude::*;
 use query_util::*;
@@ -40,6 +40,8 @@ proptest! {
         let mut s_mp = PairState::new(a, b);
         let mut s_pen = PairState::new(a, b);
         let mut s_ref = PairState::new(a, b);
+        let mut s_front = PairState::new(a, b);
+        let mut s_pen_dfs = PairState::new(a, b);
         let mut skipped = 0;
         for (f, (pa, pb)) in motion.iter().enumerate() {
             if with_proximity && f % 7 == 0 {
@@ -62,7 +64,14 @@ proptest! {
             let m = multipoint(a, pa, b, pb, &mut s_mp, &MultipointOptions { k: 3, split_depth: 2, ..Default::default() });
             prop_assert_eq!(!m.contacts.is_empty(), truth, "multipoint, frame {}", f);
             let p = penetration(a, pa, b, pb, &mut s_pen, &PenetrationOptions::default());
-            prop_assert_eq!(p.pairs > 0, truth, "penetration, frame {}", f);
+            prop_assert_eq!(p.pairs > 0, truth, "penetration (front), frame {}", f);
+            let p = penetration(a, pa, b, pb, &mut s_pen_dfs, &PenetrationOptions { tracking: false, ..Default::default() });
+            prop_assert_eq!(p.pairs > 0, truth, "penetration (traversal + safe motion), frame {}", f);
+            let c = contact(a, pa, b, pb, &mut s_front, &on);
+            prop_assert_eq!(c.in_contact(), truth, "front contact, frame {}", f);
+            if !truth {
+                prop_assert!(c.distance <= bd.max(0.0));
+            }
         }
         // The motions are slow enough that separated stretches get skipped.
         prop_assert!(skipped > 0 || motion.iter().all(|(pa, pb)| brute::min_distance(a, pa, b, pb).0 < 0.05));
@@ -79,7 +88,7 @@ fn root_spheres_reject_far_pairs() {
     let off = ContactOptions { safe_motion: false };
     assert_eq!(distance_traversal(a, &pa, b, &pb, &mut st, &off).visits, 1);
     assert_eq!(backtracking(a, &pa, b, &pb, &mut st, &off).visits, 1);
-    let p = penetration(a, &pa, b, &pb, &mut st, &PenetrationOptions { safe_motion: false, ..Default::default() });
+    let p = penetration(a, &pa, b, &pb, &mut st, &PenetrationOptions { safe_motion: false, tracking: false, ..Default::default() });
     assert_eq!((p.visits, p.volume), (1, 0.0));
     // And the next frame, barely moved, is skipped.
     let (pa2, pb2) = pair_poses(a, b, Default::default(), Default::default(), DVec3::new(9.99, 0.0, 0.0));

@@ -6,8 +6,8 @@ mod query_util;
 
 use glam::DVec3;
 use innersphere::query::{
-    backtracking, brute, distance_traversal, multipoint, ContactOptions, MultipointOptions,
-    PairState,
+    backtracking, brute, contact, distance_traversal, multipoint, ContactOptions,
+    MultipointOptions, PairState,
 };
 use innersphere::SphereTree;
 use proptest::prelude::*;
@@ -57,7 +57,8 @@ proptest! {
     }
 
     /// Backtracking gives the same contact answer as the full traversal (and brute force) on
-    /// every frame of a motion, with a valid contact or a valid lower bound.
+    /// every frame of a motion, with a valid contact or a valid lower bound; so does the
+    /// kinetic-front contact query.
     #[test]
     fn backtracking_equals_full_traversal_along_motions(
         ia in 0usize..4, ib in 0usize..4,
@@ -70,11 +71,20 @@ proptest! {
         let motion = motion(a, b, dir, side, axis, spin, frames);
         let mut bt = PairState::new(a, b);
         let mut full = PairState::new(a, b);
+        let mut front = PairState::new(a, b);
         let mut contacts = 0;
         for (f, (pa, pb)) in motion.iter().enumerate() {
             let q = backtracking(a, pa, b, pb, &mut bt, &NO_SKIP);
             let r = distance_traversal(a, pa, b, pb, &mut full, &NO_SKIP);
             prop_assert_eq!(q.in_contact(), r.in_contact(), "frame {}", f);
+            let t = contact(a, pa, b, pb, &mut front, &NO_SKIP);
+            prop_assert_eq!(t.in_contact(), r.in_contact(), "front, frame {}", f);
+            if let Some(c) = t.contact {
+                prop_assert!(brute::leaves_overlap(a, c.leaf_a, pa, b, c.leaf_b, pb));
+            } else {
+                let (bd, _, _) = brute::min_distance(a, pa, b, pb);
+                prop_assert!(t.distance <= bd, "front bound {} above {}", t.distance, bd);
+            }
             let truth = !brute::overlapping_pairs(a, pa, b, pb).is_empty();
             prop_assert_eq!(q.in_contact(), truth, "frame {}", f);
             if let Some(c) = q.contact {
@@ -105,6 +115,7 @@ proptest! {
         let motion = motion(a, b, dir, side, axis, spin, 50);
         let mut reuse = PairState::new(a, b);
         let mut fresh = PairState::new(a, b);
+        let mut tracked = PairState::new(a, b);
         for (f, (pa, pb)) in motion.iter().enumerate() {
             let pairs = brute::overlapping_pairs(a, pa, b, pb);
             let regions: BTreeSet<(u32, u32)> = pairs
@@ -112,8 +123,8 @@ proptest! {
                 .map(|&(la, lb)| (ancestor_at(a, la, split), ancestor_at(b, lb, split)))
                 .collect();
             let want = k.min(regions.len());
-            for (st, reuse_on) in [(&mut reuse, true), (&mut fresh, false)] {
-                let opts = MultipointOptions { k, split_depth: split, reuse: reuse_on, safe_motion: false };
+            for (st, reuse_on, tracking) in [(&mut reuse, true, false), (&mut fresh, false, false), (&mut tracked, true, true)] {
+                let opts = MultipointOptions { k, split_depth: split, reuse: reuse_on, safe_motion: false, tracking };
                 let r = multipoint(a, pa, b, pb, st, &opts);
                 prop_assert_eq!(r.contacts.len(), want, "frame {} reuse {}", f, reuse_on);
                 prop_assert!(r.reused <= r.contacts.len());

@@ -7,6 +7,7 @@ mod check;
 mod demo;
 mod export;
 mod inspect;
+mod motion;
 mod progress;
 mod query;
 
@@ -34,6 +35,8 @@ enum Command {
     Export(export::Args),
     /// Run one query between two trees.
     Query(query::Args),
+    /// Generate a hand-recorded-looking motion of body B against body A (a CSV at 1 kHz).
+    Motion(motion::Args),
     /// Benchmarks (build).
     Bench(bench::Args),
 }
@@ -47,6 +50,7 @@ fn main() {
         Command::Check(a) => check::run(a),
         Command::Export(a) => export::run(a),
         Command::Bench(a) => bench::run(a),
+        Command::Motion(a) => motion::run(a),
         Command::Query(a) => query::run(a),
     };
     match result {

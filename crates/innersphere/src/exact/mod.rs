@@ -2,15 +2,20 @@
 //! (the role PQP plays in the Inner Sphere Tree paper) and the baseline a user would
 //! otherwise pick.
 //!
-//! Everything is f64 and works in body A's frame: B's boxes and triangles are transformed
-//! into it as a traversal reaches them.
+//! Everything is f64 and works in body A's frame: B's nodes and triangles are transformed
+//! into it as a traversal reaches them. [`ExactMesh`] holds one mesh's triangle BVH (the
+//! shared [`TriangleBvh`]), per-node bounding shapes, the winding-number hierarchy, its
+//! connected components and vertex adjacency; [`ExactScratch`] the per-pair memory.
 //!
-//! * [`distance`]: branch-and-bound over the two triangle BVHs (depth first, nearer pair
-//!   first, pruning on the best distance so far, optionally seeded with the last query's
-//!   closest pair), exact triangle–triangle distance at the leaves ([`tri_tri`]). Crossing
-//!   surfaces give distance 0 and stop at once.
-//! * [`intersects`]: the same traversal, pruning every pair of disjoint boxes and stopping at
-//!   the first crossing triangle pair.
+//! * [`distance`] runs in two phases. First, do the surfaces cross? A depth-first traversal
+//!   of the node pairs that may touch tests every pair of triangles whose boxes overlap
+//!   with exact predicates ([`tri_tri::triangles_intersect`]) and stops at the first
+//!   crossing: distance 0. Otherwise a best-first branch and bound over node pairs, ordered
+//!   and pruned by lower bounds that combine the boxes with a slab-and-disc shape per node
+//!   (tight for the nearly flat patches near the leaves), finds the minimum of the
+//!   triangle–triangle distances (PQP's `TriDist`), filtered per triangle pair by boxes and
+//!   planes. The scratch can seed both phases with the last query's pairs (warm start).
+//! * [`intersects`]: the first phase alone.
 //! * Both count one body lying entirely inside the other (no surface crossing) as
 //!   intersecting: for every connected component of one body whose extreme vertices all lie
 //!   in the other's bounding box, the generalized winding number of one of its vertices
@@ -18,7 +23,13 @@
 //! * [`penetration`] / [`penetration_depth`]: the largest distance to the other surface of a
 //!   vertex of one body inside the other (both ways).
 //! * [`brute_force_distance`] / [`brute_force_intersects`]: O(n·m) references for tests.
+//!
+//! No input panics: meshes are validated by [`ExactMesh::new`], degenerate triangles are
+//! handled, and a non-finite pose gives a NaN distance, no intersection and depth 0.
 
+#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x < y)` is deliberate: true for NaN too.
+
+mod bound;
 mod penetration;
 pub mod tri_tri;
 
@@ -56,6 +67,10 @@ pub struct ExactMesh {
     /// Vertex adjacency (CSR): the neighbours of `v` are `adj[adj_start[v]..adj_start[v + 1]]`.
     adj_start: Vec<u32>,
     adj: Vec<u32>,
+    /// Bounding shapes of the BVH nodes (same indices).
+    shapes: Vec<bound::Shape>,
+    /// Unit normal of the triangle in each BVH slot (zero when degenerate).
+    normals: Vec<DVec3>,
 }
 
 impl ExactMesh {
@@ -63,6 +78,7 @@ impl ExactMesh {
     pub fn new(mesh: &Mesh) -> crate::Result<Self> {
         mesh.validate()?;
         let winding = FastWinding::new(mesh);
+        let (shapes, normals) = bound::shapes(winding.bvh());
         let n = mesh.vertices.len();
         // Union-find over vertices.
         let mut parent: Vec<u32> = (0..n as u32).collect();
@@ -109,10 +125,8 @@ impl ExactMesh {
             s.sort_unstable();
             let before = compact.len();
             for &w in s.iter() {
-                if compact.len() == before || compact.last() != Some(&w) {
-                    if w as usize != v {
-                        compact.push(w);
-                    }
+                if (compact.len() == before || compact.last() != Some(&w)) && w as usize != v {
+                    compact.push(w);
                 }
             }
             new_start[v + 1] = compact.len() as u32;
@@ -174,6 +188,8 @@ impl ExactMesh {
             extremes,
             adj_start: new_start,
             adj: compact,
+            shapes,
+            normals,
         })
     }
 
@@ -240,9 +256,11 @@ impl ExactMesh {
 
     /// True when a connected component of `self` lies inside `outer` (winding number of one
     /// of its vertices); meaningful when the surfaces do not cross.
-    fn component_inside(&self, outer: &ExactMesh, to_outer: &Frame) -> bool {
-        self.maybe_inside(outer, to_outer)
-            .any(|v| outer.contains_point(to_outer.point(self.mesh.vertices[v as usize])))
+    fn component_inside(&self, outer: &ExactMesh, to_outer: &Frame, tests: &mut usize) -> bool {
+        self.maybe_inside(outer, to_outer).any(|v| {
+            *tests += 1;
+            outer.contains_point(to_outer.point(self.mesh.vertices[v as usize]))
+        })
     }
 }
 
@@ -251,12 +269,27 @@ impl ExactMesh {
 #[derive(Debug, Clone)]
 pub struct ExactScratch {
     stack: Vec<(u32, u32, f64)>,
+    heap: std::collections::BinaryHeap<HeapItem>,
     /// Closest pair of the last [`distance`] (BVH slots), tried first next time.
     last_pair: Option<(u32, u32)>,
     /// Crossing pair of the last [`intersects`], tried first next time.
     last_hit: Option<(u32, u32)>,
     warm_start: bool,
+    stats: ExactStats,
     pub(crate) pen: penetration::PenScratch,
+}
+
+/// Work counters of the last query run with an [`ExactScratch`].
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ExactStats {
+    /// Node pairs taken from the traversal stack.
+    pub node_pairs: usize,
+    /// Leaf pairs reached.
+    pub leaf_pairs: usize,
+    /// Triangle pairs evaluated exactly (after the per-triangle box filter).
+    pub triangle_pairs: usize,
+    /// Winding-number evaluations of the containment test.
+    pub winding_tests: usize,
 }
 
 impl Default for ExactScratch {
@@ -271,9 +304,11 @@ impl ExactScratch {
     pub fn new() -> Self {
         ExactScratch {
             stack: Vec::new(),
+            heap: Default::default(),
             last_pair: None,
             last_hit: None,
             warm_start: true,
+            stats: ExactStats::default(),
             pen: Default::default(),
         }
     }
@@ -284,6 +319,11 @@ impl ExactScratch {
             warm_start: false,
             ..Self::new()
         }
+    }
+
+    /// Work counters of the last query.
+    pub fn stats(&self) -> ExactStats {
+        self.stats
     }
 
     /// Forgets the last answers.
@@ -356,21 +396,37 @@ impl Frame {
         [self.point(t[0]), self.point(t[1]), self.point(t[2])]
     }
 
-    /// Centre and (padded) half extents of an axis-aligned box around the mapped node box.
+    /// A node shape of B mapped into A's frame.
     #[inline]
-    fn node_box(&self, n: &BvhNode) -> (DVec3, DVec3) {
-        let c = (n.lo + n.hi) * 0.5;
-        let h = (n.hi - n.lo) * 0.5;
-        (self.point(c), self.abs_r * h + DVec3::splat(self.pad))
+    fn shape<'s>(&self, s: &'s bound::Shape) -> MappedShape<'s> {
+        MappedShape {
+            c: self.point(s.c),
+            h: self.abs_r * s.h + DVec3::splat(self.pad),
+            n: self.r * s.n,
+            s,
+        }
+    }
+
+    /// Squared lower bound on the distance between A's node `a` and B's node `b`.
+    #[inline]
+    fn lower_bound_sq(&self, a: &bound::Shape, b: &bound::Shape) -> f64 {
+        self.shape(b).lower_bound_sq(a, self.pad)
     }
 }
 
-/// Squared distance between A's node box and a box given by centre and half extents.
-#[inline]
-fn box_dist_sq(a: &BvhNode, c: DVec3, h: DVec3) -> f64 {
-    let ca = (a.lo + a.hi) * 0.5;
-    let ha = (a.hi - a.lo) * 0.5;
-    ((c - ca).abs() - ha - h).max(DVec3::ZERO).length_squared()
+/// A node shape of B in A's frame.
+struct MappedShape<'s> {
+    c: DVec3,
+    h: DVec3,
+    n: DVec3,
+    s: &'s bound::Shape,
+}
+
+impl MappedShape<'_> {
+    #[inline]
+    fn lower_bound_sq(&self, a: &bound::Shape, pad: f64) -> f64 {
+        bound::lower_bound_sq(a, self.c, self.h, self.n, self.s, pad)
+    }
 }
 
 #[inline]
@@ -422,51 +478,79 @@ impl Best {
     }
 }
 
-/// Distance between every triangle pair of two leaves; true when a crossing pair was found.
+/// Distance between every triangle pair of two leaves (known not to cross).
 #[inline]
 fn leaf_distance(
-    a: &TriangleBvh,
-    b: &TriangleBvh,
+    a: &ExactMesh,
+    b: &ExactMesh,
     na: &BvhNode,
     nb: &BvhNode,
     f: &Frame,
     best: &mut Best,
-) -> bool {
+    stats: &mut ExactStats,
+) {
+    stats.leaf_pairs += 1;
+    let (ta, tb) = (a.bvh(), b.bvh());
     let (sa0, ca) = (na.start as usize, na.count as usize);
     let (sb0, cb) = (nb.start as usize, nb.count as usize);
-    let Some(ta_all) = a.tris.get(sa0..sa0 + ca) else {
-        return false;
+    let (Some(ta_all), Some(tb_all)) = (ta.tris.get(sa0..sa0 + ca), tb.tris.get(sb0..sb0 + cb))
+    else {
+        return;
     };
-    let Some(tb_all) = b.tris.get(sb0..sb0 + cb) else {
-        return false;
+    let (Some(na_all), Some(nb_all)) = (a.normals.get(sa0..sa0 + ca), b.normals.get(sb0..sb0 + cb))
+    else {
+        return;
     };
-    let mut tb = [[DVec3::ZERO; 3]; LEAF_SIZE];
+    let mut tbuf = [[DVec3::ZERO; 3]; LEAF_SIZE];
     let mut bb = [(DVec3::ZERO, DVec3::ZERO); LEAF_SIZE];
-    for (chunk_i, chunk) in tb_all.chunks(LEAF_SIZE).enumerate() {
+    let mut nbuf = [DVec3::ZERO; LEAF_SIZE];
+    for (chunk_i, (chunk, nchunk)) in tb_all
+        .chunks(LEAF_SIZE)
+        .zip(nb_all.chunks(LEAF_SIZE))
+        .enumerate()
+    {
         for (j, t) in chunk.iter().enumerate() {
-            tb[j] = f.tri(t);
-            bb[j] = tri_box(&tb[j]);
+            tbuf[j] = f.tri(t);
+            bb[j] = tri_box(&tbuf[j]);
+            nbuf[j] = f.r * nchunk[j];
         }
-        for (i, ta) in ta_all.iter().enumerate() {
-            let (alo, ahi) = tri_box(ta);
+        for (i, (x, &nx)) in ta_all.iter().zip(na_all).enumerate() {
+            let (alo, ahi) = tri_box(x);
             for j in 0..chunk.len() {
                 let (blo, bhi) = bb[j];
-                let gap = (alo - bhi).max(blo - ahi);
-                let lb = gap.max(DVec3::ZERO).length_squared();
+                let gap = (alo - bhi).max(blo - ahi).max(DVec3::ZERO);
+                let mut lb = gap.length_squared();
                 if !(lb < best.d2) {
                     continue;
                 }
-                let may_touch = gap.max_element() <= 0.0;
-                let r = triangle_distance_hint(ta, &tb[j], may_touch);
+                let y = &tbuf[j];
+                lb = lb
+                    .max(plane_gap_sq(x[0], nx, y))
+                    .max(plane_gap_sq(y[0], nbuf[j], x));
+                if !(lb < best.d2) {
+                    continue;
+                }
+                stats.triangle_pairs += 1;
+                let r = triangle_distance_hint(x, y, false);
                 let sb = (sb0 + chunk_i * LEAF_SIZE + j) as u32;
                 best.offer(&r, (sa0 + i) as u32, sb);
-                if r.intersecting {
-                    return true;
-                }
             }
         }
     }
-    false
+}
+
+/// Squared distance from the plane through `o` with unit normal `n` to the triangle `t`
+/// when `t` lies strictly on one side of it, else 0 (a lower bound on the distance of `t`
+/// to anything in the plane).
+#[inline]
+fn plane_gap_sq(o: DVec3, n: DVec3, t: &[DVec3; 3]) -> f64 {
+    let s0 = n.dot(t[0] - o);
+    let s1 = n.dot(t[1] - o);
+    let s2 = n.dot(t[2] - o);
+    let g = s0.min(s1).min(s2).max(-(s0.max(s1).max(s2))).max(0.0);
+    // Shrunk by a relative hair so that rounding never prunes the closest pair.
+    let g = g * (1.0 - 1e-12);
+    g * g
 }
 
 /// Exact distance between A and B at their world poses (see the module docs).
@@ -498,82 +582,145 @@ pub fn distance(
             intersecting: false,
         };
     }
-    if scratch.warm_start {
-        if let Some((sa, sb)) = scratch.last_pair {
-            if let (Some(x), Some(y)) = (ta.tris.get(sa as usize), tb.tris.get(sb as usize)) {
-                best.offer(&triangle_distance(x, &f.tri(y)), sa, sb);
+    scratch.stats = ExactStats::default();
+    // Phase 1: do the surfaces cross? (Exact predicates on every pair of overlapping
+    // triangle boxes, stopping at the first crossing.)
+    let first = if scratch.warm_start {
+        scratch.last_hit
+    } else {
+        None
+    };
+    let mut hit = None;
+    overlap_pairs(a, b, &f, &mut scratch.stack, first, |sa, sb, x, y| {
+        if let Some(p) = tri_tri::intersection_point(x, y) {
+            hit = Some((sa, sb, p));
+            true
+        } else {
+            false
+        }
+    });
+    if let Some((sa, sb, p)) = hit {
+        scratch.last_hit = Some((sa, sb));
+        best = Best {
+            d2: 0.0,
+            pa: p,
+            pb: p,
+            sa,
+            sb,
+            intersecting: true,
+        };
+    } else {
+        // Phase 2: no triangle pair crosses; branch and bound on floating-point distances.
+        if scratch.warm_start {
+            if let Some((sa, sb)) = scratch.last_pair {
+                if let (Some(x), Some(y)) = (ta.tris.get(sa as usize), tb.tris.get(sb as usize)) {
+                    best.offer(&triangle_distance_hint(x, &f.tri(y), false), sa, sb);
+                }
             }
         }
-    }
-    if !best.intersecting {
-        bnb(ta, tb, &f, &mut best, &mut scratch.stack);
+        bnb_heap(a, b, &f, &mut best, &mut scratch.heap, &mut scratch.stats);
     }
     if best.sa != u32::MAX {
         scratch.last_pair = Some((best.sa, best.sb));
     }
-    finish(a, pose_a, b, &rel, &f, &best)
+    finish(
+        a,
+        pose_a,
+        b,
+        &rel,
+        &f,
+        &best,
+        &mut scratch.stats.winding_tests,
+    )
 }
 
-/// The branch-and-bound traversal of [`distance`].
-fn bnb(
-    ta: &TriangleBvh,
-    tb: &TriangleBvh,
+/// A node pair on the best-first queue, smallest lower bound on top.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct HeapItem(f64, u32, u32);
+impl Eq for HeapItem {}
+impl PartialOrd for HeapItem {
+    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for HeapItem {
+    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+        o.0.total_cmp(&self.0)
+    }
+}
+
+/// Best-first branch and bound of [`distance`]: node pairs in the order of their lower
+/// bounds ([`bound::lower_bound_sq`]), except that the nearer child pair is taken at once
+/// while no queued pair is nearer (which saves most queue operations without changing the
+/// order).
+fn bnb_heap(
+    a: &ExactMesh,
+    b: &ExactMesh,
     f: &Frame,
     best: &mut Best,
-    stack: &mut Vec<(u32, u32, f64)>,
+    heap: &mut std::collections::BinaryHeap<HeapItem>,
+    stats: &mut ExactStats,
 ) {
-    let (Some(ra), Some(rb)) = (ta.nodes.first(), tb.nodes.first()) else {
+    let (ta, tb) = (a.bvh(), b.bvh());
+    if ta.nodes.is_empty()
+        || tb.nodes.is_empty()
+        || a.shapes.len() != ta.nodes.len()
+        || b.shapes.len() != tb.nodes.len()
+    {
         return;
-    };
-    stack.clear();
-    let (c, h) = f.node_box(rb);
-    let d0 = box_dist_sq(ra, c, h);
-    if d0 < best.d2 {
-        stack.push((0, 0, d0));
     }
-    while let Some((ia, ib, lb)) = stack.pop() {
+    heap.clear();
+    let mut cur = Some(HeapItem(f.lower_bound_sq(&a.shapes[0], &b.shapes[0]), 0, 0));
+    loop {
+        let HeapItem(lb, ia, ib) = match cur.take() {
+            Some(x) => x,
+            None => match heap.pop() {
+                Some(x) => x,
+                None => break,
+            },
+        };
         if !(lb < best.d2) {
-            continue;
+            // Everything still queued is at least as far.
+            break;
         }
+        stats.node_pairs += 1;
         let na = &ta.nodes[ia as usize];
         let nb = &tb.nodes[ib as usize];
-        match (na.is_leaf(), nb.is_leaf()) {
+        let (p1, p2, d1, d2) = match (na.is_leaf(), nb.is_leaf()) {
             (true, true) => {
-                if leaf_distance(ta, tb, na, nb, f, best) {
-                    stack.clear();
-                    return;
-                }
+                leaf_distance(a, b, na, nb, f, best, stats);
+                continue;
             }
             (la, lb_leaf) => {
-                let split_a = !la && (lb_leaf || size_sq(na) >= size_sq(nb));
-                let (p1, p2, d1, d2) = if split_a {
-                    let (c, h) = f.node_box(nb);
+                if !la && (lb_leaf || size_sq(na) >= size_sq(nb)) {
+                    let sb = f.shape(&b.shapes[ib as usize]);
                     let (x, y) = (ia + 1, na.start);
-                    let d1 = box_dist_sq(&ta.nodes[x as usize], c, h);
-                    let d2 = box_dist_sq(&ta.nodes[y as usize], c, h);
+                    let d1 = sb.lower_bound_sq(&a.shapes[x as usize], f.pad);
+                    let d2 = sb.lower_bound_sq(&a.shapes[y as usize], f.pad);
                     ((x, ib), (y, ib), d1, d2)
                 } else {
                     let (x, y) = (ib + 1, nb.start);
-                    let (c1, h1) = f.node_box(&tb.nodes[x as usize]);
-                    let (c2, h2) = f.node_box(&tb.nodes[y as usize]);
-                    (
-                        (ia, x),
-                        (ia, y),
-                        box_dist_sq(na, c1, h1),
-                        box_dist_sq(na, c2, h2),
-                    )
-                };
-                let (near, dn, far, df) = if d1 <= d2 {
-                    (p1, d1, p2, d2)
-                } else {
-                    (p2, d2, p1, d1)
-                };
-                if df < best.d2 {
-                    stack.push((far.0, far.1, df));
+                    let sa = &a.shapes[ia as usize];
+                    let d1 = f.lower_bound_sq(sa, &b.shapes[x as usize]);
+                    let d2 = f.lower_bound_sq(sa, &b.shapes[y as usize]);
+                    ((ia, x), (ia, y), d1, d2)
                 }
-                if dn < best.d2 {
-                    stack.push((near.0, near.1, dn));
-                }
+            }
+        };
+        let (near, dn, far, df) = if d1 <= d2 {
+            (p1, d1, p2, d2)
+        } else {
+            (p2, d2, p1, d1)
+        };
+        if df < best.d2 {
+            heap.push(HeapItem(df, far.0, far.1));
+        }
+        if dn < best.d2 {
+            let item = HeapItem(dn, near.0, near.1);
+            if heap.peek().is_none_or(|t| dn <= t.0) {
+                cur = Some(item);
+            } else {
+                heap.push(item);
             }
         }
     }
@@ -587,9 +734,10 @@ fn finish(
     rel: &Pose,
     f: &Frame,
     best: &Best,
+    tests: &mut usize,
 ) -> ExactDistance {
     let surface = best.d2.sqrt();
-    let contained = !best.intersecting && contained(a, b, rel, f);
+    let contained = !best.intersecting && contained(a, b, rel, f, tests);
     let tri = |m: &ExactMesh, s: u32| m.bvh().order.get(s as usize).copied().unwrap_or(u32::MAX);
     ExactDistance {
         distance: if best.intersecting || contained {
@@ -607,25 +755,26 @@ fn finish(
 }
 
 /// One body lies entirely inside the other (assuming the surfaces do not cross).
-fn contained(a: &ExactMesh, b: &ExactMesh, rel: &Pose, f: &Frame) -> bool {
-    if b.component_inside(a, f) {
+fn contained(a: &ExactMesh, b: &ExactMesh, rel: &Pose, f: &Frame, tests: &mut usize) -> bool {
+    if b.component_inside(a, f, tests) {
         return true;
     }
     let g = Frame::new(&rel.inverse(), b.bvh(), a.bvh());
-    a.component_inside(b, &g)
+    a.component_inside(b, &g, tests)
 }
 
 /// Traverses all pairs of overlapping boxes and calls `leaf(slot_a, slot_b, tri_a, tri_b)`
 /// (B's triangle in A's frame) for every triangle pair whose boxes overlap, until it returns
 /// true. Tries `first` before anything else. Returns whether it stopped early.
 pub(crate) fn overlap_pairs(
-    ta: &TriangleBvh,
-    tb: &TriangleBvh,
+    a: &ExactMesh,
+    b: &ExactMesh,
     f: &Frame,
     stack: &mut Vec<(u32, u32, f64)>,
     first: Option<(u32, u32)>,
     mut leaf: impl FnMut(u32, u32, &[DVec3; 3], &[DVec3; 3]) -> bool,
 ) -> bool {
+    let (ta, tb) = (a.bvh(), b.bvh());
     if let Some((sa, sb)) = first {
         if let (Some(x), Some(y)) = (ta.tris.get(sa as usize), tb.tris.get(sb as usize)) {
             if leaf(sa, sb, x, &f.tri(y)) {
@@ -633,12 +782,15 @@ pub(crate) fn overlap_pairs(
             }
         }
     }
-    let (Some(ra), Some(rb)) = (ta.nodes.first(), tb.nodes.first()) else {
+    if ta.nodes.is_empty()
+        || tb.nodes.is_empty()
+        || a.shapes.len() != ta.nodes.len()
+        || b.shapes.len() != tb.nodes.len()
+    {
         return false;
-    };
+    }
     stack.clear();
-    let (c, h) = f.node_box(rb);
-    if box_dist_sq(ra, c, h) > 0.0 {
+    if f.lower_bound_sq(&a.shapes[0], &b.shapes[0]) > 0.0 {
         return false;
     }
     stack.push((0, 0, 0.0));
@@ -668,8 +820,12 @@ pub(crate) fn overlap_pairs(
                             if (alo - bhi).max(blo - ahi).max_element() > 0.0 {
                                 continue;
                             }
+                            let y = &tb_buf[j];
+                            if tri_tri::plane_separates(x, y) || tri_tri::plane_separates(y, x) {
+                                continue;
+                            }
                             let sb = (sb0 + ci * LEAF_SIZE + j) as u32;
-                            if leaf((sa0 + i) as u32, sb, x, &tb_buf[j]) {
+                            if leaf((sa0 + i) as u32, sb, x, y) {
                                 stack.clear();
                                 return true;
                             }
@@ -679,16 +835,16 @@ pub(crate) fn overlap_pairs(
             }
             (la, lb_leaf) => {
                 if !la && (lb_leaf || size_sq(na) >= size_sq(nb)) {
-                    let (c, h) = f.node_box(nb);
+                    let sb = f.shape(&b.shapes[ib as usize]);
                     for x in [na.start, ia + 1] {
-                        if box_dist_sq(&ta.nodes[x as usize], c, h) <= 0.0 {
+                        if sb.lower_bound_sq(&a.shapes[x as usize], f.pad) <= 0.0 {
                             stack.push((x, ib, 0.0));
                         }
                     }
                 } else {
+                    let sa = &a.shapes[ia as usize];
                     for y in [nb.start, ib + 1] {
-                        let (c, h) = f.node_box(&tb.nodes[y as usize]);
-                        if box_dist_sq(na, c, h) <= 0.0 {
+                        if f.lower_bound_sq(sa, &b.shapes[y as usize]) <= 0.0 {
                             stack.push((ia, y, 0.0));
                         }
                     }
@@ -714,31 +870,25 @@ pub fn intersects(
     if !f.is_finite() {
         return false;
     }
+    scratch.stats = ExactStats::default();
     let first = if scratch.warm_start {
         scratch.last_hit
     } else {
         None
     };
     let mut hit = None;
-    let crossing = overlap_pairs(
-        a.bvh(),
-        b.bvh(),
-        &f,
-        &mut scratch.stack,
-        first,
-        |sa, sb, x, y| {
-            let h = tri_tri::intersection_point(x, y).is_some();
-            if h {
-                hit = Some((sa, sb));
-            }
-            h
-        },
-    );
+    let crossing = overlap_pairs(a, b, &f, &mut scratch.stack, first, |sa, sb, x, y| {
+        let h = tri_tri::intersection_point(x, y).is_some();
+        if h {
+            hit = Some((sa, sb));
+        }
+        h
+    });
     if crossing {
         scratch.last_hit = hit;
         return true;
     }
-    contained(a, b, &rel, &f)
+    contained(a, b, &rel, &f, &mut scratch.stats.winding_tests)
 }
 
 /// O(n·m) reference for [`distance`]: every triangle pair, the same containment rule.
@@ -762,7 +912,7 @@ pub fn brute_force_distance(
             }
         }
     }
-    finish(a, pose_a, b, &rel, &f, &best)
+    finish(a, pose_a, b, &rel, &f, &best, &mut 0)
 }
 
 /// O(n·m) reference for [`intersects`].

@@ -12,6 +12,8 @@
 //!
 //! Meant for closed, outward-facing meshes (for open meshes it is a best effort).
 
+#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x < y)` is deliberate: true for NaN too.
+
 use super::tri_tri::segment_triangle_intersect;
 use super::{overlap_pairs, ExactMesh, ExactScratch, Frame};
 use crate::query::pose::Pose;
@@ -227,18 +229,11 @@ pub fn penetration(
     s.cross_b.clear();
     {
         let (cross_a, cross_b) = (&mut s.cross_a, &mut s.cross_b);
-        overlap_pairs(
-            a.bvh(),
-            b.bvh(),
-            &f,
-            &mut scratch.stack,
-            None,
-            |sa, sb, x, y| {
-                record_crossings(b.slot_vertices(sb), y, x, cross_b);
-                record_crossings(a.slot_vertices(sa), x, y, cross_a);
-                false
-            },
-        );
+        overlap_pairs(a, b, &f, &mut scratch.stack, None, |sa, sb, x, y| {
+            record_crossings(b.slot_vertices(sb), y, x, cross_b);
+            record_crossings(a.slot_vertices(sa), x, y, cross_a);
+            false
+        });
     }
     let mut cross = std::mem::take(&mut s.cross_b);
     merge(&mut cross, &mut s.barrier);

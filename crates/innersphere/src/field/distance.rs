@@ -2,9 +2,10 @@
 //!
 //! Every inside voxel gets the exact minimum over all triangles of the point–triangle
 //! distance, found with the [`TriangleBvh`]. Voxels are processed row by row (x fastest),
-//! each query's bound seeded with the distance to the previous voxel's closest triangle,
-//! which prunes most of the tree. The pruning is exactly conservative, so the result is
-//! bit-identical to brute force and independent of threads and seeds.
+//! each query's bound seeded with the distances to the closest triangles of the previous
+//! voxel in the row and of the neighbour in the previous row, which prunes most of the tree.
+//! The pruning is exactly conservative, so the result is bit-identical to brute force and
+//! independent of threads and seeds.
 
 use super::inside::classify;
 use super::{DistanceField, VoxelGrid};
@@ -16,7 +17,7 @@ use rayon::prelude::*;
 
 /// Rows of voxels handled sequentially by one parallel task (fixed, so that seeding does not
 /// depend on scheduling).
-const ROWS_PER_TASK: usize = 8;
+const ROWS_PER_TASK: usize = 16;
 /// Points handled sequentially by one parallel task in [`distance_of_points`].
 const POINTS_PER_TASK: usize = 256;
 
@@ -68,7 +69,28 @@ pub fn distances_of_cells(
             let r0 = t * ROWS_PER_TASK;
             let r1 = (r0 + ROWS_PER_TASK).min(row_starts.len() - 1);
             let span = &cells[row_starts[r0]..row_starts[r1]];
-            let out = seeded_distances(bvh, span.iter().map(|&c| grid.center_of(c as usize)));
+            // Seeds: the previous cell of the row, and the last cell of this task in the same
+            // column (the cell of the previous row, when that row was inside too).
+            let mut column_seed = vec![u32::MAX; nx as usize];
+            let mut hint = u32::MAX;
+            let out = span
+                .iter()
+                .map(|&c| {
+                    let p = grid.center_of(c as usize);
+                    let i = (c % nx) as usize;
+                    let bound = bvh
+                        .slot_distance_sq(p, hint)
+                        .min(bvh.slot_distance_sq(p, column_seed[i]));
+                    match bvh.closest_point(p, bound) {
+                        Some(cl) => {
+                            hint = cl.slot;
+                            column_seed[i] = cl.slot;
+                            cl.dist_sq.sqrt()
+                        }
+                        None => f64::INFINITY,
+                    }
+                })
+                .collect();
             progress.advance(span.len() as u64);
             out
         })

@@ -3,8 +3,10 @@
 //! A flat f64 AABB tree: nodes in one `Vec` in depth-first order (the first child of an inner
 //! node directly follows it), triangles reordered so that every leaf owns a contiguous range,
 //! and the triangle corners copied in that order so that queries never chase indices.
-//! Built with a binned surface-area heuristic, in parallel for the top levels; the result
-//! depends only on the input, never on thread scheduling.
+//! Every node also carries a slab (the mean normal of its triangles and their extent along
+//! it), a far tighter distance bound than the box for the nearly flat patches below low
+//! nodes. Built with a binned surface-area heuristic, in parallel for the top levels; the
+//! result depends only on the input, never on thread scheduling.
 
 use super::closest::closest_point_on_triangle;
 use crate::Mesh;
@@ -46,7 +48,10 @@ impl BvhNode {
     /// Squared distance from `p` to the node's box (0 inside).
     #[inline]
     pub fn dist_sq(&self, p: DVec3) -> f64 {
-        (self.lo - p).max(p - self.hi).max(DVec3::ZERO).length_squared()
+        (self.lo - p)
+            .max(p - self.hi)
+            .max(DVec3::ZERO)
+            .length_squared()
     }
 }
 
@@ -59,6 +64,33 @@ pub struct TriangleBvh {
     pub order: Vec<u32>,
     /// The corners of the triangle in each slot (BVH order).
     pub tris: Vec<[DVec3; 3]>,
+    /// One slab per node (same index): a second, orientation-aware bound that is much
+    /// tighter than the box for the nearly flat surface patches below low nodes.
+    pub slabs: Vec<NodeSlab>,
+}
+
+/// The slab `lo ≤ normal · x ≤ hi` that holds every triangle below a node; `normal` is the
+/// unit area-weighted mean normal of those triangles (or +x when they cancel out).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodeSlab {
+    /// Unit slab normal.
+    pub normal: DVec3,
+    /// Lowest `normal · x` over the node's triangle corners.
+    pub lo: f64,
+    /// Highest `normal · x` over the node's triangle corners.
+    pub hi: f64,
+}
+
+impl NodeSlab {
+    /// A lower bound of the distance from `p` to the slab (0 inside), with a relative slack
+    /// of 1e-9 that absorbs every rounding error: never above the computed distance from `p`
+    /// to any triangle in the slab.
+    #[inline]
+    pub fn lower_bound(&self, p: DVec3) -> f64 {
+        let d = self.normal.dot(p);
+        let gap = (d - self.hi).max(self.lo - d);
+        (gap - 1e-9 * (d.abs() + self.lo.abs() + self.hi.abs())).max(0.0)
+    }
 }
 
 /// The answer of [`TriangleBvh::closest_point`].
@@ -107,7 +139,9 @@ fn half_area(lo: DVec3, hi: DVec3) -> f64 {
 impl TriangleBvh {
     /// Builds the tree over all triangles of `mesh` (whose indices must be valid).
     pub fn new(mesh: &Mesh) -> Self {
-        let tris: Vec<[DVec3; 3]> = (0..mesh.triangles.len()).map(|t| mesh.triangle(t)).collect();
+        let tris: Vec<[DVec3; 3]> = (0..mesh.triangles.len())
+            .map(|t| mesh.triangle(t))
+            .collect();
         Self::from_triangles(&tris)
     }
 
@@ -132,8 +166,14 @@ impl TriangleBvh {
             build(&mut prims, 0, 0, &mut nodes);
         }
         let order: Vec<u32> = prims.iter().map(|p| p.idx).collect();
-        let tris = order.iter().map(|&i| tris[i as usize]).collect();
-        TriangleBvh { nodes, order, tris }
+        let tris: Vec<[DVec3; 3]> = order.iter().map(|&i| tris[i as usize]).collect();
+        let slabs = slabs(&nodes, &tris);
+        TriangleBvh {
+            nodes,
+            order,
+            tris,
+            slabs,
+        }
     }
 
     /// Number of triangles.
@@ -160,14 +200,17 @@ impl TriangleBvh {
     /// The nearest surface point to `p` whose squared distance is at most `upper_bound_sq`
     /// (`f64::INFINITY` for no bound), or `None` when no triangle is that close.
     ///
-    /// Ordered depth-first descent (nearer child first) that prunes boxes farther than the
-    /// best triangle found so far. Ties keep the first triangle found; the distance is the
-    /// exact minimum over all triangles of [`closest_point_on_triangle`].
+    /// Ordered depth-first descent (nearer child first) that prunes the nodes whose box or
+    /// slab lies farther than the best triangle found so far. Both bounds are exactly
+    /// conservative, so the distance is the exact minimum over all triangles of
+    /// [`closest_point_on_triangle`], bit for bit, whatever the bound; ties keep the first
+    /// triangle found.
     pub fn closest_point(&self, p: DVec3, upper_bound_sq: f64) -> Option<Closest> {
         let mut best = upper_bound_sq;
         let mut found: Option<(usize, DVec3)> = None;
         let root = self.nodes.first()?;
-        if !(root.dist_sq(p) <= best) {
+        let d = root.dist_sq(p);
+        if d.is_nan() || d > best {
             return None;
         }
         let mut stack = [(0u32, 0.0f64); MAX_DEPTH + 2];
@@ -194,8 +237,8 @@ impl TriangleBvh {
                 }
             } else {
                 let (l, r) = (node + 1, n.start as usize);
-                let dl = self.nodes[l].dist_sq(p);
-                let dr = self.nodes[r].dist_sq(p);
+                let dl = self.lower_bound_sq(l, p);
+                let dr = self.lower_bound_sq(r, p);
                 let (near, dn, far, df) = if dl <= dr {
                     (l, dl, r, dr)
                 } else {
@@ -231,15 +274,29 @@ impl TriangleBvh {
         }
     }
 
+    /// A lower bound of the squared distance from `p` to the triangles below node `i`: the
+    /// larger of the box and slab bounds.
+    #[inline]
+    pub fn lower_bound_sq(&self, i: usize, p: DVec3) -> f64 {
+        let s = self.slabs[i].lower_bound(p);
+        self.nodes[i].dist_sq(p).max(s * s)
+    }
+
+    /// Squared distance from `p` to the triangle in slot `slot` (`f64::INFINITY` for a slot
+    /// that does not exist, e.g. `u32::MAX`): an upper bound for [`closest_point`](Self::closest_point).
+    #[inline]
+    pub fn slot_distance_sq(&self, p: DVec3, slot: u32) -> f64 {
+        match self.tris.get(slot as usize) {
+            Some(&[a, b, c]) => (p - closest_point_on_triangle(p, a, b, c)).length_squared(),
+            None => f64::INFINITY,
+        }
+    }
+
     /// Like [`closest_point`](Self::closest_point) with the bound taken from the triangle in
     /// `hint_slot` (typically the answer for a nearby point): always finds the nearest triangle,
     /// but prunes most of the tree from the start.
     pub fn closest_point_from(&self, p: DVec3, hint_slot: u32) -> Option<Closest> {
-        let bound = match self.tris.get(hint_slot as usize) {
-            Some(&[a, b, c]) => (p - closest_point_on_triangle(p, a, b, c)).length_squared(),
-            None => f64::INFINITY,
-        };
-        self.closest_point(p, bound)
+        self.closest_point(p, self.slot_distance_sq(p, hint_slot))
     }
 
     /// Squared distance from `p` to the nearest triangle (`f64::INFINITY` when empty).
@@ -247,6 +304,50 @@ impl TriangleBvh {
         self.closest_point(p, f64::INFINITY)
             .map_or(f64::INFINITY, |c| c.dist_sq)
     }
+}
+
+/// The slab of every node: normals summed bottom-up, extents over each node's slot range.
+fn slabs(nodes: &[BvhNode], tris: &[[DVec3; 3]]) -> Vec<NodeSlab> {
+    use rayon::prelude::*;
+    let n = nodes.len();
+    let mut range = vec![(0usize, 0usize); n];
+    let mut normal = vec![DVec3::ZERO; n];
+    for i in (0..n).rev() {
+        let node = &nodes[i];
+        if node.is_leaf() {
+            let r = node.start as usize..(node.start + node.count) as usize;
+            normal[i] = tris[r.clone()]
+                .iter()
+                .map(|&[a, b, c]| (b - a).cross(c - a))
+                .sum();
+            range[i] = (r.start, r.end);
+        } else {
+            let (l, r) = (i + 1, node.start as usize);
+            normal[i] = normal[l] + normal[r];
+            range[i] = (range[l].0, range[r].1);
+        }
+    }
+    (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let len = normal[i].length();
+            let unit = normal[i] / len;
+            let normal = if len > 0.0 && unit.is_finite() {
+                unit
+            } else {
+                DVec3::X
+            };
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for t in &tris[range[i].0..range[i].1] {
+                for v in t {
+                    let d = normal.dot(*v);
+                    lo = lo.min(d);
+                    hi = hi.max(d);
+                }
+            }
+            NodeSlab { normal, lo, hi }
+        })
+        .collect()
 }
 
 /// Builds the subtree over `prims` (whose first slot is `first`) and appends it to `out`.
@@ -327,7 +428,7 @@ fn split(prims: &mut [Prim], clo: DVec3, chi: DVec3, depth: u32) -> usize {
     } else {
         2
     };
-    if !(ext[axis] > 0.0) {
+    if ext[axis].is_nan() || ext[axis] <= 0.0 {
         // All centroids coincide (or are not finite): split by position in the list.
         return n / 2;
     }
@@ -339,9 +440,7 @@ fn split(prims: &mut [Prim], clo: DVec3, chi: DVec3, depth: u32) -> usize {
     // Median split along the longest axis (total order, so deterministic).
     let mid = n / 2;
     prims.select_nth_unstable_by(mid, |a, b| {
-        a.c[axis]
-            .total_cmp(&b.c[axis])
-            .then(a.idx.cmp(&b.idx))
+        a.c[axis].total_cmp(&b.c[axis]).then(a.idx.cmp(&b.idx))
     });
     mid
 }
@@ -350,9 +449,21 @@ fn split(prims: &mut [Prim], clo: DVec3, chi: DVec3, depth: u32) -> usize {
 fn sah_split(prims: &mut [Prim], clo: DVec3, ext: DVec3) -> Option<usize> {
     let mut bins = [[Bin::EMPTY; BINS]; 3];
     let scale = DVec3::new(
-        if ext.x > 0.0 { BINS as f64 / ext.x } else { 0.0 },
-        if ext.y > 0.0 { BINS as f64 / ext.y } else { 0.0 },
-        if ext.z > 0.0 { BINS as f64 / ext.z } else { 0.0 },
+        if ext.x > 0.0 {
+            BINS as f64 / ext.x
+        } else {
+            0.0
+        },
+        if ext.y > 0.0 {
+            BINS as f64 / ext.y
+        } else {
+            0.0
+        },
+        if ext.z > 0.0 {
+            BINS as f64 / ext.z
+        } else {
+            0.0
+        },
     );
     let bin_of = |c: f64, a: usize| -> usize {
         // NaN casts to 0; the `min` keeps the maximum centroid in the last bin.
@@ -368,12 +479,16 @@ fn sah_split(prims: &mut [Prim], clo: DVec3, ext: DVec3) -> Option<usize> {
     }
     let mut best: Option<(f64, usize, usize)> = None; // (cost, axis, bins on the left)
     for (a, axis_bins) in bins.iter().enumerate() {
-        if !(ext[a] > 0.0) {
+        if ext[a].is_nan() || ext[a] <= 0.0 {
             continue;
         }
         // Sweep from the right to get suffix areas and counts.
         let mut right_cost = [0.0f64; BINS];
-        let (mut lo, mut hi, mut cnt) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY), 0);
+        let (mut lo, mut hi, mut cnt) = (
+            DVec3::splat(f64::INFINITY),
+            DVec3::splat(f64::NEG_INFINITY),
+            0,
+        );
         for i in (1..BINS).rev() {
             let b = &axis_bins[i];
             lo = lo.min(b.lo);
@@ -385,7 +500,11 @@ fn sah_split(prims: &mut [Prim], clo: DVec3, ext: DVec3) -> Option<usize> {
                 0.0
             };
         }
-        let (mut lo, mut hi, mut cnt) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY), 0);
+        let (mut lo, mut hi, mut cnt) = (
+            DVec3::splat(f64::INFINITY),
+            DVec3::splat(f64::NEG_INFINITY),
+            0,
+        );
         for i in 0..BINS - 1 {
             let b = &axis_bins[i];
             lo = lo.min(b.lo);
@@ -439,9 +558,13 @@ mod tests {
             if node.is_leaf() {
                 assert!(node.count as usize <= LEAF_SIZE);
                 covered += node.count as usize;
+                let slab = &bvh.slabs[i];
                 for t in &bvh.tris[node.start as usize..(node.start + node.count) as usize] {
                     for v in t {
                         assert!(v.cmpge(node.lo).all() && v.cmple(node.hi).all());
+                        let d = slab.normal.dot(*v);
+                        assert!(d >= slab.lo && d <= slab.hi);
+                        assert_eq!(slab.lower_bound(*v), 0.0);
                     }
                 }
             } else {
@@ -453,6 +576,7 @@ mod tests {
             }
         }
         assert_eq!(covered, n);
+        assert_eq!(bvh.slabs.len(), bvh.nodes.len());
     }
 
     fn v3(r: f64) -> impl Strategy<Value = DVec3> {
@@ -493,20 +617,28 @@ mod tests {
 
     #[test]
     fn degenerate_inputs() {
-        assert!(TriangleBvh::from_triangles(&[]).closest_point(DVec3::ZERO, f64::INFINITY).is_none());
+        assert!(TriangleBvh::from_triangles(&[])
+            .closest_point(DVec3::ZERO, f64::INFINITY)
+            .is_none());
         // Many identical triangles and point triangles: no panic, a valid tree.
         let t = [DVec3::ZERO, DVec3::X, DVec3::Y];
         let mut tris = vec![t; 1000];
         tris.extend(std::iter::repeat_n([DVec3::ONE; 3], 500));
         let bvh = TriangleBvh::from_triangles(&tris);
         check_structure(&bvh, tris.len());
-        let c = bvh.closest_point(DVec3::new(0.2, 0.2, 1.0), f64::INFINITY).unwrap();
+        let c = bvh
+            .closest_point(DVec3::new(0.2, 0.2, 1.0), f64::INFINITY)
+            .unwrap();
         assert!((c.dist_sq - 1.0).abs() < 1e-15);
         // Exponentially spaced triangles (a bad case for SAH depth).
         let tris: Vec<[DVec3; 3]> = (0..2000)
             .map(|i| {
                 let x = 1.01f64.powi(i);
-                [DVec3::new(x, 0.0, 0.0), DVec3::new(x, 1.0, 0.0), DVec3::new(x, 0.0, 1.0)]
+                [
+                    DVec3::new(x, 0.0, 0.0),
+                    DVec3::new(x, 1.0, 0.0),
+                    DVec3::new(x, 0.0, 1.0),
+                ]
             })
             .collect();
         let bvh = TriangleBvh::from_triangles(&tris);
@@ -522,6 +654,7 @@ mod tests {
         let b = TriangleBvh::new(&m);
         assert_eq!(a.nodes, b.nodes);
         assert_eq!(a.order, b.order);
+        assert_eq!(a.slabs, b.slabs);
         check_structure(&a, m.triangles.len());
     }
 }

@@ -10,7 +10,7 @@ use glam::DVec3;
 pub fn closest_point_on_segment(p: DVec3, a: DVec3, b: DVec3) -> DVec3 {
     let ab = b - a;
     let len_sq = ab.length_squared();
-    if !(len_sq > 0.0) {
+    if len_sq.is_nan() || len_sq <= 0.0 {
         return a;
     }
     let t = ((p - a).dot(ab) / len_sq).clamp(0.0, 1.0);

@@ -15,7 +15,7 @@ use crate::Mesh;
 use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
 
-/// Default accuracy parameter β: nodes farther than β·radius use the dipole approximation.
+/// Default accuracy parameter β: nodes farther than β·radius use their far-field expansion.
 pub const DEFAULT_BETA: f64 = 2.0;
 
 /// Signed solid angle of the triangle `a, b, c` given relative to the viewpoint
@@ -65,7 +65,7 @@ pub struct FastWinding {
 }
 
 impl FastWinding {
-    /// Builds the hierarchy with the default β = 2 (accurate to about 1e-2).
+    /// Builds the hierarchy with the default β = 2 (errors of about 1e-3).
     pub fn new(mesh: &Mesh) -> Self {
         Self::with_beta(mesh, DEFAULT_BETA)
     }
@@ -125,8 +125,7 @@ impl FastWinding {
                     let s = ua + ub + uc;
                     moment += outer(nrm, s / 3.0);
                     // ∫ u uᵀ dA = (1/12)(Σ u_v u_vᵀ + s sᵀ) per unit area.
-                    let cov =
-                        (outer(ua, ua) + outer(ub, ub) + outer(uc, uc) + outer(s, s)) / 12.0;
+                    let cov = (outer(ua, ua) + outer(ub, ub) + outer(uc, uc) + outer(s, s)) / 12.0;
                     for (k, t) in second.iter_mut().enumerate() {
                         *t += cov * nrm[k];
                     }
@@ -179,11 +178,7 @@ impl FastWinding {
                 area[i] = asum;
             }
         }
-        FastWinding {
-            bvh,
-            moments,
-            beta,
-        }
+        FastWinding { bvh, moments, beta }
     }
 
     /// The triangle tree the evaluation runs on.
@@ -274,7 +269,9 @@ mod tests {
         assert!((FastWinding::new(&flipped).winding_number(DVec3::ZERO) + 1.0).abs() < 1e-2);
         let mut s = 12345u64;
         let mut rnd = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0
         };
         for _ in 0..500 {
@@ -300,10 +297,18 @@ mod tests {
             triangles: vec![[0, 1, 2], [0, 0, 0], [0, 1, 3]],
         };
         let fw = FastWinding::new(&m);
-        for p in [DVec3::ZERO, DVec3::X, DVec3::new(0.2, 0.2, 0.0), DVec3::new(0.2, 0.2, 1e-300)] {
+        for p in [
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::new(0.2, 0.2, 0.0),
+            DVec3::new(0.2, 0.2, 1e-300),
+        ] {
             assert!(fw.winding_number(p).is_finite());
             assert!(exact_winding_number(&m, p).is_finite());
         }
-        assert_eq!(FastWinding::new(&Mesh::default()).winding_number(DVec3::ZERO), 0.0);
+        assert_eq!(
+            FastWinding::new(&Mesh::default()).winding_number(DVec3::ZERO),
+            0.0
+        );
     }
 }

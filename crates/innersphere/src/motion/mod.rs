@@ -1,1 +1,24 @@
-//! (in progress)
+//! Motion files and generated motions.
+//!
+//! - [`Motion`] / [`Frame`]: the motion file format (`t,tx,ty,tz,qw,qx,qy,qz`, the pose of
+//!   body B in body A's frame over time), loading with line-numbered errors, saving.
+//! - [`generate`] / [`generate_with`]: hand-recorded-looking motions of a pair at 1 kHz
+//!   ([`Scenario::Chew`], [`Scenario::OpenClose`], [`Scenario::Grind`]) that pass through
+//!   separated, touching and interpenetrating phases.
+//! - [`AnatomicalFrame`]: up / left / anterior, the incisal point and the opening hinge of a
+//!   jaw pair, from the meshes.
+//! - [`ClearanceEstimator`], [`clearance`], [`phase_of`]: a fast signed-clearance estimate
+//!   and the phase labels that replays and benchmarks use.
+
+pub mod clearance;
+pub mod csv;
+pub mod frame;
+pub mod generate;
+mod rng;
+
+pub use clearance::{
+    clearance, phase_of, ClearanceEstimator, ClearanceOptions, Phase, PhaseCounts, DEFAULT_TOUCH,
+};
+pub use csv::{Frame, Motion, HEADER};
+pub use frame::AnatomicalFrame;
+pub use generate::{generate, generate_with, GenerateOptions, Generated, Scenario};

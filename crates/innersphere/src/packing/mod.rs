@@ -136,7 +136,8 @@ pub fn pack(
         let reach_sq = reach * reach;
         let r_sq = radius * radius;
         // One extra cell of reach covers the rounding of an off-grid centre.
-        let reach_cells = reach_cells + 1;
+        let pad = i64::from(refiner.is_some());
+        let reach_cells = reach_cells + pad;
         let (ci, cj, ck) = (ci as i64, cj as i64, ck as i64);
         for k in (ck - reach_cells).max(0)..=(ck + reach_cells).min(dims[2] as i64 - 1) {
             let dz = grid.origin.z + k as f64 * h - center.z;
@@ -146,7 +147,7 @@ pub fn pack(
                 if dyz > reach_sq {
                     continue;
                 }
-                let span = ((reach_sq - dyz).sqrt() / h).floor() as i64 + 1;
+                let span = ((reach_sq - dyz).sqrt() / h).floor() as i64 + pad;
                 let row = grid.index(0, j as u32, k as u32);
                 for i in (ci - span).max(0)..=(ci + span).min(dims[0] as i64 - 1) {
                     let slot = &mut remaining[row + i as usize];

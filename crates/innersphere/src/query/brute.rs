@@ -114,7 +114,7 @@ pub fn penetration(
         let n = i as usize;
         for &(j, c) in &lb {
             if overlaps(a.x[n], a.y[n], a.z[n], a.r[n], c, b.r[j as usize]) {
-                sums.add(a, i, b, j, c);
+                sums.add([a.x[n], a.y[n], a.z[n]], a.r[n], c, b.r[j as usize]);
             }
         }
     }

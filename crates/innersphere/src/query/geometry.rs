@@ -1,8 +1,8 @@
 //! Small geometry shared by the queries: the f32 relative transform, sphere–sphere lens
 //! volumes and centroids, contacts of leaf pairs.
 
+use super::info::Node;
 use super::Pose;
-use crate::SphereTree;
 use glam::{DMat3, DVec3};
 
 /// The pose of B in A's frame in f32, applied to B's node centres during a traversal.
@@ -130,20 +130,13 @@ pub struct Contact {
     pub depth: f64,
 }
 
-/// Centre (A's frame, f64 of the f32 values) and radius of leaf `la` of A and of leaf `lb` of
-/// B whose transformed centre is `cb`.
+/// Centre (A's frame, f64 of the f32 values) and radius of leaf `na` of A and of leaf `nb`
+/// of B whose transformed centre is `cb`.
 #[inline]
-pub(crate) fn leaf_pair(
-    a: &SphereTree,
-    la: u32,
-    b: &SphereTree,
-    lb: u32,
-    cb: [f32; 3],
-) -> (DVec3, f64, DVec3, f64) {
-    let i = la as usize;
-    let ca = DVec3::new(a.x[i] as f64, a.y[i] as f64, a.z[i] as f64);
+pub(crate) fn leaf_pair(na: &Node, nb: &Node, cb: [f32; 3]) -> (DVec3, f64, DVec3, f64) {
+    let ca = DVec3::new(na.x as f64, na.y as f64, na.z as f64);
     let cb = DVec3::new(cb[0] as f64, cb[1] as f64, cb[2] as f64);
-    (ca, a.r[i] as f64, cb, b.r[lb as usize] as f64)
+    (ca, na.r as f64, cb, nb.r as f64)
 }
 
 /// Unit vector from `ca` to `cb` (zero when they coincide) and their distance.
@@ -160,14 +153,14 @@ pub(crate) fn direction(ca: DVec3, cb: DVec3) -> (DVec3, f64) {
 
 /// The world contact of an (overlapping) leaf pair.
 pub(crate) fn make_contact(
-    a: &SphereTree,
+    a: &[Node],
     la: u32,
-    b: &SphereTree,
+    b: &[Node],
     lb: u32,
     cb: [f32; 3],
     pose_a: &Pose,
 ) -> Contact {
-    let (ca, ra, cb, rb) = leaf_pair(a, la, b, lb, cb);
+    let (ca, ra, cb, rb) = leaf_pair(&a[la as usize], &b[lb as usize], cb);
     let (u, d) = direction(ca, cb);
     let depth = ra + rb - d;
     let p = ca + u * (ra - 0.5 * depth);

@@ -7,6 +7,8 @@ pub(crate) struct Entry {
     pub key: f32,
     pub a: u32,
     pub b: u32,
+    /// B's node centre in A's frame.
+    pub c: [f32; 3],
 }
 
 /// Min-heap on `key` (ties in any order).
@@ -94,7 +96,12 @@ mod tests {
             s = s.wrapping_mul(1103515245).wrapping_add(12345);
             let k = (s >> 8) as f32 / 1000.0;
             keys.push(k);
-            h.push(Entry { key: k, a: i, b: 0 });
+            h.push(Entry {
+                key: k,
+                a: i,
+                b: 0,
+                c: [0.0; 3],
+            });
         }
         keys.sort_by(f32::total_cmp);
         for k in keys {

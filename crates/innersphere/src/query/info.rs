@@ -3,6 +3,32 @@
 use crate::SphereTree;
 use glam::DVec3;
 
+/// One node in the queries' packed layout: everything a traversal reads about a node in one
+/// 32-byte record, so that the children of a node (contiguous) share one or two cache lines.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[repr(C, align(32))]
+pub(crate) struct Node {
+    pub x: f32,
+    pub y: f32,
+    pub z: f32,
+    pub r: f32,
+    /// First child (0 for leaves).
+    pub first: u32,
+    /// Number of children; 0 for leaves.
+    pub count: u32,
+    /// Parent (`NO_PARENT` for the root).
+    pub parent: u32,
+    /// Depth below the root.
+    pub depth: u32,
+}
+
+impl Node {
+    #[inline(always)]
+    pub(crate) fn is_leaf(&self) -> bool {
+        self.count == 0
+    }
+}
+
 /// Query-side facts about one tree, computed once ([`TreeInfo::new`], O(nodes)) and shared
 /// by every [`PairState`](super::PairState) that involves the tree.
 #[derive(Debug, Clone)]
@@ -27,6 +53,8 @@ pub struct TreeInfo {
     /// Total volume of the leaf spheres below each node (rounded up to f32), the
     /// time-critical query's per-node upper bound on any intersection volume.
     pub subtree_volume: Vec<f32>,
+    /// The tree's nodes in the packed layout the traversals read (same f32 values).
+    pub(crate) packed: Vec<Node>,
 }
 
 /// Rounds a non-negative f64 up to the next f32.
@@ -73,6 +101,22 @@ impl TreeInfo {
             extent,
             center_of_mass: DVec3::from_array(tree.meta.center_of_mass),
             subtree_volume: vol.into_iter().map(f32_up).collect(),
+            packed: (0..n)
+                .map(|i| Node {
+                    x: tree.x[i],
+                    y: tree.y[i],
+                    z: tree.z[i],
+                    r: tree.r[i],
+                    first: if tree.is_leaf(i) {
+                        0
+                    } else {
+                        tree.first_child[i]
+                    },
+                    count: tree.child_count[i] as u32,
+                    parent: tree.parent[i],
+                    depth: tree.depth[i] as u32,
+                })
+                .collect(),
         }
     }
 }

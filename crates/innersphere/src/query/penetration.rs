@@ -4,9 +4,9 @@
 //! Leaves within one tree are disjoint, so the sum of the lens volumes of all overlapping
 //! leaf pairs is exactly the volume of the intersection of the two sphere unions.
 
-use super::geometry::{direction, leaf_pair, lens};
+use super::geometry::{direction, lens};
 use super::heap::Entry;
-use super::state::{expand_larger, test_pair, PairState, StackEntry};
+use super::state::{expand_larger, safe_separation, Item, PairState};
 use super::Pose;
 use crate::SphereTree;
 use glam::DVec3;
@@ -23,6 +23,10 @@ pub struct PenetrationOptions {
     pub patch_radius: f64,
     /// Skip (answer "no penetration") while the last proved separation holds.
     pub safe_motion: bool,
+    /// `true` (default): take the overlapping leaf pairs from the kinetic front (re-testing
+    /// only what the motion since the last query could change); `false`: a depth-first
+    /// traversal from the roots every query. Same result.
+    pub tracking: bool,
 }
 
 impl Default for PenetrationOptions {
@@ -32,6 +36,7 @@ impl Default for PenetrationOptions {
             max_patches: 8,
             patch_radius: 0.0,
             safe_motion: true,
+            tracking: true,
         }
     }
 }
@@ -104,17 +109,19 @@ pub(crate) struct Sums {
 }
 
 impl Sums {
-    /// Adds one overlapping leaf pair; returns its (volume, centroid, direction, depth).
+    /// Adds one overlapping leaf pair (A's centre and radius, B's transformed centre and
+    /// radius, all f32); returns its (volume, centroid, direction, depth).
     #[inline]
     pub(crate) fn add(
         &mut self,
-        a: &SphereTree,
-        la: u32,
-        b: &SphereTree,
-        lb: u32,
+        ca: [f32; 3],
+        ra: f32,
         cb: [f32; 3],
+        rb: f32,
     ) -> (f64, DVec3, DVec3, f64) {
-        let (ca, ra, cbd, rb) = leaf_pair(a, la, b, lb, cb);
+        let ca = DVec3::new(ca[0] as f64, ca[1] as f64, ca[2] as f64);
+        let cbd = DVec3::new(cb[0] as f64, cb[1] as f64, cb[2] as f64);
+        let (ra, rb) = (ra as f64, rb as f64);
         let (u, d) = direction(ca, cbd);
         let (v, g) = lens(ra, rb, d);
         let p = ca + u * g;
@@ -205,15 +212,15 @@ pub fn penetration<'s>(
     st: &'s mut PairState,
     opts: &PenetrationOptions,
 ) -> Penetration<'s> {
-    let ctx = st.begin(a, pose_a, b, pose_b);
-    st.patch_acc.clear();
-    st.patches.clear();
+    let (ctx, s, ia, ib) = st.begin(a, pose_a, b, pose_b);
+    s.patch_acc.clear();
+    s.patches.clear();
     let mut visits = 0u64;
     let mut min_sep = f32::INFINITY;
     let mut sums = Sums::default();
     let mut skipped = false;
-    let safe = if opts.safe_motion {
-        st.safe_separation_rel(&ctx.rel).filter(|&s| s > 0.0)
+    let safe = if opts.safe_motion && !opts.tracking {
+        safe_separation(ia, ib, s.separation, &ctx.rel).filter(|&d| d > 0.0)
     } else {
         None
     };
@@ -221,61 +228,79 @@ pub fn penetration<'s>(
         skipped = true;
         min_sep = d as f32;
     } else {
-        let (ov, lbr) = test_pair(&ctx, 0, 0, st.tb.get(0));
+        let c0 = ctx.xf(0);
+        let (ov, lbr) = ctx.test(0, 0, c0);
         visits += 1;
         let r2 = {
             let r = if opts.patch_radius > 0.0 {
                 opts.patch_radius
             } else {
-                0.125 * (a.r[0].min(b.r[0]) as f64)
+                0.125 * (ctx.a[0].r.min(ctx.b[0].r) as f64)
             };
             r * r
         };
         let maxp = opts.max_patches;
-        if !ov {
+        let (na, nb) = (ctx.a, ctx.b);
+        if opts.tracking {
+            visits = s.front.update(&ctx, ib);
+            for h in &s.front.hits {
+                let n = &na[h.a as usize];
+                let (v, p, u, depth) = sums.add([n.x, n.y, n.z], n.r, h.c, nb[h.b as usize].r);
+                assign_patch(&mut s.patch_acc, maxp, r2, v, p, u, depth);
+            }
+            if s.front.hits.is_empty() {
+                min_sep = s.front.margin().max(0.0) as f32;
+            }
+        } else if !ov {
             min_sep = lbr;
-        } else if a.is_leaf(0) && b.is_leaf(0) {
-            let (v, p, u, depth) = sums.add(a, 0, b, 0, st.tb.get(0));
-            assign_patch(&mut st.patch_acc, maxp, r2, v, p, u, depth);
+        } else if na[0].is_leaf() && nb[0].is_leaf() {
+            let (v, p, u, depth) = sums.add([na[0].x, na[0].y, na[0].z], na[0].r, c0, nb[0].r);
+            assign_patch(&mut s.patch_acc, maxp, r2, v, p, u, depth);
         } else {
-            st.stack.clear();
-            st.stack.push(StackEntry {
+            s.stack.clear();
+            s.stack.push(Item {
                 a: 0,
                 b: 0,
+                c: c0,
                 depth: 0,
             });
-            let stack = &mut st.stack;
-            let patch_acc = &mut st.patch_acc;
+            let stack = &mut s.stack;
+            let patch_acc = &mut s.patch_acc;
             while let Some(e) = stack.pop() {
-                expand_larger(&ctx, &mut st.tb, e.a, e.b, |i, j, cb, d2, s, leafs| {
+                let visit = |i: u32, j: u32, cb: [f32; 3], d2: f32, sr: f32, leafs: bool| {
                     visits += 1;
-                    if d2 < s * s {
+                    if d2 < sr * sr {
                         if leafs {
-                            let (v, p, u, depth) = sums.add(a, i, b, j, cb);
+                            let n = &na[i as usize];
+                            let (v, p, u, depth) =
+                                sums.add([n.x, n.y, n.z], n.r, cb, nb[j as usize].r);
                             assign_patch(patch_acc, maxp, r2, v, p, u, depth);
                         } else {
-                            stack.push(StackEntry {
+                            ctx.prefetch(i, j);
+                            stack.push(Item {
                                 a: i,
                                 b: j,
+                                c: cb,
                                 depth: 0,
                             });
                         }
-                    } else {
-                        let lb = d2.sqrt() - s;
+                    } else if d2 < (sr + min_sep) * (sr + min_sep) {
+                        let lb = d2.sqrt() - sr;
                         if lb < min_sep {
                             min_sep = lb;
                         }
                     }
-                });
+                };
+                expand_larger(&ctx, e.a, e.b, e.c, visit);
             }
         }
     }
-    let com_a = st.ia.center_of_mass;
-    let com_b = ctx.rel.transform_point(st.ib.center_of_mass);
+    let com_a = ia.center_of_mass;
+    let com_b = ctx.rel.transform_point(ib.center_of_mass);
     let (n, f, ta, tb) = sums.wrench(opts.stiffness, com_a, com_b);
     let rot = |v: DVec3| pose_a.transform_vector(v);
-    for pa in &st.patch_acc {
-        st.patches.push(Patch {
+    for pa in &s.patch_acc {
+        s.patches.push(Patch {
             point: pose_a.transform_point(if pa.vol > 0.0 {
                 pa.vg / pa.vol
             } else {
@@ -289,13 +314,13 @@ pub fn penetration<'s>(
     }
     let distance = if sums.pairs > 0 {
         if !skipped {
-            st.separation = None;
+            s.separation = None;
         }
         0.0
     } else {
         let d = min_sep.max(0.0) as f64;
         if !skipped {
-            st.record_separation(&ctx, d);
+            s.record_separation(&ctx, d);
         }
         d
     };
@@ -307,7 +332,7 @@ pub fn penetration<'s>(
         force: rot(f),
         torque_a: rot(ta),
         torque_b: rot(tb),
-        patches: &st.patches,
+        patches: &s.patches,
         distance,
         visits,
         skipped,
@@ -340,16 +365,19 @@ pub fn penetration_budgeted(
     st: &mut PairState,
     budget: u64,
 ) -> BudgetedVolume {
-    let ctx = st.begin(a, pose_a, b, pose_b);
-    st.heap.clear();
+    let (ctx, s, ia, ib) = st.begin(a, pose_a, b, pose_b);
+    let heap = &mut s.heap;
+    heap.clear();
     let mut visits = 1u64;
     let mut found = 0.0f64;
-    let (ov, _) = test_pair(&ctx, 0, 0, st.tb.get(0));
-    let va = &st.ia.subtree_volume;
-    let vb = &st.ib.subtree_volume;
+    let c0 = ctx.xf(0);
+    let (ov, _) = ctx.test(0, 0, c0);
+    let va = &ia.subtree_volume;
+    let vb = &ib.subtree_volume;
+    let (na, nb) = (ctx.a, ctx.b);
     let h = 0.5 * ctx.slack as f64;
     let bound = |i: u32, j: u32, d2: f32| -> f32 {
-        let (ra, rb) = (a.r[i as usize] as f64 + h, b.r[j as usize] as f64 + h);
+        let (ra, rb) = (na[i as usize].r as f64 + h, nb[j as usize].r as f64 + h);
         let (l, _) = lens(ra, rb, (d2 as f64).sqrt());
         let ub = (l * (1.0 + 1e-6))
             .min(va[i as usize] as f64)
@@ -361,38 +389,40 @@ pub fn penetration_budgeted(
             f
         }
     };
+    let leaf_volume = |i: u32, j: u32, cb: [f32; 3]| -> f64 {
+        let n = &na[i as usize];
+        let mut s = Sums::default();
+        s.add([n.x, n.y, n.z], n.r, cb, nb[j as usize].r);
+        s.volume
+    };
     if ov {
-        if a.is_leaf(0) && b.is_leaf(0) {
-            let mut s = Sums::default();
-            s.add(a, 0, b, 0, st.tb.get(0));
-            found = s.volume;
+        if na[0].is_leaf() && nb[0].is_leaf() {
+            found = leaf_volume(0, 0, c0);
         } else {
-            let cb = st.tb.get(0);
-            let dx = cb[0] - a.x[0];
-            let dy = cb[1] - a.y[0];
-            let dz = cb[2] - a.z[0];
-            st.heap.push(Entry {
+            let dx = na[0].x - c0[0];
+            let dy = na[0].y - c0[1];
+            let dz = na[0].z - c0[2];
+            heap.push(Entry {
                 key: -bound(0, 0, dx * dx + dy * dy + dz * dz),
                 a: 0,
                 b: 0,
+                c: c0,
             });
         }
     }
-    let heap = &mut st.heap;
     while visits < budget {
         let Some(e) = heap.pop() else { break };
-        expand_larger(&ctx, &mut st.tb, e.a, e.b, |i, j, cb, d2, s, leafs| {
+        expand_larger(&ctx, e.a, e.b, e.c, |i, j, c, d2, sr, leafs| {
             visits += 1;
-            if d2 < s * s {
+            if d2 < sr * sr {
                 if leafs {
-                    let mut s = Sums::default();
-                    s.add(a, i, b, j, cb);
-                    found += s.volume;
+                    found += leaf_volume(i, j, c);
                 } else {
                     heap.push(Entry {
                         key: -bound(i, j, d2),
                         a: i,
                         b: j,
+                        c,
                     });
                 }
             }

@@ -1,9 +1,8 @@
-//! Exact proximity of the two inner-sphere packings: best-first branch and bound over both
-//! trees.
+//! Exact proximity of the two inner-sphere packings: branch and bound over both trees.
 
 use super::geometry::{direction, leaf_pair};
 use super::heap::Entry;
-use super::state::{expand_larger, test_pair, PairState};
+use super::state::{expand_larger, PairState};
 use super::Pose;
 use crate::SphereTree;
 use glam::DVec3;
@@ -18,11 +17,16 @@ pub struct ProximityOptions {
     pub rel_tolerance: f64,
     /// When the packings overlap: `false` (default) stops at the first overlapping leaf pair
     /// found and reports `distance = 0`; `true` finds the most deeply overlapping leaf pair
-    /// and reports `distance = −(its overlap)` (slower: every overlapping node pair deeper
-    /// than that must be refined).
+    /// and reports `distance = −(its overlap)` (slower: every node pair that could overlap
+    /// deeper must be refined).
     pub signed: bool,
     /// Start from last query's closest leaf pair (an upper bound before the search starts).
     pub coherence: bool,
+    /// Search order: `true` = best first (a priority queue of node pairs keyed by their
+    /// lower bound, the classic formulation); `false` (default) = depth first, nearest child
+    /// pair first. Both return the same answer; with the coherent upper bound they refine
+    /// about the same pairs, and depth first is cheaper per pair (no heap, better locality).
+    pub best_first: bool,
 }
 
 impl Default for ProximityOptions {
@@ -32,6 +36,7 @@ impl Default for ProximityOptions {
             rel_tolerance: 0.0,
             signed: false,
             coherence: true,
+            best_first: false,
         }
     }
 }
@@ -67,10 +72,10 @@ pub struct Proximity {
 /// Exact minimum distance between the inner-sphere packings of `a` at `pose_a` and `b` at
 /// `pose_b` (world poses), with the closest points and the leaf pair.
 ///
-/// Best-first branch and bound: a priority queue of node pairs keyed by the lower bound
-/// `|ca − cb| − ra − rb`, refining the larger sphere first, pruning pairs that cannot beat
-/// the best leaf pair so far (seeded with last query's pair). Records the separation for the
-/// safe-motion skip of the contact queries.
+/// Branch and bound over node pairs with the lower bound `|ca − cb| − ra − rb`, refining the
+/// larger sphere first and pruning pairs that cannot beat the best leaf pair so far (seeded
+/// with last query's pair); best first or depth first ([`ProximityOptions::best_first`]).
+/// Records the proved separation for the safe-motion skip of the contact queries.
 pub fn proximity(
     a: &SphereTree,
     pose_a: &Pose,
@@ -79,98 +84,136 @@ pub fn proximity(
     st: &mut PairState,
     opts: &ProximityOptions,
 ) -> Proximity {
-    let ctx = st.begin(a, pose_a, b, pose_b);
+    let (ctx, s, _, _) = st.begin(a, pose_a, b, pose_b);
     let abs = opts.abs_tolerance.max(0.0) as f32;
     let rel = opts.rel_tolerance.max(0.0) as f32;
     let signed = opts.signed;
     // A pair whose lower bound is `lb` cannot improve `ub` by more than the tolerance.
     let done = |lb: f32, ub: f32| ub - lb <= abs.max(rel * lb.max(0.0));
+    let clamp = |d: f32| if signed { d } else { d.max(0.0) };
     let mut ub = f32::INFINITY;
     let mut best = (0u32, 0u32);
     let mut visits = 0u64;
     if opts.coherence {
-        if let Some((la, lb)) = st.prox_pair {
-            let cb = st.tb.xf(&ctx.rel32, b, lb as usize);
-            let (_, d) = test_pair(&ctx, la as usize, lb as usize, cb);
+        if let Some((la, lb)) = s.prox_pair {
+            let (_, d) = ctx.test(la, lb, ctx.xf(lb));
             ub = d;
             best = (la, lb);
             visits += 1;
         }
     }
-    st.heap.clear();
-    let (_, root_lb) = test_pair(&ctx, 0, 0, st.tb.get(0));
+    let c0 = ctx.xf(0);
+    let (_, root_lb) = ctx.test(0, 0, c0);
     visits += 1;
-    let key_of = |d: f32, s: f32| if signed || d > 0.0 { d } else { -1.0 / s };
-    if a.is_leaf(0) && b.is_leaf(0) {
+    let mut lower = f32::INFINITY;
+    let root = Entry {
+        key: root_lb,
+        a: 0,
+        b: 0,
+        c: c0,
+    };
+    if ctx.a[0].is_leaf() && ctx.b[0].is_leaf() {
         if root_lb < ub {
             ub = root_lb;
             best = (0, 0);
         }
-    } else {
-        let l = if signed { root_lb } else { root_lb.max(0.0) };
-        if !done(l, ub) {
-            st.heap.push(Entry {
-                key: key_of(root_lb, a.r[0] + b.r[0] + ctx.slack),
-                a: 0,
-                b: 0,
+    } else if opts.best_first {
+        // In the non-signed mode overlapping pairs are all "distance 0"; among them the
+        // smallest spheres go first, so that the search dives to an overlapping leaf pair.
+        let key_of = |d: f32, s: f32| if signed || d > 0.0 { d } else { -1.0 / s };
+        let heap = &mut s.heap;
+        heap.clear();
+        if !done(clamp(root_lb), ub) {
+            let sr = ctx.a[0].r + ctx.b[0].r + ctx.slack;
+            heap.push(Entry {
+                key: key_of(root_lb, sr),
+                ..root
             });
         }
-    }
-    let mut lower = f32::INFINITY;
-    let heap = &mut st.heap;
-    while let Some(e) = heap.pop() {
-        let elb = if signed { e.key } else { e.key.max(0.0) };
-        if done(elb, ub) {
-            lower = elb;
-            break;
-        }
-        expand_larger(&ctx, &mut st.tb, e.a, e.b, |i, j, _cb, d2, s, leafs| {
-            visits += 1;
-            let d = d2.sqrt() - s;
-            if leafs {
-                if d < ub {
-                    ub = d;
-                    best = (i, j);
-                }
-            } else {
-                let l = if signed { d } else { d.max(0.0) };
-                if !done(l, ub) {
+        while let Some(e) = heap.pop() {
+            let elb = clamp(e.key);
+            if done(elb, ub) {
+                lower = elb;
+                break;
+            }
+            expand_larger(&ctx, e.a, e.b, e.c, |i, j, c, d2, sr, leafs| {
+                visits += 1;
+                let d = d2.sqrt() - sr;
+                if leafs {
+                    if d < ub {
+                        ub = d;
+                        best = (i, j);
+                    }
+                } else if !done(clamp(d), ub) {
                     heap.push(Entry {
-                        key: key_of(d, s),
+                        key: key_of(d, sr),
                         a: i,
                         b: j,
+                        c,
                     });
                 }
+            });
+        }
+    } else {
+        let stack = &mut s.pstack;
+        stack.clear();
+        stack.push(root);
+        while let Some(e) = stack.pop() {
+            let elb = clamp(e.key);
+            if done(elb, ub) {
+                lower = lower.min(elb);
+                continue;
             }
-        });
+            let base = stack.len();
+            expand_larger(&ctx, e.a, e.b, e.c, |i, j, c, d2, sr, leafs| {
+                visits += 1;
+                let d = d2.sqrt() - sr;
+                if leafs {
+                    if d < ub {
+                        ub = d;
+                        best = (i, j);
+                    }
+                } else if !done(clamp(d), ub) {
+                    stack.push(Entry {
+                        key: d,
+                        a: i,
+                        b: j,
+                        c,
+                    });
+                } else {
+                    lower = lower.min(clamp(d));
+                }
+            });
+            // Nearest child pair on top (insertion sort, descending keys; a handful).
+            let kids = &mut stack[base..];
+            for i in 1..kids.len() {
+                let mut j = i;
+                while j > 0 && kids[j - 1].key < kids[j].key {
+                    kids.swap(j - 1, j);
+                    j -= 1;
+                }
+            }
+        }
     }
     let lower = lower.min(ub);
-    st.prox_pair = Some(best);
+    s.prox_pair = Some(best);
     let (la, lb) = best;
-    let cb = st.tb.xf(&ctx.rel32, b, lb as usize);
-    let (ca, ra, cbd, rb) = leaf_pair(a, la, b, lb, cb);
+    let cb = ctx.xf(lb);
+    let (ca, ra, cbd, rb) = leaf_pair(&ctx.a[la as usize], &ctx.b[lb as usize], cb);
     let (mut n, _) = direction(ca, cbd);
     if n == DVec3::ZERO {
         n = DVec3::X;
     }
     let overlapping = ub < 0.0;
     if overlapping {
-        st.separation = None;
+        s.separation = None;
     } else {
-        st.record_separation(&ctx, lower as f64);
+        s.record_separation(&ctx, lower as f64);
     }
     Proximity {
-        distance: if signed {
-            ub as f64
-        } else {
-            ub.max(0.0) as f64
-        },
+        distance: clamp(ub) as f64,
         pair_distance: ub as f64,
-        lower_bound: if signed {
-            lower as f64
-        } else {
-            lower.max(0.0) as f64
-        },
+        lower_bound: clamp(lower) as f64,
         overlapping,
         point_a: pose_a.transform_point(ca + n * ra),
         point_b: pose_a.transform_point(cbd - n * rb),

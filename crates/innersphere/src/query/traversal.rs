@@ -20,7 +20,8 @@
 //! * Multipoint has no cap on `k` (the paper's code stops at 3).
 
 use super::geometry::{make_contact, Contact};
-use super::state::{pair_key, test_pair, Ctx, PairState, StackEntry, TbCache};
+use super::info::{Node, TreeInfo};
+use super::state::{pair_key, safe_separation, Ctx, Item, PairState, Scratch};
 use super::Pose;
 use crate::tree::NO_PARENT;
 use crate::SphereTree;
@@ -64,6 +65,11 @@ impl ContactQuery {
 /// Options of [`multipoint`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MultipointOptions {
+    /// `false` (default): the paper's traversal. `true` (ours): the contacts are picked from
+    /// the kinetic front (all overlapping leaf pairs, kept up to date at the cost of what the
+    /// motion changed): last frame's contacts that still overlap first, then the others in
+    /// front order, at most one per split-depth pair. Same guarantees.
+    pub tracking: bool,
     /// At most this many contacts (no cap).
     pub k: usize,
     /// At most one contact below each traversal pair at this depth (pairs of nodes at this
@@ -78,6 +84,7 @@ pub struct MultipointOptions {
 impl Default for MultipointOptions {
     fn default() -> Self {
         MultipointOptions {
+            tracking: false,
             k: 4,
             split_depth: 4,
             reuse: true,
@@ -112,69 +119,65 @@ const NO_PAIR: u64 = u64::MAX;
 #[allow(clippy::too_many_arguments)]
 fn expand_sim(
     ctx: &Ctx,
-    tb: &mut TbCache,
-    stack: &mut Vec<StackEntry>,
+    stack: &mut Vec<Item>,
     excl: &[u64],
     split: u32,
     skip: u64,
-    e: StackEntry,
+    e: Item,
     min_sep: &mut f32,
     visits: &mut u64,
 ) {
-    let a = ctx.a;
-    let b = ctx.b;
-    let (ia, ib) = (e.a as usize, e.b as usize);
-    let (fa, na) = if a.child_count[ia] != 0 {
-        (a.first_child[ia] as usize, a.child_count[ia] as usize)
+    let na = &ctx.a[e.a as usize];
+    let nb = &ctx.b[e.b as usize];
+    let (fa, ca) = if na.is_leaf() {
+        (e.a as usize, 1)
     } else {
-        (ia, 1)
+        (na.first as usize, na.count as usize)
     };
-    let (fb, nb) = if b.child_count[ib] != 0 {
-        let f = b.first_child[ib] as usize;
-        let n = b.child_count[ib] as usize;
-        for j in f..f + n {
-            tb.xf(&ctx.rel32, b, j);
-        }
-        (f, n)
+    let (fb, cbn) = if nb.is_leaf() {
+        (e.b as usize, 1)
     } else {
-        (ib, 1)
+        (nb.first as usize, nb.count as usize)
     };
     let depth = e.depth + 1;
     let check = depth <= split && !excl.is_empty();
-    let xs = &a.x[fa..fa + na];
-    let ys = &a.y[fa..fa + na];
-    let zs = &a.z[fa..fa + na];
-    let rs = &a.r[fa..fa + na];
-    let cs = &a.child_count[fa..fa + na];
-    for j in (fb..fb + nb).rev() {
-        let cb = tb.get(j);
-        let rb = b.r[j];
-        let jleaf = b.child_count[j] == 0;
-        for k in (0..na).rev() {
-            let leafs = jleaf && cs[k] == 0;
-            let s = rs[k] + rb + if leafs { 0.0 } else { ctx.slack };
-            let dx = xs[k] - cb[0];
-            let dy = ys[k] - cb[1];
-            let dz = zs[k] - cb[2];
+    let akids = &ctx.a[fa..fa + ca];
+    for j in (fb..fb + cbn).rev() {
+        let m = &ctx.b[j];
+        let cb = if nb.is_leaf() {
+            e.c
+        } else {
+            ctx.rel32.apply(m.x, m.y, m.z)
+        };
+        let rb = m.r;
+        let jleaf = m.is_leaf();
+        for (k, n) in akids.iter().enumerate().rev() {
+            let leafs = jleaf && n.is_leaf();
+            let s = n.r + rb + if leafs { 0.0 } else { ctx.slack };
+            let dx = n.x - cb[0];
+            let dy = n.y - cb[1];
+            let dz = n.z - cb[2];
             let d2 = dx * dx + dy * dy + dz * dz;
             if d2 < s * s {
                 let key = pair_key((fa + k) as u32, j as u32);
                 if key == skip || (check && excl.binary_search(&key).is_ok()) {
                     continue;
                 }
-                stack.push(StackEntry {
+                ctx.prefetch((fa + k) as u32, j as u32);
+                stack.push(Item {
                     a: (fa + k) as u32,
                     b: j as u32,
+                    c: cb,
                     depth,
                 });
-            } else {
+            } else if d2 < (s + *min_sep) * (s + *min_sep) {
                 let lb = d2.sqrt() - s;
                 if lb < *min_sep {
                     *min_sep = lb;
                 }
             }
         }
-        *visits += na as u64;
+        *visits += ca as u64;
     }
 }
 
@@ -182,30 +185,29 @@ fn expand_sim(
 #[allow(clippy::too_many_arguments)]
 fn dfs_sim(
     ctx: &Ctx,
-    tb: &mut TbCache,
-    stack: &mut Vec<StackEntry>,
+    stack: &mut Vec<Item>,
     excl: &[u64],
     split: u32,
     skip: u64,
     min_sep: &mut f32,
     visits: &mut u64,
-) -> Option<StackEntry> {
+) -> Option<Item> {
     while let Some(e) = stack.pop() {
-        if ctx.a.child_count[e.a as usize] == 0 && ctx.b.child_count[e.b as usize] == 0 {
+        if ctx.a[e.a as usize].is_leaf() && ctx.b[e.b as usize].is_leaf() {
             return Some(e);
         }
-        expand_sim(ctx, tb, stack, excl, split, skip, e, min_sep, visits);
+        expand_sim(ctx, stack, excl, split, skip, e, min_sep, visits);
     }
     None
 }
 
 /// Ancestors of `n`, root first (`out[d]` is the ancestor at depth `d`).
-fn chain(tree: &SphereTree, n: u32, out: &mut Vec<u32>) {
+fn chain(nodes: &[Node], n: u32, out: &mut Vec<u32>) {
     out.clear();
     let mut n = n;
     loop {
         out.push(n);
-        let p = tree.parent[n as usize];
+        let p = nodes[n as usize].parent;
         if p == NO_PARENT {
             break;
         }
@@ -215,16 +217,16 @@ fn chain(tree: &SphereTree, n: u32, out: &mut Vec<u32>) {
 }
 
 /// The ancestor of `n` at `depth` (`n` itself when it is not deeper).
-fn ancestor_at(tree: &SphereTree, mut n: u32, depth: u32) -> u32 {
-    while tree.depth[n as usize] as u32 > depth {
-        n = tree.parent[n as usize];
+fn ancestor_at(nodes: &[Node], mut n: u32, depth: u32) -> u32 {
+    while nodes[n as usize].depth > depth {
+        n = nodes[n as usize].parent;
     }
     n
 }
 
 /// Key of the traversal pair at `split` depth above leaf pair (`la`, `lb`).
-fn split_key(a: &SphereTree, la: u32, b: &SphereTree, lb: u32, split: u32) -> u64 {
-    pair_key(ancestor_at(a, la, split), ancestor_at(b, lb, split))
+fn split_key(ctx: &Ctx, la: u32, lb: u32, split: u32) -> u64 {
+    pair_key(ancestor_at(ctx.a, la, split), ancestor_at(ctx.b, lb, split))
 }
 
 /// Inserts into a sorted vector; false when already present.
@@ -239,94 +241,80 @@ fn insert_sorted(v: &mut Vec<u64>, key: u64) -> bool {
 }
 
 /// The safe-motion answer, when enabled and positive.
-fn safe_skip(st: &PairState, ctx: &Ctx, on: bool) -> Option<f64> {
+fn safe_skip(ia: &TreeInfo, ib: &TreeInfo, s: &Scratch, ctx: &Ctx, on: bool) -> Option<f64> {
     if !on {
         return None;
     }
-    st.safe_separation_rel(&ctx.rel).filter(|&s| s > 0.0)
+    safe_separation(ia, ib, s.separation, &ctx.rel).filter(|&d| d > 0.0)
 }
 
 /// Root test, then a full traversal from the roots.
-fn full(ctx: &Ctx, st: &mut PairState, min_sep: &mut f32, visits: &mut u64) -> Option<(u32, u32)> {
-    st.stack.clear();
-    let (ov, lb) = test_pair(ctx, 0, 0, st.tb.get(0));
+fn full(ctx: &Ctx, s: &mut Scratch, min_sep: &mut f32, visits: &mut u64) -> Option<Item> {
+    s.stack.clear();
+    let c0 = ctx.xf(0);
+    let (ov, lb) = ctx.test(0, 0, c0);
     *visits += 1;
     if !ov {
         *min_sep = min_sep.min(lb);
         return None;
     }
-    st.stack.push(StackEntry {
+    s.stack.push(Item {
         a: 0,
         b: 0,
+        c: c0,
         depth: 0,
     });
-    dfs_sim(
-        ctx,
-        &mut st.tb,
-        &mut st.stack,
-        &[],
-        u32::MAX,
-        NO_PAIR,
-        min_sep,
-        visits,
-    )
-    .map(|e| (e.a, e.b))
+    dfs_sim(ctx, &mut s.stack, &[], u32::MAX, NO_PAIR, min_sep, visits)
 }
 
 /// Climbs from the stale leaf pair (`la`, `lb`) toward the root (Algorithms 1–2): the leaf
 /// pair itself, then each traversal pair above it from level `top − 1` down to `stop`, each
-/// searched without the already visited child pair. Leaves the chains in `st.anc_*`.
+/// searched without the already visited child pair.
 fn climb(
     ctx: &Ctx,
-    st: &mut PairState,
+    s: &mut Scratch,
     la: u32,
     lb: u32,
     stop: u32,
     min_sep: &mut f32,
     visits: &mut u64,
-) -> Option<(u32, u32)> {
-    let (a, b) = (ctx.a, ctx.b);
-    let cb = st.tb.xf(&ctx.rel32, b, lb as usize);
-    let (ov, d) = test_pair(ctx, la as usize, lb as usize, cb);
+) -> Option<Item> {
+    let cb = ctx.xf(lb);
+    let (ov, d) = ctx.test(la, lb, cb);
     *visits += 1;
     if ov {
-        return Some((la, lb));
+        return Some(Item {
+            a: la,
+            b: lb,
+            c: cb,
+            depth: 0,
+        });
     }
     *min_sep = min_sep.min(d);
-    chain(a, la, &mut st.anc_a);
-    chain(b, lb, &mut st.anc_b);
-    let da = st.anc_a.len() - 1;
-    let db = st.anc_b.len() - 1;
+    chain(ctx.a, la, &mut s.anc_a);
+    chain(ctx.b, lb, &mut s.anc_b);
+    let da = s.anc_a.len() - 1;
+    let db = s.anc_b.len() - 1;
     let top = da.max(db);
-    let path = |anc_a: &[u32], anc_b: &[u32], k: usize| (anc_a[k.min(da)], anc_b[k.min(db)]);
     for k in (stop as usize..top).rev() {
-        let (pa, pb) = path(&st.anc_a, &st.anc_b, k);
-        let cb = st.tb.xf(&ctx.rel32, b, pb as usize);
-        let (ov, d) = test_pair(ctx, pa as usize, pb as usize, cb);
+        let (pa, pb) = (s.anc_a[k.min(da)], s.anc_b[k.min(db)]);
+        let cb = ctx.xf(pb);
+        let (ov, d) = ctx.test(pa, pb, cb);
         *visits += 1;
         if !ov {
             *min_sep = min_sep.min(d);
             continue;
         }
-        let (na, nb) = path(&st.anc_a, &st.anc_b, k + 1);
-        st.stack.clear();
-        st.stack.push(StackEntry {
+        let skip = pair_key(s.anc_a[(k + 1).min(da)], s.anc_b[(k + 1).min(db)]);
+        s.stack.clear();
+        s.stack.push(Item {
             a: pa,
             b: pb,
+            c: cb,
             depth: k as u32,
         });
-        let skip = pair_key(na, nb);
-        if let Some(e) = dfs_sim(
-            ctx,
-            &mut st.tb,
-            &mut st.stack,
-            &[],
-            u32::MAX,
-            skip,
-            min_sep,
-            visits,
-        ) {
-            return Some((e.a, e.b));
+        if let Some(e) = dfs_sim(ctx, &mut s.stack, &[], u32::MAX, skip, min_sep, visits) {
+            return Some(e);
         }
     }
     None
@@ -335,17 +323,16 @@ fn climb(
 /// Result of a contact traversal, recording the separation for the safe-motion skip.
 fn finish(
     ctx: &Ctx,
-    st: &mut PairState,
-    found: Option<(u32, u32)>,
+    s: &mut Scratch,
+    found: Option<Item>,
     min_sep: f32,
     visits: u64,
 ) -> ContactQuery {
     match found {
-        Some((la, lb)) => {
-            st.separation = None;
-            let cb = st.tb.get(lb as usize);
+        Some(e) => {
+            s.separation = None;
             ContactQuery {
-                contact: Some(make_contact(ctx.a, la, ctx.b, lb, cb, &ctx.pose_a)),
+                contact: Some(make_contact(ctx.a, e.a, ctx.b, e.b, e.c, &ctx.pose_a)),
                 distance: 0.0,
                 visits,
                 skipped: false,
@@ -353,7 +340,7 @@ fn finish(
         }
         None => {
             let d = min_sep.max(0.0) as f64;
-            st.record_separation(ctx, d);
+            s.record_separation(ctx, d);
             ContactQuery {
                 contact: None,
                 distance: d,
@@ -384,14 +371,14 @@ pub fn distance_traversal(
     st: &mut PairState,
     opts: &ContactOptions,
 ) -> ContactQuery {
-    let ctx = st.begin(a, pose_a, b, pose_b);
-    if let Some(d) = safe_skip(st, &ctx, opts.safe_motion) {
+    let (ctx, s, ia, ib) = st.begin(a, pose_a, b, pose_b);
+    if let Some(d) = safe_skip(ia, ib, s, &ctx, opts.safe_motion) {
         return skipped(d);
     }
     let mut min_sep = f32::INFINITY;
     let mut visits = 0;
-    let found = full(&ctx, st, &mut min_sep, &mut visits);
-    finish(&ctx, st, found, min_sep, visits)
+    let found = full(&ctx, s, &mut min_sep, &mut visits);
+    finish(&ctx, s, found, min_sep, visits)
 }
 
 /// The paper's backtracking traversal (III-B, Algorithms 1–2): restart from the previous
@@ -407,30 +394,63 @@ pub fn backtracking(
     st: &mut PairState,
     opts: &ContactOptions,
 ) -> ContactQuery {
-    let ctx = st.begin(a, pose_a, b, pose_b);
-    if let Some(d) = safe_skip(st, &ctx, opts.safe_motion) {
+    let (ctx, s, ia, ib) = st.begin(a, pose_a, b, pose_b);
+    if let Some(d) = safe_skip(ia, ib, s, &ctx, opts.safe_motion) {
         return skipped(d);
     }
     let mut min_sep = f32::INFINITY;
     let mut visits = 0;
-    let found = match st.bt_pair {
-        None => full(&ctx, st, &mut min_sep, &mut visits),
+    let found = match s.bt_pair {
+        None => full(&ctx, s, &mut min_sep, &mut visits),
         Some((la, lb)) => {
             // Broad phase first.
-            let (ov, lbr) = test_pair(&ctx, 0, 0, st.tb.get(0));
+            let (ov, lbr) = ctx.test(0, 0, ctx.xf(0));
             visits += 1;
             if ov {
-                climb(&ctx, st, la, lb, 0, &mut min_sep, &mut visits)
+                climb(&ctx, s, la, lb, 0, &mut min_sep, &mut visits)
             } else {
                 min_sep = lbr;
                 None
             }
         }
     };
-    if found.is_some() {
-        st.bt_pair = found;
+    if let Some(e) = found {
+        s.bt_pair = Some((e.a, e.b));
     }
-    finish(&ctx, st, found, min_sep, visits)
+    finish(&ctx, s, found, min_sep, visits)
+}
+
+/// First contact from the kinetic front (ours, beyond the paper): the same contact answer as
+/// [`distance_traversal`] and [`backtracking`], but each frame re-tests only the separated
+/// node pairs whose margin the relative motion since their last test could have used up,
+/// and last frame's contacts (see the module documentation). The first frame, and a frame
+/// after a jump, builds the front by a full traversal. `opts` is not needed (the front
+/// subsumes the safe-motion skip).
+pub fn contact(
+    a: &SphereTree,
+    pose_a: &Pose,
+    b: &SphereTree,
+    pose_b: &Pose,
+    st: &mut PairState,
+    opts: &ContactOptions,
+) -> ContactQuery {
+    let _ = opts;
+    let (ctx, s, _, ib) = st.begin(a, pose_a, b, pose_b);
+    let visits = s.front.update(&ctx, ib);
+    match s.front.hits.first() {
+        Some(h) => ContactQuery {
+            contact: Some(make_contact(ctx.a, h.a, ctx.b, h.b, h.c, &ctx.pose_a)),
+            distance: 0.0,
+            visits,
+            skipped: false,
+        },
+        None => ContactQuery {
+            contact: None,
+            distance: s.front.margin().max(0.0),
+            visits,
+            skipped: false,
+        },
+    }
 }
 
 /// The paper's multipoint traversal (III-C): up to `k` contacts, at most one below each
@@ -449,114 +469,173 @@ pub fn multipoint<'s>(
     st: &'s mut PairState,
     opts: &MultipointOptions,
 ) -> MultipointResult<'s> {
-    let ctx = st.begin(a, pose_a, b, pose_b);
+    let (ctx, s, ia, ib) = st.begin(a, pose_a, b, pose_b);
     let k = opts.k;
-    let split = opts.split_depth;
-    st.contacts.clear();
-    st.excluded.clear();
-    st.stale.clear();
+    s.contacts.clear();
+    s.excluded.clear();
+    s.stale.clear();
     let mut min_sep = f32::INFINITY;
     let mut visits = 0u64;
     let mut reused = 0;
-    let done = |st: &'s mut PairState, min_sep: f32, visits, reused, skipped| {
-        st.mp_prev.clear();
-        st.mp_prev
-            .extend(st.contacts.iter().map(|c| (c.leaf_a, c.leaf_b)));
-        let distance = if st.contacts.is_empty() {
-            min_sep.max(0.0) as f64
+    let mut skip = false;
+    if k > 0 && !opts.tracking && s.mp_prev.is_empty() {
+        if let Some(d) = safe_skip(ia, ib, s, &ctx, opts.safe_motion) {
+            min_sep = d as f32;
+            skip = true;
+        }
+    }
+    if k > 0 && opts.tracking {
+        visits = s.front.update(&ctx, ib);
+        multipoint_pick(&ctx, s, opts, &mut visits, &mut reused);
+        min_sep = s.front.margin().max(0.0) as f32;
+    } else if k > 0 && !skip {
+        multipoint_search(&ctx, s, opts, &mut min_sep, &mut visits, &mut reused);
+        if s.contacts.is_empty() {
+            s.record_separation(&ctx, min_sep.max(0.0) as f64);
         } else {
-            0.0
-        };
-        MultipointResult {
-            contacts: &st.contacts,
-            reused,
-            distance,
-            visits,
-            skipped,
+            s.separation = None;
         }
+    }
+    s.mp_prev.clear();
+    s.mp_prev
+        .extend(s.contacts.iter().map(|c| (c.leaf_a, c.leaf_b)));
+    let distance = if s.contacts.is_empty() {
+        min_sep.max(0.0) as f64
+    } else {
+        0.0
     };
-    if k == 0 {
-        return done(st, 0.0, 0, 0, false);
+    MultipointResult {
+        contacts: &s.contacts,
+        reused,
+        distance,
+        visits,
+        skipped: skip,
     }
-    if st.mp_prev.is_empty() {
-        if let Some(d) = safe_skip(st, &ctx, opts.safe_motion) {
-            return done(st, d as f32, 0, 0, true);
+}
+
+/// [`multipoint`] from the kinetic front: last frame's contacts that still overlap, then the
+/// front's overlapping leaf pairs, at most one per split-depth pair.
+fn multipoint_pick(
+    ctx: &Ctx,
+    s: &mut Scratch,
+    opts: &MultipointOptions,
+    visits: &mut u64,
+    reused: &mut usize,
+) {
+    let k = opts.k;
+    let split = opts.split_depth;
+    if opts.reuse {
+        for idx in 0..s.mp_prev.len() {
+            if s.contacts.len() >= k {
+                break;
+            }
+            let (la, lb) = s.mp_prev[idx];
+            let cb = ctx.xf(lb);
+            let (ov, _) = ctx.test(la, lb, cb);
+            *visits += 1;
+            if ov && insert_sorted(&mut s.excluded, split_key(ctx, la, lb, split)) {
+                s.contacts
+                    .push(make_contact(ctx.a, la, ctx.b, lb, cb, &ctx.pose_a));
+                *reused += 1;
+            }
         }
     }
-    let (ov, lbr) = test_pair(&ctx, 0, 0, st.tb.get(0));
-    visits += 1;
+    for h in s.front.hits.iter_mut() {
+        if s.contacts.len() >= k {
+            break;
+        }
+        if h.split != split {
+            h.key = split_key(ctx, h.a, h.b, split);
+            h.split = split;
+        }
+        if insert_sorted(&mut s.excluded, h.key) {
+            s.contacts
+                .push(make_contact(ctx.a, h.a, ctx.b, h.b, h.c, &ctx.pose_a));
+        }
+    }
+}
+
+/// The three stages of [`multipoint`].
+fn multipoint_search(
+    ctx: &Ctx,
+    s: &mut Scratch,
+    opts: &MultipointOptions,
+    min_sep: &mut f32,
+    visits: &mut u64,
+    reused: &mut usize,
+) {
+    let k = opts.k;
+    let split = opts.split_depth;
+    let c0 = ctx.xf(0);
+    let (ov, lbr) = ctx.test(0, 0, c0);
+    *visits += 1;
     if !ov {
-        st.record_separation(&ctx, lbr as f64);
-        return done(st, lbr, visits, 0, false);
+        *min_sep = lbr;
+        return;
     }
     // (1) Still valid contacts.
     if opts.reuse {
-        for idx in 0..st.mp_prev.len() {
-            let (la, lb) = st.mp_prev[idx];
-            let cb = st.tb.xf(&ctx.rel32, b, lb as usize);
-            let (ov, d) = test_pair(&ctx, la as usize, lb as usize, cb);
-            visits += 1;
+        for idx in 0..s.mp_prev.len() {
+            let (la, lb) = s.mp_prev[idx];
+            let cb = ctx.xf(lb);
+            let (ov, d) = ctx.test(la, lb, cb);
+            *visits += 1;
             if !ov {
-                min_sep = min_sep.min(d);
-                st.stale.push((la, lb));
-            } else if st.contacts.len() < k
-                && insert_sorted(&mut st.excluded, split_key(a, la, b, lb, split))
+                *min_sep = min_sep.min(d);
+                s.stale.push((la, lb));
+            } else if s.contacts.len() < k
+                && insert_sorted(&mut s.excluded, split_key(ctx, la, lb, split))
             {
-                st.contacts.push(make_contact(a, la, b, lb, cb, pose_a));
-                reused += 1;
+                s.contacts
+                    .push(make_contact(ctx.a, la, ctx.b, lb, cb, &ctx.pose_a));
+                *reused += 1;
             }
         }
     }
     // (2) Backtrack from stale contacts within their split-depth pairs.
-    for idx in 0..st.stale.len() {
-        if st.contacts.len() >= k {
+    for idx in 0..s.stale.len() {
+        if s.contacts.len() >= k {
             break;
         }
-        let (la, lb) = st.stale[idx];
-        let key = split_key(a, la, b, lb, split);
-        if st.excluded.binary_search(&key).is_ok() {
+        let (la, lb) = s.stale[idx];
+        let key = split_key(ctx, la, lb, split);
+        if s.excluded.binary_search(&key).is_ok() {
             continue;
         }
-        let found = climb(&ctx, st, la, lb, split, &mut min_sep, &mut visits);
-        insert_sorted(&mut st.excluded, key);
-        if let Some((fa, fb)) = found {
-            let cb = st.tb.get(fb as usize);
-            st.contacts.push(make_contact(a, fa, b, fb, cb, pose_a));
+        let found = climb(ctx, s, la, lb, split, min_sep, visits);
+        insert_sorted(&mut s.excluded, key);
+        if let Some(e) = found {
+            s.contacts
+                .push(make_contact(ctx.a, e.a, ctx.b, e.b, e.c, &ctx.pose_a));
         }
     }
     // (3) Search from the roots for the rest.
-    if st.contacts.len() < k && st.excluded.binary_search(&pair_key(0, 0)).is_err() {
-        st.stack.clear();
-        st.stack.push(StackEntry {
+    if s.contacts.len() < k && s.excluded.binary_search(&pair_key(0, 0)).is_err() {
+        s.stack.clear();
+        s.stack.push(Item {
             a: 0,
             b: 0,
+            c: c0,
             depth: 0,
         });
         while let Some(e) = dfs_sim(
-            &ctx,
-            &mut st.tb,
-            &mut st.stack,
-            &st.excluded,
+            ctx,
+            &mut s.stack,
+            &s.excluded,
             split,
             NO_PAIR,
-            &mut min_sep,
-            &mut visits,
+            min_sep,
+            visits,
         ) {
-            let cb = st.tb.get(e.b as usize);
-            st.contacts.push(make_contact(a, e.a, b, e.b, cb, pose_a));
-            insert_sorted(&mut st.excluded, split_key(a, e.a, b, e.b, split));
-            if st.contacts.len() >= k {
+            s.contacts
+                .push(make_contact(ctx.a, e.a, ctx.b, e.b, e.c, &ctx.pose_a));
+            insert_sorted(&mut s.excluded, split_key(ctx, e.a, e.b, split));
+            if s.contacts.len() >= k {
                 break;
             }
-            while st.stack.last().is_some_and(|t| t.depth > split) {
-                st.stack.pop();
+            while s.stack.last().is_some_and(|t| t.depth > split) {
+                s.stack.pop();
             }
         }
     }
-    if st.contacts.is_empty() {
-        st.record_separation(&ctx, min_sep.max(0.0) as f64);
-    } else {
-        st.separation = None;
-    }
-    done(st, min_sep, visits, reused, false)
 }

@@ -1,0 +1,304 @@
+//! The anatomical frame of a jaw pair, found from the meshes themselves.
+//!
+//! - **up** (occlusal direction, from the lower body B to the upper body A): the principal
+//!   axis of the vertices of both bodies that is best aligned with the line between their
+//!   centroids — for a dental arch, which is flat, the smallest axis; for a pair of single
+//!   teeth, the long axis. Its sign points from B's centroid to A's.
+//! - **anterior** and **left**: the principal axes of B's vertices in the plane across up.
+//!   A dental arch is U-shaped: along the anterior–posterior axis its width changes (narrow
+//!   at the front), across it the arch is mirror-symmetric; the axis along which the
+//!   spread of the other coordinate changes most is anterior–posterior, and anterior is
+//!   where the arch is narrow. left = up × anterior.
+//! - **incisal point**: on B's midline, at its front, at the height of its highest front
+//!   vertex — the lower incisal tip of a jaw.
+//! - **hinge**: [`HINGE_BEHIND`] behind and [`HINGE_ABOVE`] above the incisal point (times
+//!   the [`scale`](AnatomicalFrame::scale)); the opening rotation turns about the axis
+//!   through it along left.
+
+use crate::{Error, Mesh, Result};
+use glam::DVec3;
+
+/// Distance of the opening hinge behind the lower incisal tip, in millimetres at scale 1.
+pub const HINGE_BEHIND: f64 = 95.0;
+/// Height of the opening hinge above the lower incisal tip, in millimetres at scale 1.
+pub const HINGE_ABOVE: f64 = 20.0;
+/// The height of B along up that has scale 1: the lower dental arch (crowns and roots) of
+/// the project's jaw pair, 24.5 mm.
+pub const REFERENCE_HEIGHT: f64 = 24.5;
+
+/// An anatomical frame of a pair of bodies, in A's frame with B at the identity pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AnatomicalFrame {
+    /// Unit occlusal direction, from B towards A.
+    pub up: DVec3,
+    /// Unit left–right axis, `up × anterior`.
+    pub left: DVec3,
+    /// Unit anterior direction (towards the incisors).
+    pub anterior: DVec3,
+    /// The lower incisal point (see the [module docs](self)).
+    pub incisal: DVec3,
+    /// A point on the opening hinge axis, which runs along [`left`](Self::left).
+    pub hinge: DVec3,
+    /// Size of B relative to a human lower dental arch: its height along up divided by
+    /// [`REFERENCE_HEIGHT`]. Motion amplitudes (opening, excursions, tremor) scale with it.
+    pub scale: f64,
+}
+
+impl AnatomicalFrame {
+    /// Finds the frame of `a` (upper body) and `b` (lower body); see the
+    /// [module docs](self). Fails on invalid meshes or a body without extent.
+    pub fn from_meshes(a: &Mesh, b: &Mesh) -> Result<AnatomicalFrame> {
+        a.validate()?;
+        b.validate()?;
+        let ca = centroid(&a.vertices);
+        let cb = centroid(&b.vertices);
+        let centre = (ca * a.vertices.len() as f64 + cb * b.vertices.len() as f64)
+            / (a.vertices.len() + b.vertices.len()) as f64;
+        let mut cov = [[0.0f64; 3]; 3];
+        for v in a.vertices.iter().chain(&b.vertices) {
+            let d = (*v - centre).to_array();
+            for (i, row) in cov.iter_mut().enumerate() {
+                for (j, c) in row.iter_mut().enumerate() {
+                    *c += d[i] * d[j];
+                }
+            }
+        }
+        let (_, axes) = symmetric_eigen(cov);
+        let dc = ca - cb;
+        let size = bbox_diagonal(a).max(bbox_diagonal(b));
+        if !(size.is_finite() && size > 0.0) {
+            return Err(Error::InvalidMesh(
+                "the bodies have no extent; cannot find an anatomical frame".into(),
+            ));
+        }
+        // Eigenvalues ascending: axes[0] is the smallest.
+        let mut up = if dc.length() > 1e-9 * size {
+            let d = dc.normalize();
+            *axes
+                .iter()
+                .max_by(|p, q| p.dot(d).abs().total_cmp(&q.dot(d).abs()))
+                .unwrap_or(&axes[0])
+        } else {
+            axes[0]
+        };
+        if up.dot(dc) < 0.0 {
+            up = -up;
+        }
+        // Principal axes of B across up.
+        let (e1, e2) = plane_basis(up);
+        let cb2 = (cb.dot(e1), cb.dot(e2));
+        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+        for v in &b.vertices {
+            let x = v.dot(e1) - cb2.0;
+            let y = v.dot(e2) - cb2.1;
+            sxx += x * x;
+            sxy += x * y;
+            syy += y * y;
+        }
+        let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+        let f1 = e1 * angle.cos() + e2 * angle.sin();
+        let f2 = up.cross(f1).normalize();
+        // Which one is anterior–posterior: the one along which the spread across it changes.
+        let width_trend = |ax: DVec3, across: DVec3| -> f64 {
+            let xs: Vec<(f64, f64)> = b
+                .vertices
+                .iter()
+                .map(|v| ((*v - cb).dot(ax), (*v - cb).dot(across).abs()))
+                .collect();
+            correlation(&xs)
+        };
+        let c1 = width_trend(f1, f2);
+        let c2 = width_trend(f2, f1);
+        let (ap, corr) = if c1.abs() >= c2.abs() {
+            (f1, c1)
+        } else {
+            (f2, c2)
+        };
+        // Narrow towards the front: the width decreases along +anterior.
+        let anterior = if corr <= 0.0 { ap } else { -ap };
+        let left = up.cross(anterior).normalize();
+        let anterior = left.cross(up).normalize();
+
+        // Coordinates of B's vertices in the frame.
+        let coords: Vec<[f64; 3]> = b
+            .vertices
+            .iter()
+            .map(|v| [v.dot(left), v.dot(anterior), v.dot(up)])
+            .collect();
+        let (umin, umax) = coords
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
+                (lo.min(c[2]), hi.max(c[2]))
+            });
+        let height = umax - umin;
+        if !(height > 0.0) {
+            return Err(Error::InvalidMesh(
+                "body B is flat across the occlusal direction; cannot find an anatomical frame"
+                    .into(),
+            ));
+        }
+        let scale = height / REFERENCE_HEIGHT;
+        let lmid = cb.dot(left);
+        let mut midline: Vec<&[f64; 3]> = coords
+            .iter()
+            .filter(|c| (c[0] - lmid).abs() <= 4.0 * scale)
+            .collect();
+        if midline.is_empty() {
+            midline = coords.iter().collect();
+        }
+        let afront = midline
+            .iter()
+            .map(|c| c[1])
+            .fold(f64::NEG_INFINITY, f64::max);
+        let utop = midline
+            .iter()
+            .filter(|c| c[1] >= afront - 3.0 * scale)
+            .map(|c| c[2])
+            .fold(f64::NEG_INFINITY, f64::max);
+        let incisal = left * lmid + anterior * afront + up * utop;
+        let hinge = incisal - anterior * (HINGE_BEHIND * scale) + up * (HINGE_ABOVE * scale);
+        Ok(AnatomicalFrame {
+            up,
+            left,
+            anterior,
+            incisal,
+            hinge,
+            scale,
+        })
+    }
+
+    /// The frame moved with body B by `pose` (directions turn, points move).
+    pub fn moved(&self, pose: &crate::query::Pose) -> AnatomicalFrame {
+        AnatomicalFrame {
+            up: pose.transform_vector(self.up),
+            left: pose.transform_vector(self.left),
+            anterior: pose.transform_vector(self.anterior),
+            incisal: pose.transform_point(self.incisal),
+            hinge: pose.transform_point(self.hinge),
+            scale: self.scale,
+        }
+    }
+
+    /// Coordinates `(left, anterior, up)` of a point relative to the incisal point.
+    pub fn coordinates(&self, p: DVec3) -> DVec3 {
+        let d = p - self.incisal;
+        DVec3::new(d.dot(self.left), d.dot(self.anterior), d.dot(self.up))
+    }
+}
+
+fn centroid(v: &[DVec3]) -> DVec3 {
+    if v.is_empty() {
+        DVec3::ZERO
+    } else {
+        v.iter().copied().sum::<DVec3>() / v.len() as f64
+    }
+}
+
+fn bbox_diagonal(m: &Mesh) -> f64 {
+    let (lo, hi) = m.bbox();
+    (hi - lo).length()
+}
+
+/// Pearson correlation of the pairs (0 when either side has no spread).
+fn correlation(xs: &[(f64, f64)]) -> f64 {
+    let n = xs.len() as f64;
+    if xs.is_empty() {
+        return 0.0;
+    }
+    let (mx, my) = xs
+        .iter()
+        .fold((0.0, 0.0), |(a, b), &(x, y)| (a + x / n, b + y / n));
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for &(x, y) in xs {
+        sxy += (x - mx) * (y - my);
+        sxx += (x - mx) * (x - mx);
+        syy += (y - my) * (y - my);
+    }
+    let den = (sxx * syy).sqrt();
+    if den > 0.0 {
+        sxy / den
+    } else {
+        0.0
+    }
+}
+
+/// Two unit vectors that complete `n` (unit) to an orthonormal basis.
+fn plane_basis(n: DVec3) -> (DVec3, DVec3) {
+    let helper = if n.x.abs() < 0.6 { DVec3::X } else { DVec3::Y };
+    let e1 = n.cross(helper).normalize();
+    (e1, n.cross(e1))
+}
+
+/// Eigen-decomposition of a symmetric 3×3 matrix by Jacobi rotations: eigenvalues ascending
+/// and their unit eigenvectors.
+pub(crate) fn symmetric_eigen(m: [[f64; 3]; 3]) -> ([f64; 3], [DVec3; 3]) {
+    let mut a = m;
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    for _ in 0..64 {
+        let (mut p, mut q, mut big) = (0, 1, 0.0f64);
+        for i in 0..3 {
+            for j in i + 1..3 {
+                if a[i][j].abs() > big {
+                    big = a[i][j].abs();
+                    p = i;
+                    q = j;
+                }
+            }
+        }
+        let scale = a[0][0].abs() + a[1][1].abs() + a[2][2].abs();
+        if !(big > 1e-300 && big > 1e-17 * scale) {
+            break;
+        }
+        let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+        let t = if theta == 0.0 {
+            1.0
+        } else {
+            theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt())
+        };
+        let c = 1.0 / (t * t + 1.0).sqrt();
+        let s = t * c;
+        // a ← Jᵀ a J and v ← v J, with J the rotation in the (p, q) plane.
+        for k in 0..3 {
+            let (akp, akq) = (a[k][p], a[k][q]);
+            a[k][p] = c * akp - s * akq;
+            a[k][q] = s * akp + c * akq;
+        }
+        for k in 0..3 {
+            let (apk, aqk) = (a[p][k], a[q][k]);
+            a[p][k] = c * apk - s * aqk;
+            a[q][k] = s * apk + c * aqk;
+        }
+        for row in v.iter_mut() {
+            let (vp, vq) = (row[p], row[q]);
+            row[p] = c * vp - s * vq;
+            row[q] = s * vp + c * vq;
+        }
+    }
+    let mut idx = [0usize, 1, 2];
+    idx.sort_by(|&i, &j| a[i][i].total_cmp(&a[j][j]));
+    let vals = idx.map(|i| a[i][i]);
+    let vecs = idx.map(|j| DVec3::new(v[0][j], v[1][j], v[2][j]).normalize_or(DVec3::Z));
+    (vals, vecs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn jacobi_diagonalizes() {
+        let m = [[4.0, 1.0, 0.5], [1.0, 3.0, 0.2], [0.5, 0.2, 1.0]];
+        let (vals, vecs) = symmetric_eigen(m);
+        assert!(vals[0] <= vals[1] && vals[1] <= vals[2]);
+        for (l, v) in vals.iter().zip(vecs) {
+            let mv = DVec3::new(
+                m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z,
+                m[1][0] * v.x + m[1][1] * v.y + m[1][2] * v.z,
+                m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z,
+            );
+            assert!((mv - v * *l).length() < 1e-10, "{mv} vs {}", v * *l);
+        }
+        let (vals, _) = symmetric_eigen([[2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]]);
+        assert_eq!(vals, [2.0; 3]);
+    }
+}

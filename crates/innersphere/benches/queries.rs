@@ -266,7 +266,7 @@ fn main() {
             }),
         ),
         (
-            "penetration traversal",
+            "penetration (default)",
             Box::new(|p, st| {
                 let o = PenetrationOptions {
                     tracking: false,
@@ -277,9 +277,13 @@ fn main() {
             }),
         ),
         (
-            "penetration front (default)",
+            "penetration front",
             Box::new(|p, st| {
-                let r = penetration(a, &id, b, p, st, &PenetrationOptions::default());
+                let o = PenetrationOptions {
+                    tracking: true,
+                    ..Default::default()
+                };
+                let r = penetration(a, &id, b, p, st, &o);
                 (r.pairs > 0, r.visits)
             }),
         ),

@@ -79,7 +79,7 @@ fn run_all(
         sum += contact(a, pa, b, pb, s9, &on).distance;
         let p = penetration(a, pa, b, pb, s6, &PenetrationOptions { safe_motion: false, tracking: false, ..Default::default() });
         sum += p.volume + p.patches.len() as f64 + p.torque_a.x;
-        let p = penetration(a, pa, b, pb, s7, &PenetrationOptions { max_patches: 3, ..Default::default() });
+        let p = penetration(a, pa, b, pb, s7, &PenetrationOptions { max_patches: 3, tracking: true, ..Default::default() });
         sum += p.force.length();
         sum += penetration_budgeted(a, pa, b, pb, s8, 200).upper_bound;
         sum += penetration_budgeted(a, pa, b, pb, s8, u64::MAX).volume;
@@ -137,4 +137,41 @@ fn no_locks_in_the_query_sources() {
         }
     }
     assert!(checked >= 5);
+}
+
+/// Trees and states can be shared and sent across threads.
+#[test]
+fn trees_and_states_are_send_and_sync() {
+    fn check<T: Send + Sync>() {}
+    check::<innersphere::SphereTree>();
+    check::<PairState>();
+    check::<innersphere::query::TreeInfo>();
+}
+
+/// Many pairs queried from many threads at once (shared immutable trees, one state per pair
+/// and thread) give the same answers as one thread.
+#[test]
+fn many_pairs_from_many_threads() {
+    let t = trees();
+    let pairs: Vec<(usize, usize)> = (0..4).flat_map(|i| (0..4).map(move |j| (i, j))).collect();
+    let run = |ia: usize, ib: usize| -> Vec<(u64, u64, usize)> {
+        let (a, b) = (&t[ia], &t[ib]);
+        let frames = motion(a, b, DVec3::new(0.3, 1.0, 0.2), DVec3::Z, DVec3::X, 0.02, 80);
+        let mut st = PairState::new(a, b);
+        frames
+            .iter()
+            .map(|(pa, pb)| {
+                let d = proximity(a, pa, b, pb, &mut st, &ProximityOptions::default()).distance;
+                let v = penetration(a, pa, b, pb, &mut st, &PenetrationOptions::default()).volume;
+                let c = multipoint(a, pa, b, pb, &mut st, &MultipointOptions::default()).contacts.len();
+                (d.to_bits(), v.to_bits(), c)
+            })
+            .collect()
+    };
+    let serial: Vec<_> = pairs.iter().map(|&(i, j)| run(i, j)).collect();
+    let parallel: Vec<_> = std::thread::scope(|s| {
+        let handles: Vec<_> = pairs.iter().map(|&(i, j)| s.spawn(move || run(i, j))).collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert_eq!(serial, parallel);
 }

@@ -63,7 +63,7 @@ proptest! {
             prop_assert_eq!(distance_traversal(a, pa, b, pb, &mut s_dt, &on).in_contact(), truth, "distance traversal, frame {}", f);
             let m = multipoint(a, pa, b, pb, &mut s_mp, &MultipointOptions { k: 3, split_depth: 2, ..Default::default() });
             prop_assert_eq!(!m.contacts.is_empty(), truth, "multipoint, frame {}", f);
-            let p = penetration(a, pa, b, pb, &mut s_pen, &PenetrationOptions::default());
+            let p = penetration(a, pa, b, pb, &mut s_pen, &PenetrationOptions { tracking: true, ..Default::default() });
             prop_assert_eq!(p.pairs > 0, truth, "penetration (front), frame {}", f);
             let p = penetration(a, pa, b, pb, &mut s_pen_dfs, &PenetrationOptions { tracking: false, ..Default::default() });
             prop_assert_eq!(p.pairs > 0, truth, "penetration (traversal + safe motion), frame {}", f);

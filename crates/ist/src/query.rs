@@ -83,6 +83,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 rel_tolerance: args.rel_tol,
                 signed: args.signed,
                 coherence: false,
+                best_first: false,
             };
             let p = query::proximity(&a, &pose_a, &b, &pose_b, &mut st, &opts);
             let secs = t0.elapsed().as_secs_f64();
@@ -157,6 +158,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 split_depth: args.split_depth,
                 reuse: false,
                 safe_motion: false,
+                tracking: false,
             };
             let m = query::multipoint(&a, &pose_a, &b, &pose_b, &mut st, &opts);
             let secs = t0.elapsed().as_secs_f64();
@@ -183,6 +185,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             let opts = PenetrationOptions {
                 stiffness: args.stiffness,
                 safe_motion: false,
+                tracking: false,
                 ..Default::default()
             };
             let p = query::penetration(&a, &pose_a, &b, &pose_b, &mut st, &opts);

@@ -78,9 +78,10 @@ pub fn distances_of_cells(
                 .map(|&c| {
                     let p = grid.center_of(c as usize);
                     let i = (c % nx) as usize;
-                    let bound = bvh
-                        .slot_distance_sq(p, hint)
-                        .min(bvh.slot_distance_sq(p, column_seed[i]));
+                    let mut bound = bvh.slot_distance_sq(p, hint);
+                    if column_seed[i] != hint {
+                        bound = bound.min(bvh.slot_distance_sq(p, column_seed[i]));
+                    }
                     match bvh.closest_point(p, bound) {
                         Some(cl) => {
                             hint = cl.slot;

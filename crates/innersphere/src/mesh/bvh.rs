@@ -21,6 +21,9 @@ const PAR_THRESHOLD: usize = 8192;
 /// Below this depth splits follow the SAH; deeper ones split at the median, which bounds the
 /// depth by `MEDIAN_DEPTH + log2(n)`.
 const MEDIAN_DEPTH: u32 = 40;
+/// Nodes with at most this many triangles get slabs fitted to their corners; bigger ones take
+/// the slab through their box corners (keeps the build O(n log SLAB_EXACT)).
+const SLAB_EXACT: usize = 1024;
 /// Upper bound of the tree depth (sizes the traversal stacks).
 pub const MAX_DEPTH: usize = MEDIAN_DEPTH as usize + 34;
 
@@ -338,9 +341,24 @@ fn slabs(nodes: &[BvhNode], tris: &[[DVec3; 3]]) -> Vec<NodeSlab> {
                 DVec3::X
             };
             let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-            for t in &tris[range[i].0..range[i].1] {
-                for v in t {
-                    let d = normal.dot(*v);
+            if range[i].1 - range[i].0 <= SLAB_EXACT {
+                for t in &tris[range[i].0..range[i].1] {
+                    for v in t {
+                        let d = normal.dot(*v);
+                        lo = lo.min(d);
+                        hi = hi.max(d);
+                    }
+                }
+            } else {
+                // Big, curved regions: their slabs rarely prune; the box corners suffice.
+                let (a, b) = (nodes[i].lo, nodes[i].hi);
+                for k in 0..8 {
+                    let c = DVec3::new(
+                        if k & 1 == 0 { a.x } else { b.x },
+                        if k & 2 == 0 { a.y } else { b.y },
+                        if k & 4 == 0 { a.z } else { b.z },
+                    );
+                    let d = normal.dot(c);
                     lo = lo.min(d);
                     hi = hi.max(d);
                 }
@@ -469,13 +487,41 @@ fn sah_split(prims: &mut [Prim], clo: DVec3, ext: DVec3) -> Option<usize> {
         // NaN casts to 0; the `min` keeps the maximum centroid in the last bin.
         (((c - clo[a]) * scale[a]) as usize).min(BINS - 1)
     };
-    for p in prims.iter() {
-        for (a, axis_bins) in bins.iter_mut().enumerate() {
-            let b = &mut axis_bins[bin_of(p.c[a], a)];
-            b.lo = b.lo.min(p.lo);
-            b.hi = b.hi.max(p.hi);
-            b.n += 1;
+    let fill = |bins: &mut [[Bin; BINS]; 3], chunk: &[Prim]| {
+        for p in chunk {
+            for (a, axis_bins) in bins.iter_mut().enumerate() {
+                let b = &mut axis_bins[bin_of(p.c[a], a)];
+                b.lo = b.lo.min(p.lo);
+                b.hi = b.hi.max(p.hi);
+                b.n += 1;
+            }
         }
+    };
+    if prims.len() > 4 * PAR_THRESHOLD {
+        // Min, max and counts merge exactly: the same bins whatever the scheduling.
+        use rayon::prelude::*;
+        bins = prims
+            .par_chunks(PAR_THRESHOLD)
+            .map(|chunk| {
+                let mut b = [[Bin::EMPTY; BINS]; 3];
+                fill(&mut b, chunk);
+                b
+            })
+            .reduce(
+                || [[Bin::EMPTY; BINS]; 3],
+                |mut x, y| {
+                    for (xa, ya) in x.iter_mut().zip(&y) {
+                        for (xb, yb) in xa.iter_mut().zip(ya) {
+                            xb.lo = xb.lo.min(yb.lo);
+                            xb.hi = xb.hi.max(yb.hi);
+                            xb.n += yb.n;
+                        }
+                    }
+                    x
+                },
+            );
+    } else {
+        fill(&mut bins, prims);
     }
     let mut best: Option<(f64, usize, usize)> = None; // (cost, axis, bins on the left)
     for (a, axis_bins) in bins.iter().enumerate() {
@@ -649,7 +695,8 @@ mod tests {
 
     #[test]
     fn deterministic_parallel_build() {
-        let m = crate::shapes::icosphere(5);
+        // 81920 triangles: parallel subtrees and parallel binning.
+        let m = crate::shapes::icosphere(6);
         let a = TriangleBvh::new(&m);
         let b = TriangleBvh::new(&m);
         assert_eq!(a.nodes, b.nodes);

@@ -13,11 +13,14 @@
 //! current minimum cannot be the minimum. Consecutive frames of a 1 kHz motion cost a few
 //! dozen closest-point queries.
 
+use crate::mesh::bvh::{TriangleBvh, MAX_DEPTH};
+use crate::mesh::closest::closest_point_on_triangle;
 use crate::mesh::winding::FastWinding;
 use crate::query::Pose;
 use crate::Mesh;
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 use rayon::prelude::*;
+use std::collections::{HashMap, HashSet};
 
 /// Clearance within ±this is [`Phase::Touching`] by default (0.1, millimetres for the jaws).
 pub const DEFAULT_TOUCH: f64 = 0.1;
@@ -131,88 +134,144 @@ const UNKNOWN: Known = Known {
     slot: u32::MAX,
 };
 
+/// Samples per group.
+const GROUP: usize = 32;
+/// The inside/outside cache is emptied when it grows beyond this many cells.
+const MAX_CELLS: usize = 1 << 20;
+
+/// A run of spatially close samples with a common lower bound, so that groups far from the
+/// minimum are skipped without looking at their samples.
+#[derive(Debug, Clone, Copy)]
+struct Group {
+    start: u32,
+    end: u32,
+    /// Centre and radius of a ball around the samples (model coordinates).
+    centre: DVec3,
+    radius: f64,
+    /// Lower bound of the samples' signed distances at the pose of the last visit...
+    lower: f64,
+    /// ...whose rotation was this, and which put the centre here.
+    rotation: DQuat,
+    at: DVec3,
+}
+
 /// Sample points of one body against the surface of the other.
 #[derive(Debug, Clone)]
 struct Side {
     surface: FastWinding,
     lo: DVec3,
     hi: DVec3,
-    /// Samples in their own body's model coordinates.
+    /// Samples in their own body's model coordinates, in groups of nearby ones.
     samples: Vec<DVec3>,
     known: Vec<Known>,
-    /// Scratch: (lower bound now, sample, position now).
+    groups: Vec<Group>,
+    /// Inside/outside of grid cells of size `cell` (each cell's centre by its winding
+    /// number): exact for points farther than `cell` from the surface.
+    cells: HashMap<[i64; 3], bool>,
+    cell: f64,
+    /// Scratch: (lower bound now, sample, position now) and the groups visited.
     cand: Vec<(f64, u32, DVec3)>,
+    visited: Vec<u32>,
 }
 
 impl Side {
-    fn new(surface: FastWinding, samples: Vec<DVec3>) -> Side {
+    fn new(surface: FastWinding, samples: Vec<DVec3>, cell: f64) -> Side {
         let (lo, hi) = surface
             .bvh()
             .bounds()
             .unwrap_or((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)));
-        let known = vec![UNKNOWN; samples.len()];
-        Side {
+        let mut side = Side {
             surface,
             lo,
             hi,
-            samples,
-            known,
+            samples: Vec::new(),
+            known: Vec::new(),
+            groups: Vec::new(),
+            cells: HashMap::new(),
+            cell,
             cand: Vec::new(),
-        }
+            visited: Vec::new(),
+        };
+        side.add(&samples);
+        side
     }
 
     fn inside_box(&self, p: DVec3) -> bool {
         p.cmpge(self.lo).all() && p.cmple(self.hi).all()
     }
 
-    fn inside(&self, p: DVec3) -> bool {
-        let t0 = std::time::Instant::now();
-        let r = self.inside_box(p) && self.surface.winding_number(p).abs() >= 0.5;
-        DBG_W.fetch_add(t0.elapsed().as_nanos() as u64, std::sync::atomic::Ordering::Relaxed);
-        DBG_N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        r
+    fn winding_inside(&self, p: DVec3) -> bool {
+        self.inside_box(p) && self.surface.winding_number(p).abs() >= 0.5
+    }
+
+    /// Inside test of a point known to be farther than `cell` from the surface.
+    fn far_inside(&mut self, p: DVec3) -> bool {
+        if !self.inside_box(p) {
+            return false;
+        }
+        let c = (p / self.cell).floor();
+        let key = [c.x as i64, c.y as i64, c.z as i64];
+        if let Some(&inside) = self.cells.get(&key) {
+            return inside;
+        }
+        let centre = (c + 0.5) * self.cell;
+        let inside = self.winding_inside(centre);
+        if self.cells.len() >= MAX_CELLS {
+            self.cells.clear();
+        }
+        self.cells.insert(key, inside);
+        inside
     }
 
     /// Signed distance of `p`, exact when within `bound` of the surface or inside;
     /// otherwise `bound` (a lower bound). `hint` is the slot of a triangle that was closest
     /// to a nearby point (it only speeds the search up); the answer's slot is returned too.
     /// `side` is whether `p` is inside, when already known.
-    fn signed(&self, p: DVec3, bound: f64, hint: u32, side: Option<bool>) -> (f64, u32) {
-        let t0 = std::time::Instant::now();
-        let r = self.signed_(p, bound, hint, side);
-        DBG_T.fetch_add(t0.elapsed().as_nanos() as u64, std::sync::atomic::Ordering::Relaxed);
-        r
-    }
-    fn signed_(&self, p: DVec3, bound: f64, hint: u32, side: Option<bool>) -> (f64, u32) {
+    fn signed(&mut self, p: DVec3, bound: f64, hint: u32, side: Option<bool>) -> (f64, u32) {
         let bvh = self.surface.bvh();
-        let bound_sq = bound * bound;
-        let hinted = bvh.slot_distance_sq(p, hint);
-        let search = if hinted <= bound_sq { hinted } else { bound_sq };
-        match bvh.closest_point(p, search) {
-            Some(c) => {
-                let d = c.dist_sq.sqrt();
-                // When the closest point lies inside its triangle, the offset runs along the
-                // triangle's normal and its side is the answer; otherwise (an edge or a
-                // corner) the winding number decides.
-                let [ta, tb, tc] = bvh.tris[c.slot as usize];
+        // (distance, slot, side by the closest triangle's normal when the closest point lies
+        // inside the triangle — then the offset runs along the normal), or a lower bound.
+        let found = match closest_within(bvh, p, bound * bound, hint) {
+            Ok((dist_sq, point, slot)) => {
+                let d = dist_sq.sqrt();
+                let [ta, tb, tc] = bvh.tris[slot as usize];
                 let n = (tb - ta).cross(tc - ta);
-                let along = (p - c.point).dot(n);
+                let along = (p - point).dot(n);
+                let by_normal =
+                    (along.abs() >= 0.9999 * d * n.length() && d > 0.0).then_some(along < 0.0);
+                Ok((d, slot, by_normal))
+            }
+            Err(lower_sq) => Err(lower_sq.sqrt()),
+        };
+        match found {
+            Ok((d, slot, by_normal)) => {
+                let inside = match side.or(by_normal) {
+                    Some(inside) => inside,
+                    None if d > self.cell => self.far_inside(p),
+                    None => self.winding_inside(p),
+                };
+                (if inside { -d } else { d }, slot)
+            }
+            Err(lower) => {
                 let inside = match side {
                     Some(inside) => inside,
-                    None if along.abs() >= 0.9999 * d * n.length() && d > 0.0 => along < 0.0,
-                    None => self.inside(p),
+                    None if lower > self.cell => self.far_inside(p),
+                    None => self.winding_inside(p),
                 };
-                (if inside { -d } else { d }, c.slot)
+                if inside {
+                    match self.surface.bvh().closest_point(p, f64::INFINITY) {
+                        Some(c) => (-c.dist_sq.sqrt(), c.slot),
+                        None => (f64::NEG_INFINITY, u32::MAX),
+                    }
+                } else {
+                    (lower, u32::MAX)
+                }
             }
-            None if side.unwrap_or_else(|| self.inside(p)) => match bvh.closest_point(p, f64::INFINITY) {
-                Some(c) => (-c.dist_sq.sqrt(), c.slot),
-                None => (f64::NEG_INFINITY, u32::MAX),
-            },
-            None => (bound, u32::MAX),
         }
     }
 
     /// Lowers `best` to the minimum signed distance of the samples when it is below.
+    /// Samples are resolved to `|best| + margin`.
     fn update(&mut self, to_surface: &Pose, mut best: f64, margin: f64, evals: &mut u64) -> f64 {
         let bound = |best: f64| {
             if best.is_finite() {
@@ -222,11 +281,23 @@ impl Side {
             }
         };
         self.cand.clear();
-        for (i, (s, k)) in self.samples.iter().zip(&self.known).enumerate() {
-            let p = to_surface.transform_point(*s);
-            let lower = k.lower - (p - k.at).length();
-            if lower < best {
-                self.cand.push((lower, i as u32, p));
+        self.visited.clear();
+        let rot = to_surface.rotation;
+        for (gi, g) in self.groups.iter().enumerate() {
+            let cos = rot.dot(g.rotation).abs().min(1.0);
+            let turn = 2.0 * (1.0 - cos * cos).max(0.0).sqrt();
+            let moved = (to_surface.transform_point(g.centre) - g.at).length() + g.radius * turn;
+            if g.lower - moved >= best {
+                continue;
+            }
+            self.visited.push(gi as u32);
+            for i in g.start as usize..g.end as usize {
+                let k = &self.known[i];
+                let p = to_surface.transform_point(self.samples[i]);
+                let lower = k.lower - (p - k.at).length();
+                if lower < best {
+                    self.cand.push((lower, i as u32, p));
+                }
             }
         }
         // Resolve the most promising samples first, which usually leaves few below `best`.
@@ -258,6 +329,19 @@ impl Side {
             }
             best = best.min(self.resolve(i, p, lower, bound(best), evals));
         }
+        // The visited groups' bounds at this pose.
+        for &gi in &self.visited {
+            let g = &mut self.groups[gi as usize];
+            let mut lower = f64::INFINITY;
+            for i in g.start as usize..g.end as usize {
+                let k = &self.known[i];
+                let p = to_surface.transform_point(self.samples[i]);
+                lower = lower.min(k.lower - (p - k.at).length());
+            }
+            g.lower = lower;
+            g.rotation = rot;
+            g.at = to_surface.transform_point(g.centre);
+        }
         best
     }
 
@@ -284,17 +368,177 @@ impl Side {
         s
     }
 
-    /// Adds the points, skipping ones already sampled.
+    /// Adds the points (skipping ones already sampled) and regroups all samples along a
+    /// Morton curve.
     fn add(&mut self, points: &[DVec3]) {
-        let mut have: std::collections::HashSet<[u64; 3]> =
-            self.samples.iter().map(|p| key(*p)).collect();
+        let mut have: HashSet<[u64; 3]> = self.samples.iter().map(|p| key(*p)).collect();
+        let mut all: Vec<(DVec3, Known)> = self
+            .samples
+            .iter()
+            .copied()
+            .zip(self.known.iter().copied())
+            .collect();
         for &p in points {
             if have.insert(key(p)) {
-                self.samples.push(p);
-                self.known.push(UNKNOWN);
+                all.push((p, UNKNOWN));
             }
         }
+        let (lo, hi) = all.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), (p, _)| (lo.min(*p), hi.max(*p)),
+        );
+        let ext = (hi - lo).max_element();
+        let scale = if ext > 0.0 { 1023.0 / ext } else { 0.0 };
+        let mut keyed: Vec<(u32, usize)> = all
+            .iter()
+            .enumerate()
+            .map(|(i, (p, _))| {
+                let q = ((*p - lo) * scale).clamp(DVec3::ZERO, DVec3::splat(1023.0));
+                (morton(q.x as u32, q.y as u32, q.z as u32), i)
+            })
+            .collect();
+        keyed.sort_unstable();
+        self.samples = keyed.iter().map(|&(_, i)| all[i].0).collect();
+        self.known = keyed.iter().map(|&(_, i)| all[i].1).collect();
+        self.groups = self
+            .samples
+            .chunks(GROUP)
+            .enumerate()
+            .map(|(c, pts)| {
+                let (lo, hi) = pts.iter().fold(
+                    (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                    |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+                );
+                let centre = (lo + hi) * 0.5;
+                let radius = pts
+                    .iter()
+                    .map(|p| (*p - centre).length())
+                    .fold(0.0, f64::max);
+                Group {
+                    start: (c * GROUP) as u32,
+                    end: (c * GROUP + pts.len()) as u32,
+                    centre,
+                    radius,
+                    lower: f64::NEG_INFINITY,
+                    rotation: DQuat::IDENTITY,
+                    at: DVec3::ZERO,
+                }
+            })
+            .collect();
     }
+}
+
+/// The closest point of the tree's triangles to `p` when one is within `sqrt(bound_sq)`:
+/// `(dist_sq, point, slot)`; otherwise a lower bound of the squared distance (at least
+/// `bound_sq`, often more: the nearest box or triangle that was pruned). `hint` is the slot
+/// of a triangle likely to be close (`u32::MAX` for none).
+fn closest_within(
+    bvh: &TriangleBvh,
+    p: DVec3,
+    bound_sq: f64,
+    hint: u32,
+) -> Result<(f64, DVec3, u32), f64> {
+    let mut best = bound_sq;
+    let mut found: Option<(DVec3, u32)> = None;
+    if let Some(&[a, b, c]) = bvh.tris.get(hint as usize) {
+        let q = closest_point_on_triangle(p, a, b, c);
+        let d = (p - q).length_squared();
+        if d <= best {
+            best = d;
+            found = Some((q, hint));
+        }
+    }
+    let mut pruned = f64::INFINITY;
+    let Some(root) = bvh.nodes.first() else {
+        return Err(f64::INFINITY);
+    };
+    let d = root.dist_sq(p);
+    if !(d <= best) {
+        return match found {
+            Some((q, slot)) => Ok((best, q, slot)),
+            None => Err(if d.is_nan() { bound_sq } else { d }),
+        };
+    }
+    let mut stack = [(0u32, 0.0f64); MAX_DEPTH + 2];
+    let mut sp = 0usize;
+    let mut node = 0usize;
+    loop {
+        let n = &bvh.nodes[node];
+        let mut next = None;
+        if n.is_leaf() {
+            let s = n.start as usize;
+            for (k, &[a, b, c]) in bvh.tris[s..s + n.count as usize].iter().enumerate() {
+                let lo = a.min(b).min(c);
+                let hi = a.max(b).max(c);
+                let bd = (lo - p).max(p - hi).max(DVec3::ZERO).length_squared();
+                if bd > best {
+                    pruned = pruned.min(bd);
+                    continue;
+                }
+                let q = closest_point_on_triangle(p, a, b, c);
+                let d = (p - q).length_squared();
+                if d < best || (found.is_none() && d <= best) {
+                    if found.is_none() {
+                        pruned = pruned.min(best);
+                    }
+                    best = d;
+                    found = Some((q, (s + k) as u32));
+                } else {
+                    pruned = pruned.min(d);
+                }
+            }
+        } else {
+            let (l, r) = (node + 1, n.start as usize);
+            let dl = bvh.nodes[l].dist_sq(p);
+            let dr = bvh.nodes[r].dist_sq(p);
+            let (near, dn, far, df) = if dl <= dr {
+                (l, dl, r, dr)
+            } else {
+                (r, dr, l, dl)
+            };
+            if df <= best {
+                stack[sp] = (far as u32, df);
+                sp += 1;
+            } else {
+                pruned = pruned.min(df);
+            }
+            if dn <= best {
+                next = Some(near);
+            } else {
+                pruned = pruned.min(dn);
+            }
+        }
+        match next {
+            Some(nx) => node = nx,
+            None => loop {
+                if sp == 0 {
+                    return match found {
+                        Some((q, slot)) => Ok((best, q, slot)),
+                        None => Err(pruned.max(bound_sq)),
+                    };
+                }
+                sp -= 1;
+                let (idx, d) = stack[sp];
+                if d <= best {
+                    node = idx as usize;
+                    break;
+                }
+                pruned = pruned.min(d);
+            },
+        }
+    }
+}
+
+/// Interleaves the low 10 bits of three coordinates.
+fn morton(x: u32, y: u32, z: u32) -> u32 {
+    fn spread(v: u32) -> u32 {
+        let mut v = v & 0x3ff;
+        v = (v | (v << 16)) & 0x0300_00ff;
+        v = (v | (v << 8)) & 0x0300_f00f;
+        v = (v | (v << 4)) & 0x030c_30c3;
+        (v | (v << 2)) & 0x0924_9249
+    }
+    spread(x) | (spread(y) << 1) | (spread(z) << 2)
 }
 
 fn key(p: DVec3) -> [u64; 3] {
@@ -340,14 +584,15 @@ impl ClearanceEstimator {
             let (lo2, hi2) = b.bbox();
             (hi - lo).length().max((hi2 - lo2).length())
         };
+        let margin = if size.is_finite() && size > 0.0 {
+            0.005 * size
+        } else {
+            1.0
+        };
         ClearanceEstimator {
-            b_in_a: Side::new(wa, sb),
-            a_in_b: wb.map(|w| Side::new(w, sa)),
-            margin: if size.is_finite() && size > 0.0 {
-                0.005 * size
-            } else {
-                1.0
-            },
+            b_in_a: Side::new(wa, sb, margin),
+            a_in_b: wb.map(|w| Side::new(w, sa, margin)),
+            margin,
             evals: 0,
         }
     }
@@ -496,6 +741,3 @@ fn thin(pts: &[DVec3], n: usize) -> Vec<DVec3> {
     best
 }
 
-pub static DBG_T: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-pub static DBG_W: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-pub static DBG_N: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);

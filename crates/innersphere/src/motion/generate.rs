@@ -197,16 +197,16 @@ pub fn generate_with(
         )));
     }
     let mut rng = Rng::new(seed);
-    let tremor_rms = opts.tremor.unwrap_or_else(|| rng.range(0.010, 0.016) * k);
+    // Drawn even when given, so that the tremor's size leaves the rest of the motion alone.
+    let drawn = rng.range(0.010, 0.016) * k;
+    let tremor_rms = opts.tremor.unwrap_or(drawn);
     if !(tremor_rms.is_finite() && tremor_rms >= 0.0) {
         return Err(Error::InvalidOption(format!(
             "tremor {tremor_rms}: expected >= 0"
         )));
     }
 
-    let t0 = std::time::Instant::now();
     let mut est = ClearanceEstimator::new(a, b, &opts.clearance);
-    eprintln!("DBG build {:?}", t0.elapsed());
     // The bite: the identity when the pair overlaps slightly there, else solved along up.
     let c0 = est.clearance(&Pose::IDENTITY);
     let bite = if (-8.0 * touch..=-touch).contains(&c0) {
@@ -228,7 +228,6 @@ pub fn generate_with(
     // Finer samples where the bodies meet.
     est.add_contact_samples(a, b, &bite, 1.5 * k, opts.clearance.samples.max(1));
     let bite_clearance = est.clearance(&bite);
-    eprintln!("DBG bite {:?} evals {}", t0.elapsed(), est.evaluations());
     let moved = frame.moved(&bite);
     let kin = Kin {
         bite,
@@ -252,7 +251,6 @@ pub fn generate_with(
         guess: 0.0,
     };
     let o_channel = planner.opening(&keys, n, opts.rate)?;
-    eprintln!("DBG plan {:?} evals {}", t0.elapsed(), est.evaluations());
     let times: Vec<f64> = (0..n).map(|i| i as f64 / opts.rate).collect();
     let lat_pro: Vec<(f64, f64)> = times.iter().map(|&t| lateral(&keys, t)).collect();
 
@@ -293,7 +291,6 @@ pub fn generate_with(
     }
     let motion = Motion { frames };
     let clearance = est.clearances(&motion, LABEL_CAP_TOUCHES * touch);
-    eprintln!("DBG label {:?} evals {} signed {}ms winding {}ms n {}", t0.elapsed(), est.evaluations(), super::clearance::DBG_T.swap(0, std::sync::atomic::Ordering::Relaxed)/1000000, super::clearance::DBG_W.swap(0, std::sync::atomic::Ordering::Relaxed)/1000000, super::clearance::DBG_N.swap(0, std::sync::atomic::Ordering::Relaxed));
     let phases = clearance.iter().map(|&c| phase_of(c, touch)).collect();
     Ok(Generated {
         motion,

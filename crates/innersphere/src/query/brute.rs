@@ -7,13 +7,11 @@ use super::Pose;
 use crate::SphereTree;
 use glam::DVec3;
 
-/// Leaves of A (index, centre, radius) and of B in A's frame.
-fn leaves(
-    a: &SphereTree,
-    pose_a: &Pose,
-    b: &SphereTree,
-    pose_b: &Pose,
-) -> (Vec<u32>, Vec<(u32, [f32; 3])>, Pose) {
+/// Leaf indices of A, leaves of B with their centres in A's frame, and the relative pose.
+type Leaves = (Vec<u32>, Vec<(u32, [f32; 3])>, Pose);
+
+/// Leaves of A and of B (centres in A's frame).
+fn leaves(a: &SphereTree, pose_a: &Pose, b: &SphereTree, pose_b: &Pose) -> Leaves {
     let rel = Pose::relative(pose_a, pose_b);
     let r32 = Rel32::new(&rel);
     let la: Vec<u32> = a.leaves().map(|n| n as u32).collect();

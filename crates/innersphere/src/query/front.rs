@@ -315,7 +315,8 @@ impl Front {
         };
         let size = self.queue.len + self.hits.len();
         let small = (ctx.a[0].r.min(ctx.b[0].r)) as f64;
-        let rebuild = !(delta <= 0.25 * small) || size > (8 * self.built).max(1 << 14);
+        let rebuild =
+            delta.is_nan() || delta > 0.25 * small || size > (8 * self.built).max(1 << 14);
         let slack2 = 2.0 * ctx.slack as f64;
         let mut tests = 0;
         if rebuild {

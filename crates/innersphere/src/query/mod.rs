@@ -3,14 +3,17 @@
 //! Every query takes the two trees, the world pose of each and the [`PairState`] of the pair
 //! (created once per pair with [`PairState::new`]). Internally a query works in A's frame:
 //! the relative pose of B is converted to f32 once per query and only the B nodes a traversal
-//! actually visits are transformed. The state carries what temporal coherence needs and all
+//! actually visits are transformed. Traversals read a packed copy of each tree's nodes
+//! ([`TreeInfo`], 32 bytes per node, children contiguous) and keep explicit stacks in the
+//! state; node tests carry a tiny slack covering the f32 rounding, so that an inner-node test
+//! never prunes a leaf pair that the exact leaf test (`|Δ|² < (ra + rb)²` in f32) accepts. The state carries what temporal coherence needs and all
 //! scratch memory, so that a query allocates nothing and takes no lock in steady state; list
 //! results are slices borrowed from the state. Trees are immutable and shared freely between
 //! threads; one state serves one pair on one thread at a time.
 //!
 //! | query | function | answer |
 //! |---|---|---|
-//! | exact proximity of the sphere sets (best-first branch and bound) | [`proximity`] | distance, closest points, leaf pair |
+//! | exact proximity of the sphere sets (branch and bound, depth or best first) | [`proximity`] | distance, closest points, leaf pair |
 //! | the paper's distance traversal (III-A) | [`distance_traversal`] | contact yes/no, a contact, a separation bound |
 //! | the paper's backtracking traversal (III-B, Alg. 1–2) | [`backtracking`] | same, restarting from last frame's contact |
 //! | the paper's multipoint traversal (III-C) | [`multipoint`] | up to `k` contacts, one per split-depth node |

@@ -35,7 +35,9 @@ fn data_dir() -> PathBuf {
 fn cache_dir() -> PathBuf {
     std::env::var_os("QUERY_BENCH_TREES")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../target/bench-trees"))
+        .unwrap_or_else(|| {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../target/bench-trees")
+        })
 }
 
 /// The tree of `mesh` at voxel size `h`, from the cache or built and cached.
@@ -48,7 +50,10 @@ fn tree(mesh: &Path, name: &str, h: f64) -> SphereTree {
             return t;
         }
     }
-    eprintln!("building the tree of {} at voxel size {h} ...", mesh.display());
+    eprintln!(
+        "building the tree of {} at voxel size {h} ...",
+        mesh.display()
+    );
     let t0 = Instant::now();
     let m = innersphere::mesh::io::load(mesh).unwrap();
     let opts = BuildOptions {
@@ -57,7 +62,11 @@ fn tree(mesh: &Path, name: &str, h: f64) -> SphereTree {
     };
     let (t, _) = build_tree(&m, &opts, &innersphere::progress::Silent).unwrap();
     file::save(&t, &path).unwrap();
-    eprintln!("  built in {:.1?}, cached at {}", t0.elapsed(), path.display());
+    eprintln!(
+        "  built in {:.1?}, cached at {}",
+        t0.elapsed(),
+        path.display()
+    );
     t
 }
 
@@ -66,7 +75,10 @@ fn read_motion(path: &Path) -> Vec<Pose> {
     text.lines()
         .skip(1)
         .filter_map(|line| {
-            let v: Vec<f64> = line.split(',').filter_map(|x| x.trim().parse().ok()).collect();
+            let v: Vec<f64> = line
+                .split(',')
+                .filter_map(|x| x.trim().parse().ok())
+                .collect();
             (v.len() == 8).then(|| Pose::from_array([v[1], v[2], v[3], v[4], v[5], v[6], v[7]]))?
         })
         .collect()
@@ -112,7 +124,10 @@ fn main() {
     let fm = dir.join("motion/jaw_chew_demo.csv");
     let fp = dir.join("motion/jaw_chew_demo.phases.csv");
     if !(fa.is_file() && fb.is_file() && fm.is_file()) {
-        println!("queries bench skipped: jaw data not found under {}", dir.display());
+        println!(
+            "queries bench skipped: jaw data not found under {}",
+            dir.display()
+        );
         return;
     }
     let h: f64 = std::env::var("QUERY_BENCH_VOXEL")
@@ -252,13 +267,6 @@ fn main() {
             }),
         ),
         (
-            "multipoint k=4 front",
-            Box::new(move |p, st| {
-                let r = multipoint(a, &id, b, p, st, &mpt(4));
-                (!r.contacts.is_empty(), r.visits)
-            }),
-        ),
-        (
             "multipoint k=16 front",
             Box::new(move |p, st| {
                 let r = multipoint(a, &id, b, p, st, &mpt(16));
@@ -266,7 +274,7 @@ fn main() {
             }),
         ),
         (
-            "penetration (default)",
+            "penetration traversal",
             Box::new(|p, st| {
                 let o = PenetrationOptions {
                     tracking: false,
@@ -277,13 +285,9 @@ fn main() {
             }),
         ),
         (
-            "penetration front",
+            "penetration front (default)",
             Box::new(|p, st| {
-                let o = PenetrationOptions {
-                    tracking: true,
-                    ..Default::default()
-                };
-                let r = penetration(a, &id, b, p, st, &o);
+                let r = penetration(a, &id, b, p, st, &PenetrationOptions::default());
                 (r.pairs > 0, r.visits)
             }),
         ),
@@ -297,9 +301,22 @@ fn main() {
     ];
     println!(
         "{:<30} {:<10} {:>6} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>9} {:>7}",
-        "query", "phase", "frames", "median", "p99", "max", "mean", ">1ms", "visits", "p99 vis", "contact"
+        "query",
+        "phase",
+        "frames",
+        "median",
+        "p99",
+        "max",
+        "mean",
+        ">1ms",
+        "visits",
+        "p99 vis",
+        "contact"
     );
-    println!("{:<30} {:<10} {:>6} {:>9} {:>9} {:>9} {:>9}", "", "", "", "µs", "µs", "µs", "µs");
+    println!(
+        "{:<30} {:<10} {:>6} {:>9} {:>9} {:>9} {:>9}",
+        "", "", "", "µs", "µs", "µs", "µs"
+    );
     let mut st = PairState::new(a, b);
     for (name, mut q) in queries {
         if !only.is_empty() && !only.iter().any(|o| name.contains(o.as_str())) {

@@ -4,9 +4,7 @@
 mod query_util;
 
 use glam::DVec3;
-use innersphere::query::{
-    brute, penetration, penetration_budgeted, PairState, PenetrationOptions,
-};
+use innersphere::query::{brute, penetration, penetration_budgeted, PairState, PenetrationOptions};
 use proptest::prelude::*;
 use query_util::*;
 

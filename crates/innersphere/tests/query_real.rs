@@ -43,15 +43,46 @@ fn check_pose(a: &SphereTree, b: &SphereTree, pa: &Pose, pb: &Pose, st: &mut [Pa
     let p = proximity(a, pa, b, pb, &mut st[0], &ProximityOptions::default());
     assert_eq!(p.distance, bd.max(0.0));
     let off = ContactOptions { safe_motion: false };
-    assert_eq!(distance_traversal(a, pa, b, pb, &mut st[1], &off).in_contact(), !pairs.is_empty());
-    assert_eq!(backtracking(a, pa, b, pb, &mut st[2], &off).in_contact(), !pairs.is_empty());
-    assert_eq!(contact(a, pa, b, pb, &mut st[3], &off).in_contact(), !pairs.is_empty());
+    assert_eq!(
+        distance_traversal(a, pa, b, pb, &mut st[1], &off).in_contact(),
+        !pairs.is_empty()
+    );
+    assert_eq!(
+        backtracking(a, pa, b, pb, &mut st[2], &off).in_contact(),
+        !pairs.is_empty()
+    );
+    assert_eq!(
+        contact(a, pa, b, pb, &mut st[3], &off).in_contact(),
+        !pairs.is_empty()
+    );
     let want = brute::penetration(a, pa, b, pb, 2.0);
-    let q = penetration(a, pa, b, pb, &mut st[1], &PenetrationOptions { stiffness: 2.0, tracking: false, ..Default::default() });
+    let q = penetration(
+        a,
+        pa,
+        b,
+        pb,
+        &mut st[1],
+        &PenetrationOptions {
+            stiffness: 2.0,
+            safe_motion: false,
+            tracking: false,
+            ..Default::default()
+        },
+    );
     assert_eq!(q.pairs, want.pairs);
     assert!(close(q.volume, want.volume, 1e-10, 1e-18));
     assert!((q.force - want.force).length() <= 1e-7 * want.force.length() + 1e-18);
-    let t = penetration(a, pa, b, pb, &mut st[3], &PenetrationOptions { stiffness: 2.0, tracking: true, ..Default::default() });
+    let t = penetration(
+        a,
+        pa,
+        b,
+        pb,
+        &mut st[3],
+        &PenetrationOptions {
+            stiffness: 2.0,
+            ..Default::default()
+        },
+    );
     assert_eq!(t.pairs, want.pairs);
     assert!(close(t.volume, want.volume, 1e-10, 1e-18));
     for budget in [10, 1000, u64::MAX] {
@@ -59,28 +90,59 @@ fn check_pose(a: &SphereTree, b: &SphereTree, pa: &Pose, pb: &Pose, st: &mut [Pa
         assert!(r.volume <= want.volume * (1.0 + 1e-9) + 1e-18);
         assert!(want.volume <= r.upper_bound * (1.0 + 1e-9) + 1e-18);
     }
-    let m = multipoint(a, pa, b, pb, &mut st[2], &MultipointOptions { k: 8, split_depth: 3, safe_motion: false, ..Default::default() });
+    let m = multipoint(
+        a,
+        pa,
+        b,
+        pb,
+        &mut st[2],
+        &MultipointOptions {
+            k: 8,
+            split_depth: 3,
+            safe_motion: false,
+            ..Default::default()
+        },
+    );
     assert_eq!(m.contacts.is_empty(), pairs.is_empty());
 }
 
 #[test]
 #[ignore = "real data: run with --ignored"]
 fn small_meshes_random_poses_equal_brute_force() {
-    let names = ["small/knot1_cgal.stl", "small/eight_genus2_cgal.stl", "small/femur_cgal.stl", "small/torus_trimesh.stl"];
+    let names = [
+        "small/knot1_cgal.stl",
+        "small/eight_genus2_cgal.stl",
+        "small/femur_cgal.stl",
+        "small/torus_trimesh.stl",
+    ];
     let trees: Vec<SphereTree> = names.iter().map(|n| tree(n, 40)).collect();
     let mut r = rng(7);
     for (i, a) in trees.iter().enumerate() {
         for (j, b) in trees.iter().enumerate() {
             let scale = (a.r[0] + b.r[0]) as f64;
-            let mut st = [PairState::new(a, b), PairState::new(a, b), PairState::new(a, b), PairState::new(a, b)];
+            let mut st = [
+                PairState::new(a, b),
+                PairState::new(a, b),
+                PairState::new(a, b),
+                PairState::new(a, b),
+            ];
             for _ in 0..12 {
                 let q = DQuat::from_xyzw(r(), r(), r(), r()).normalize();
                 let off = DVec3::new(r(), r(), r()) * scale * 0.9;
-                let pose_a = Pose::new(DVec3::new(r(), r(), r()), DQuat::from_rotation_y(r())).unwrap();
+                let pose_a =
+                    Pose::new(DVec3::new(r(), r(), r()), DQuat::from_rotation_y(r())).unwrap();
                 let (pa, pb) = pair_poses(a, b, pose_a, q, off);
                 check_pose(a, b, &pa, &pb, &mut st);
             }
-            let frames = motion(a, b, DVec3::new(r(), r(), r()), DVec3::new(r(), r(), r()), DVec3::new(r(), r(), r()), 0.02, 60);
+            let frames = motion(
+                a,
+                b,
+                DVec3::new(r(), r(), r()),
+                DVec3::new(r(), r(), r()),
+                DVec3::new(r(), r(), r()),
+                0.02,
+                60,
+            );
             for (pa, pb) in &frames {
                 check_pose(a, b, pa, pb, &mut st);
             }
@@ -95,13 +157,22 @@ fn opposing_molars_in_the_bite_and_along_a_motion() {
     let a = tree("jaw/ofj_p26_tooth03_upper_first_molar.stl", 48);
     let b = tree("jaw/ofj_p26_tooth30_lower_first_molar.stl", 48);
     // Both are in the same frame: the bite pose is the identity.
-    let mut st = [PairState::new(&a, &b), PairState::new(&a, &b), PairState::new(&a, &b), PairState::new(&a, &b)];
+    let mut st = [
+        PairState::new(&a, &b),
+        PairState::new(&a, &b),
+        PairState::new(&a, &b),
+        PairState::new(&a, &b),
+    ];
     let id = Pose::IDENTITY;
     check_pose(&a, &b, &id, &id, &mut st);
     // Open and close the bite: B moves down and back up along z with a small rotation.
     for f in 0..120 {
         let s = f as f64 / 120.0 * std::f64::consts::TAU;
-        let pb = Pose::new(DVec3::new(0.1 * s.sin(), 0.0, -1.0 + s.cos()), DQuat::from_rotation_x(0.02 * s.sin())).unwrap();
+        let pb = Pose::new(
+            DVec3::new(0.1 * s.sin(), 0.0, -1.0 + s.cos()),
+            DQuat::from_rotation_x(0.02 * s.sin()),
+        )
+        .unwrap();
         check_pose(&a, &b, &id, &pb, &mut st);
     }
 }

@@ -185,7 +185,6 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             let opts = PenetrationOptions {
                 stiffness: args.stiffness,
                 safe_motion: false,
-                tracking: false,
                 ..Default::default()
             };
             let p = query::penetration(&a, &pose_a, &b, &pose_b, &mut st, &opts);

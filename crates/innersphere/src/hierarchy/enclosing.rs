@@ -100,8 +100,9 @@ fn solve(a: &[[f64; 3]; 3], b: &[f64; 3], m: usize) -> Option<[f64; 3]> {
         b.swap(col, piv);
         for row in col + 1..m {
             let f = a[row][col] / a[col][col];
-            for k in col..m {
-                a[row][k] -= f * a[col][k];
+            let pivot_row = a[col];
+            for (x, p) in a[row][col..m].iter_mut().zip(&pivot_row[col..m]) {
+                *x -= f * p;
             }
             b[row] -= f * b[col];
         }

@@ -181,7 +181,7 @@ impl Motion {
             // The sum of squares of finite values may overflow; length() of huge values is
             // inf, which fails the tolerance check below.
             let norm = q.length();
-            if !((norm - 1.0).abs() <= QUAT_NORM_TOLERANCE) {
+            if !unit_norm(norm) {
                 return Err(motion_error(
                     path,
                     line,
@@ -228,11 +228,14 @@ impl Motion {
         for (i, f) in self.frames.iter().enumerate() {
             let line = i + 2;
             let [tx, ty, tz, qw, qx, qy, qz] = f.pose.to_array();
-            if ![f.t, tx, ty, tz, qw, qx, qy, qz].iter().all(|x| x.is_finite()) {
+            if ![f.t, tx, ty, tz, qw, qx, qy, qz]
+                .iter()
+                .all(|x| x.is_finite())
+            {
                 return Err(motion_error(path, line, "a value is not finite"));
             }
             let norm = f.pose.rotation.length();
-            if !((norm - 1.0).abs() <= QUAT_NORM_TOLERANCE) {
+            if !unit_norm(norm) {
                 return Err(motion_error(
                     path,
                     line,
@@ -279,6 +282,11 @@ impl Motion {
         };
         result.map_err(|e| Error::io(PathBuf::from(path), e))
     }
+}
+
+/// True when a quaternion norm is within [`QUAT_NORM_TOLERANCE`] of 1 (false for NaN).
+fn unit_norm(norm: f64) -> bool {
+    (norm - 1.0).abs() <= QUAT_NORM_TOLERANCE
 }
 
 /// At most `n` characters of `s`, with an ellipsis when cut.

@@ -9,8 +9,8 @@
 //!   at the front), across it the arch is mirror-symmetric; the axis along which the
 //!   spread of the other coordinate changes most is anterior–posterior, and anterior is
 //!   where the arch is narrow. left = up × anterior.
-//! - **incisal point**: on B's midline, at its front, at the height of its highest front
-//!   vertex — the lower incisal tip of a jaw.
+//! - **incisal point**: on B's midline, at the highest of B's front vertices (those within
+//!   3 mm of the front near the midline) — the lower incisal tip of a jaw.
 //! - **hinge**: [`HINGE_BEHIND`] behind and [`HINGE_ABOVE`] above the incisal point (times
 //!   the [`scale`](AnatomicalFrame::scale)); the opening rotation turns about the axis
 //!   through it along left.
@@ -131,7 +131,7 @@ impl AnatomicalFrame {
                 (lo.min(c[2]), hi.max(c[2]))
             });
         let height = umax - umin;
-        if !(height > 0.0) {
+        if height.is_nan() || height <= 0.0 {
             return Err(Error::InvalidMesh(
                 "body B is flat across the occlusal direction; cannot find an anatomical frame"
                     .into(),
@@ -150,12 +150,14 @@ impl AnatomicalFrame {
             .iter()
             .map(|c| c[1])
             .fold(f64::NEG_INFINITY, f64::max);
-        let utop = midline
+        // The highest of the front vertices: the incisal edge (its depth too, not the
+        // labial face in front of it).
+        let tip = midline
             .iter()
             .filter(|c| c[1] >= afront - 3.0 * scale)
-            .map(|c| c[2])
-            .fold(f64::NEG_INFINITY, f64::max);
-        let incisal = left * lmid + anterior * afront + up * utop;
+            .max_by(|p, q| p[2].total_cmp(&q[2]))
+            .map_or([lmid, afront, umax], |c| **c);
+        let incisal = left * lmid + anterior * tip[1] + up * tip[2];
         let hinge = incisal - anterior * (HINGE_BEHIND * scale) + up * (HINGE_ABOVE * scale);
         Ok(AnatomicalFrame {
             up,
@@ -231,6 +233,7 @@ fn plane_basis(n: DVec3) -> (DVec3, DVec3) {
 
 /// Eigen-decomposition of a symmetric 3×3 matrix by Jacobi rotations: eigenvalues ascending
 /// and their unit eigenvectors.
+#[allow(clippy::needless_range_loop)] // matrix code reads best with indices
 pub(crate) fn symmetric_eigen(m: [[f64; 3]; 3]) -> ([f64; 3], [DVec3; 3]) {
     let mut a = m;
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];

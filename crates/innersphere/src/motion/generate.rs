@@ -36,7 +36,8 @@ pub enum Scenario {
     /// Plain hinge opening (7–12 mm) and closing into the bite, about 1.2 s per cycle.
     OpenClose,
     /// Mostly lateral and protrusive sliding in light contact (excursions up to 3.5 mm), with
-    /// an occasional press into overlap and an occasional lift-off.
+    /// an occasional press into overlap (the first right after the first contact) and an
+    /// occasional lift-off. Starts slightly open.
     Grind,
 }
 
@@ -153,7 +154,9 @@ impl Generated {
     }
 }
 
-/// A hand-recorded-looking motion of B against A (see the [module docs](self)) at 1 kHz.
+/// A hand-recorded-looking motion of B against A (see the [module docs](self)) at 1 kHz,
+/// `seconds` long. Every scenario starts separated and reaches light contact and overlap
+/// within about its first second.
 pub fn generate(scenario: Scenario, seconds: f64, seed: u64, a: &Mesh, b: &Mesh) -> Result<Motion> {
     generate_with(scenario, seconds, seed, a, b, &GenerateOptions::default()).map(|g| g.motion)
 }
@@ -215,14 +218,23 @@ pub fn generate_with(
         let up = frame.up;
         let target = -1.5 * touch;
         let mut f = |x: f64| est.clearance(&Pose::from_translation(up * -x)) - target;
-        let x = solve(&mut f, 0.0, c0 - target, 0.01 * k, -1e3 * k, 1e3 * k, 0.02 * touch)
-            .ok_or_else(|| {
-                Error::InvalidOption(
-                    "cannot generate a motion: the bodies never touch when B moves along the \
+        let x = solve(
+            &mut f,
+            0.0,
+            c0 - target,
+            1.0,
+            0.002 * k,
+            -1e3 * k,
+            1e3 * k,
+            0.02 * touch,
+        )
+        .ok_or_else(|| {
+            Error::InvalidOption(
+                "cannot generate a motion: the bodies never touch when B moves along the \
                      occlusal direction"
-                        .into(),
-                )
-            })?;
+                    .into(),
+            )
+        })?;
         Pose::from_translation(up * -x)
     };
     // Finer samples where the bodies meet.
@@ -236,6 +248,17 @@ pub fn generate_with(
         up: moved.up,
         anterior: moved.anterior,
         r_inc: (moved.incisal - moved.hinge).length(),
+        lip: 1.0,
+    };
+    // Points turn about the hinge: they move |p - hinge| / r_inc per unit of opening.
+    let reach = b
+        .vertices
+        .iter()
+        .map(|v| (bite.transform_point(*v) - kin.hinge).length())
+        .fold(0.0, f64::max);
+    let kin = Kin {
+        lip: (reach / kin.r_inc).max(1.0),
+        ..kin
     };
 
     let keys = match scenario {
@@ -310,7 +333,13 @@ pub fn generate_with(
 /// `(amplitude, frequency, phase)`.
 fn sinusoids(rng: &mut Rng, sigma: f64) -> Vec<(f64, f64, f64)> {
     let mut s: Vec<(f64, f64, f64)> = (0..12)
-        .map(|_| (rng.range(0.3, 1.0), rng.range(2.0, 12.0), rng.range(0.0, TAU)))
+        .map(|_| {
+            (
+                rng.range(0.3, 1.0),
+                rng.range(2.0, 12.0),
+                rng.range(0.0, TAU),
+            )
+        })
         .collect();
     let power: f64 = s.iter().map(|c| c.0 * c.0 / 2.0).sum();
     let f = sigma / power.sqrt();
@@ -329,6 +358,8 @@ struct Kin {
     anterior: DVec3,
     /// Distance from the hinge to the incisal point.
     r_inc: f64,
+    /// How far any point of the pair moves per unit of incisal opening (at most).
+    lip: f64,
 }
 
 /// Turn about the vertical per lateral shift, as a fraction of the shift seen at the incisal
@@ -412,7 +443,8 @@ impl Planner<'_> {
             &mut f,
             self.guess,
             f0,
-            0.01 * self.k,
+            kin.lip,
+            0.002 * self.k,
             -8.0 * self.k,
             40.0 * self.k,
             0.02 * self.touch,
@@ -484,67 +516,67 @@ impl Planner<'_> {
     }
 }
 
-/// A root of the (roughly increasing) function `f` near `x0`, where `f(x0) = f0`: brackets
-/// by steps from `x0` that double (starting at `f0` or `h0`), within `[xmin, xmax]`, then
-/// Illinois regula falsi until `|f| <= ftol`.
+/// The first root of the function `f` from `x0` (where `f(x0) = f0`) in the direction
+/// where `|f|` falls: `f` must change by at most `lip` per unit of `x` (a Lipschitz bound),
+/// so steps of `|f| / lip` (at least `h0`) cannot pass the root. Once a step crosses,
+/// Illinois regula falsi finishes until `|f| <= ftol`. `None` when `[xmin, xmax]` holds no
+/// root that way.
+#[allow(clippy::too_many_arguments)]
 fn solve(
     f: &mut impl FnMut(f64) -> f64,
     x0: f64,
     f0: f64,
+    lip: f64,
     h0: f64,
     xmin: f64,
     xmax: f64,
     ftol: f64,
 ) -> Option<f64> {
+    if !f0.is_finite() {
+        return None;
+    }
     if f0.abs() <= ftol {
         return Some(x0);
     }
-    let mut h = (0.9 * f0.abs()).max(h0);
-    let (mut lo, mut flo, mut hi, mut fhi);
-    if f0 > 0.0 {
-        (hi, fhi) = (x0, f0);
-        loop {
-            lo = (hi - h).max(xmin);
-            flo = f(lo);
-            if flo <= 0.0 {
-                break;
-            }
-            if lo <= xmin {
-                return None;
-            }
-            (hi, fhi) = (lo, flo);
-            h *= 2.0;
+    // f rises with x near the roots we look for (the clearance grows as the jaw opens).
+    let dir = if f0 > 0.0 { -1.0 } else { 1.0 };
+    let (mut x, mut fx) = (x0, f0);
+    let mut crossed = None;
+    for _ in 0..1000 {
+        let step = (fx.abs() / lip).max(h0);
+        let xn = (x + dir * step).clamp(xmin, xmax);
+        let fxn = f(xn);
+        if fxn.abs() <= ftol {
+            return Some(xn);
         }
+        if (fxn > 0.0) != (fx > 0.0) {
+            crossed = Some((xn, fxn));
+            break;
+        }
+        if xn == xmin || xn == xmax || !fxn.is_finite() {
+            return None;
+        }
+        (x, fx) = (xn, fxn);
+    }
+    let (xn, fxn) = crossed?;
+    let ((mut lo, mut flo), (mut hi, mut fhi)) = if fx > 0.0 {
+        ((xn, fxn), (x, fx))
     } else {
-        (lo, flo) = (x0, f0);
-        loop {
-            hi = (lo + h).min(xmax);
-            fhi = f(hi);
-            if fhi > 0.0 {
-                break;
-            }
-            if hi >= xmax {
-                return None;
-            }
-            (lo, flo) = (hi, fhi);
-            h *= 2.0;
-        }
+        ((x, fx), (xn, fxn))
+    };
+    if lo > hi {
+        std::mem::swap(&mut lo, &mut hi);
+        std::mem::swap(&mut flo, &mut fhi);
     }
-    if flo.abs() <= ftol {
-        return Some(lo);
-    }
+    // Regula falsi on [lo, hi] with f(lo) and f(hi) of opposite signs.
     let mut side = 0i8;
-    let xtol = 1e-9 * (1.0 + lo.abs().max(hi.abs()));
-    for _ in 0..80 {
+    let xtol = 1e-12 * (1.0 + lo.abs().max(hi.abs()));
+    for _ in 0..100 {
         let width = hi - lo;
         if width <= xtol {
             break;
         }
-        let mut m = if fhi - flo > 0.0 && fhi.is_finite() && flo.is_finite() {
-            (lo * fhi - hi * flo) / (fhi - flo)
-        } else {
-            0.5 * (lo + hi)
-        };
+        let mut m = (lo * fhi - hi * flo) / (fhi - flo);
         if !(m > lo + 1e-3 * width && m < hi - 1e-3 * width) {
             m = 0.5 * (lo + hi);
         }
@@ -552,7 +584,7 @@ fn solve(
         if fm.abs() <= ftol {
             return Some(m);
         }
-        if fm > 0.0 {
+        if (fm > 0.0) == (fhi > 0.0) {
             (hi, fhi) = (m, fm);
             if side == 1 {
                 flo *= 0.5;
@@ -566,13 +598,13 @@ fn solve(
             side = -1;
         }
     }
-    Some(0.5 * (lo + hi))
+    Some(if flo.abs() < fhi.abs() { lo } else { hi })
 }
 
 /// Gaussian smoothing in place with standard deviation `sigma` samples (weights renormalized
 /// at the ends, so constants stay constant).
 fn gaussian_smooth(v: &mut [f64], sigma: f64) {
-    if !(sigma >= 0.5) || v.len() < 3 {
+    if sigma.is_nan() || sigma < 0.5 || v.len() < 3 {
         return;
     }
     let r = (4.0 * sigma).ceil() as isize;
@@ -633,29 +665,69 @@ fn plan_chew(rng: &mut Rng, seconds: f64, k: f64, touch: f64, c_bite: f64) -> Ve
         t: 0.0,
     };
     let mut side = rng.sign();
-    p.at(0.0, -0.5 * side * k, 0.0, Depth::Open(rng.range(8.5, 11.5) * k));
+    p.at(
+        0.0,
+        -0.5 * side * k,
+        0.0,
+        Depth::Open(rng.range(8.5, 11.5) * k),
+    );
     p.hold(rng.range(0.06, 0.14));
     while p.t < seconds + 0.5 {
         // Close from the working side, touch, slide into the bite.
         let (lat_c, pro_c) = (side * rng.range(0.3, 0.8) * k, rng.range(0.0, 0.3) * k);
-        p.at(rng.range(0.30, 0.40), lat_c, pro_c, Depth::Open(rng.range(0.8, 1.2) * k));
-        p.at(rng.range(0.10, 0.14), lat_c, pro_c, Depth::Contact(light(rng, touch)));
+        p.at(
+            rng.range(0.30, 0.40),
+            lat_c,
+            pro_c,
+            Depth::Open(rng.range(0.8, 1.2) * k),
+        );
+        p.at(
+            rng.range(0.10, 0.14),
+            lat_c,
+            pro_c,
+            Depth::Contact(light(rng, touch)),
+        );
         p.at(rng.range(0.08, 0.12), 0.0, 0.0, Depth::Contact(c_bite));
         // Clench slightly beyond the bite.
         let clench = c_bite - rng.range(1.0, 2.5) * touch;
         p.at(rng.range(0.06, 0.09), 0.0, 0.0, Depth::Contact(clench));
         p.hold(rng.range(0.10, 0.16));
-        p.at(rng.range(0.08, 0.12), 0.0, 0.0, Depth::Contact(light(rng, touch)));
+        p.at(
+            rng.range(0.08, 0.12),
+            0.0,
+            0.0,
+            Depth::Contact(light(rng, touch)),
+        );
         // Grind out to the working side and back in light contact.
         let (lat_g, pro_g) = (side * rng.range(2.5, 4.5) * k, rng.range(0.3, 1.2) * k);
-        p.at(rng.range(0.25, 0.35), lat_g, pro_g, Depth::Contact(light(rng, touch)));
+        p.at(
+            rng.range(0.25, 0.35),
+            lat_g,
+            pro_g,
+            Depth::Contact(light(rng, touch)),
+        );
         let (lat_h, pro_h) = (side * rng.range(0.0, 0.4) * k, rng.range(0.0, 0.3) * k);
-        p.at(rng.range(0.25, 0.35), lat_h, pro_h, Depth::Contact(light(rng, touch)));
+        p.at(
+            rng.range(0.25, 0.35),
+            lat_h,
+            pro_h,
+            Depth::Contact(light(rng, touch)),
+        );
         // Lift, then open wide, drifting to the next cycle's balancing side.
-        p.at(rng.range(0.10, 0.14), lat_h, pro_h, Depth::Open(rng.range(0.6, 1.0) * k));
+        p.at(
+            rng.range(0.10, 0.14),
+            lat_h,
+            pro_h,
+            Depth::Open(rng.range(0.6, 1.0) * k),
+        );
         side = -side;
         let open = Depth::Open(rng.range(8.5, 11.5) * k);
-        p.at(rng.range(0.25, 0.35), -0.5 * side * k, rng.range(-0.3, 0.3) * k, open);
+        p.at(
+            rng.range(0.25, 0.35),
+            -0.5 * side * k,
+            rng.range(-0.3, 0.3) * k,
+            open,
+        );
         p.hold(rng.range(0.05, 0.12));
     }
     p.keys
@@ -671,11 +743,26 @@ fn plan_open_close(rng: &mut Rng, seconds: f64, k: f64, touch: f64, c_bite: f64)
     p.hold(rng.range(0.04, 0.12));
     while p.t < seconds + 0.5 {
         let lat = rng.range(-0.3, 0.3) * k;
-        p.at(rng.range(0.30, 0.40), lat, 0.0, Depth::Open(rng.range(0.5, 0.9) * k));
-        p.at(rng.range(0.10, 0.15), lat, 0.0, Depth::Contact(light(rng, touch)));
+        p.at(
+            rng.range(0.30, 0.40),
+            lat,
+            0.0,
+            Depth::Open(rng.range(0.5, 0.9) * k),
+        );
+        p.at(
+            rng.range(0.10, 0.15),
+            lat,
+            0.0,
+            Depth::Contact(light(rng, touch)),
+        );
         p.at(rng.range(0.08, 0.12), 0.0, 0.0, Depth::Contact(c_bite));
         p.hold(rng.range(0.10, 0.20));
-        p.at(rng.range(0.10, 0.14), 0.0, 0.0, Depth::Open(rng.range(0.5, 0.9) * k));
+        p.at(
+            rng.range(0.10, 0.14),
+            0.0,
+            0.0,
+            Depth::Open(rng.range(0.5, 0.9) * k),
+        );
         let open = Depth::Open(rng.range(7.0, 12.0) * k);
         p.at(rng.range(0.25, 0.35), rng.range(-0.3, 0.3) * k, 0.0, open);
         p.hold(rng.range(0.04, 0.12));
@@ -690,22 +777,27 @@ fn plan_grind(rng: &mut Rng, seconds: f64, k: f64, touch: f64, c_bite: f64) -> V
     };
     p.at(0.0, 0.0, 0.0, Depth::Open(rng.range(1.5, 2.5) * k));
     p.hold(rng.range(0.08, 0.15));
-    p.at(rng.range(0.25, 0.35), 0.0, 0.0, Depth::Contact(light(rng, touch)));
+    p.at(
+        rng.range(0.25, 0.35),
+        0.0,
+        0.0,
+        Depth::Contact(light(rng, touch)),
+    );
     let side = rng.sign();
     let mut step = 0usize;
     while p.t < seconds + 0.5 {
         let c = Depth::Contact(light(rng, touch));
         match step % 8 {
-            0 | 3 => {
-                let s = if step % 8 == 0 { side } else { -side };
+            1 | 3 => {
+                let s = if step % 8 == 3 { -side } else { side };
                 let (lat, pro) = (s * rng.range(1.5, 3.5) * k, rng.range(0.0, 1.0) * k);
                 p.at(rng.range(0.30, 0.45), lat, pro, c);
             }
-            1 | 4 | 6 => {
+            2 | 4 | 6 => {
                 let (lat, pro) = (rng.range(-0.2, 0.2) * k, rng.range(0.0, 0.2) * k);
                 p.at(rng.range(0.25, 0.40), lat, pro, c);
             }
-            2 => {
+            0 => {
                 let press = Depth::Contact(c_bite - rng.range(0.5, 1.5) * touch);
                 p.at(rng.range(0.12, 0.18), 0.0, 0.0, press);
                 p.hold(rng.range(0.06, 0.10));
@@ -717,7 +809,12 @@ fn plan_grind(rng: &mut Rng, seconds: f64, k: f64, touch: f64, c_bite: f64) -> V
             }
             _ => {
                 let Key { lat, pro, .. } = p.last();
-                p.at(rng.range(0.10, 0.14), lat, pro, Depth::Open(rng.range(0.6, 1.2) * k));
+                p.at(
+                    rng.range(0.10, 0.14),
+                    lat,
+                    pro,
+                    Depth::Open(rng.range(0.6, 1.2) * k),
+                );
                 p.hold(rng.range(0.08, 0.15));
                 p.at(rng.range(0.12, 0.16), lat, pro, c);
             }
@@ -734,13 +831,18 @@ mod tests {
     #[test]
     fn solver_finds_roots_and_reports_none() {
         let mut f = |x: f64| x * x * x - 2.0;
-        let r = solve(&mut f, 0.0, -2.0, 0.01, -100.0, 100.0, 1e-9).unwrap();
+        let r = solve(&mut f, 0.0, -2.0, 30.0, 0.01, -100.0, 100.0, 1e-9).unwrap();
         assert!((r - 2f64.cbrt()).abs() < 1e-6, "{r}");
+        // Capped far away, like a clearance.
         let mut g = |x: f64| (x - 3.0).min(0.5);
-        let r = solve(&mut g, 10.0, 0.5, 0.01, -100.0, 100.0, 1e-9).unwrap();
+        let r = solve(&mut g, 10.0, 0.5, 1.0, 0.01, -100.0, 100.0, 1e-9).unwrap();
         assert!((r - 3.0).abs() < 1e-6, "{r}");
+        // The first root from the start, not a later one.
+        let mut w = |x: f64| (x - 1.0).abs() - 0.5;
+        let r = solve(&mut w, 4.0, 2.5, 1.0, 0.01, -100.0, 100.0, 1e-9).unwrap();
+        assert!((r - 1.5).abs() < 1e-6, "{r}");
         let mut h = |_: f64| 1.0;
-        assert!(solve(&mut h, 0.0, 1.0, 0.01, -5.0, 5.0, 1e-9).is_none());
+        assert!(solve(&mut h, 0.0, 1.0, 1.0, 0.01, -5.0, 5.0, 1e-9).is_none());
     }
 
     #[test]

@@ -2,12 +2,12 @@
 //!
 //! - [`Motion`] / [`Frame`]: the motion file format (`t,tx,ty,tz,qw,qx,qy,qz`, the pose of
 //!   body B in body A's frame over time), loading with line-numbered errors, saving.
-//! - [`generate`] / [`generate_with`]: hand-recorded-looking motions of a pair at 1 kHz
+//! - [`generate()`] / [`generate_with`]: hand-recorded-looking motions of a pair at 1 kHz
 //!   ([`Scenario::Chew`], [`Scenario::OpenClose`], [`Scenario::Grind`]) that pass through
 //!   separated, touching and interpenetrating phases.
 //! - [`AnatomicalFrame`]: up / left / anterior, the incisal point and the opening hinge of a
 //!   jaw pair, from the meshes.
-//! - [`ClearanceEstimator`], [`clearance`], [`phase_of`]: a fast signed-clearance estimate
+//! - [`ClearanceEstimator`], [`clearance()`], [`phase_of`]: a fast signed-clearance estimate
 //!   and the phase labels that replays and benchmarks use.
 
 pub mod clearance;

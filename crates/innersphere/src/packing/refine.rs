@@ -110,8 +110,9 @@ impl<'a> Refiner<'a> {
     /// Moves the centre from voxel centre `v` (free radius `rho`) toward a larger free ball.
     pub(super) fn refine(&mut self, v: DVec3, rho: f64, spheres: &[Sphere]) -> (DVec3, f64) {
         let (mut f, mut q) = self.free(v, spheres);
-        // The grid value is exact, but never trust a refinement that would shrink the sphere.
-        if !(f >= rho) {
+        // The grid value is exact, but never trust a refinement that would shrink the sphere
+        // (or a NaN).
+        if f.is_nan() || f < rho {
             return (v, rho);
         }
         let mut c = v;

@@ -3,14 +3,18 @@
 //!
 //! The front partitions all leaf pairs: every leaf pair lies below exactly one front entry,
 //! either a *separated* node pair (no overlapping leaf pair below it, by a margin) or an
-//! *overlapping leaf pair* (a contact). A separated pair measured with lower bound `d` stays
+//! *overlapping leaf pair* (a hit). A separated pair measured with lower bound `d` stays
 //! separated while the relative motion since its measurement is below `d`: every point of B
 //! moves by at most `|Δc| + θ·ρ` per frame (root-centre displacement plus rotation angle
 //! times B's radius about its root centre), and these bounds add up over frames. So each
-//! separated pair gets an expiry (`motion so far + d`, less the f32 rounding slack) in a
-//! bucket queue; a frame adds its motion bound and re-tests only the expired pairs (refining the
-//! ones that now overlap) and the contacts. The contacts are then exactly the overlapping
-//! leaf pairs of a full traversal, at the cost of what changed.
+//! separated pair gets an expiry (`motion so far + d`, less twice the f32 rounding slack) in
+//! a bucket queue; a frame adds its motion bound and re-tests only the expired pairs
+//! (refining the ones that now overlap) and the hits. The hits are then exactly the
+//! overlapping leaf pairs of a full traversal, at the cost of what changed.
+//!
+//! The front is rebuilt from the roots on the first frame, after a jump (a motion bound above
+//! a quarter of the smaller root radius) and when it has grown to 8 times its size after the
+//! last rebuild (it refines where contact was and never coarsens).
 
 use super::info::TreeInfo;
 use super::state::{expand_larger, Ctx, Item};
@@ -19,7 +23,7 @@ use glam::DVec3;
 
 /// A separated node pair and the cumulative motion at which it may stop being separated.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Sep {
+struct Sep {
     expiry: f64,
     a: u32,
     b: u32,
@@ -39,8 +43,9 @@ const RING: i64 = 1024;
 /// A two-level bucket queue of separated pairs by expiry (linked lists in one slab). Fine
 /// buckets of width `width` hold the current block of `RING` fine buckets; coarse buckets
 /// (one block each) hold the next `RING − 1` blocks and move into the fine level when their
-/// block begins; anything beyond sits in a far list, re-sorted when the coarse level wraps.
-/// Push and pop are O(1); no allocation once the slab has grown to the front's size.
+/// block begins; anything beyond sits in a far list, re-sorted when the coarse level has
+/// advanced by half a ring. Push and pop are O(1); no allocation once the slab has grown to
+/// the front's size.
 #[derive(Debug)]
 struct Buckets {
     slab: Vec<Slot>,
@@ -79,65 +84,16 @@ impl Buckets {
         self.len = 0;
     }
 
-    /// Re-buckets every entry with bucket width `width` (when the motion per frame outgrew
-    /// the old width); `moved` is the current cumulative motion.
-    fn rebucket(&mut self, width: f64, moved: f64, tmp: &mut Vec<Sep>) {
-        tmp.clear();
-        for h in 0..2 * RING as usize + 1 {
-            let head = if h < RING as usize {
-                &mut self.fine[h]
-            } else if h < 2 * RING as usize {
-                &mut self.coarse[h - RING as usize]
-            } else {
-                &mut self.far
-            };
-            let mut s = std::mem::replace(head, NIL);
-            while s != NIL {
-                tmp.push(self.slab[s as usize].sep);
-                s = self.slab[s as usize].next;
-            }
-        }
-        self.clear(width);
-        self.cur = (moved / width).floor() as i64;
-        for &e in tmp.iter() {
-            self.push(e);
-        }
-    }
-
-    /// A lower bound on every expiry in the queue: exact over the current fine bucket (which
-    /// also holds entries pushed already due), bucket starts beyond it.
-    fn min_bound(&self) -> f64 {
-        let mut m = f64::INFINITY;
-        let mut s = self.fine[self.cur.rem_euclid(RING) as usize];
-        while s != NIL {
-            m = m.min(self.slab[s as usize].sep.expiry);
-            s = self.slab[s as usize].next;
-        }
-        let block = self.cur.div_euclid(RING);
-        for k in self.cur + 1..(block + 1) * RING {
-            if self.fine[k.rem_euclid(RING) as usize] != NIL {
-                return m.min(k as f64 * self.width);
-            }
-        }
-        for kb in block + 1..block + RING {
-            if self.coarse[kb.rem_euclid(RING) as usize] != NIL {
-                return m.min((kb * RING) as f64 * self.width);
-            }
-        }
-        if self.far != NIL {
-            m = m.min(((block + RING) * RING) as f64 * self.width);
-        }
-        m
-    }
-
     #[inline]
     fn bucket(&self, expiry: f64) -> i64 {
         (expiry / self.width).floor() as i64
     }
 
+    /// Links slab entry `slot` into the list of bucket `k` (the current bucket when `k` is
+    /// already due).
     #[inline]
     fn link(&mut self, slot: u32, k: i64) {
-        let k = k.max(self.cur); // anything already due goes into the current bucket
+        let k = k.max(self.cur);
         let block = self.cur.div_euclid(RING);
         let kb = k.div_euclid(RING);
         let head = if kb == block {
@@ -167,16 +123,23 @@ impl Buckets {
         self.link(slot, k);
     }
 
-    /// Moves every entry with `expiry ≤ moved` into `out` (the others stay); returns the
-    /// entries scanned.
-    fn drain_expired(&mut self, moved: f64, out: &mut Vec<Sep>) -> u64 {
-        let mut scanned = 0;
+    /// Re-links every entry of list `head` (after the level it was in has advanced).
+    fn relink_list(&mut self, mut s: u32) {
+        while s != NIL {
+            let next = self.slab[s as usize].next;
+            let k = self.bucket(self.slab[s as usize].sep.expiry);
+            self.link(s, k);
+            s = next;
+        }
+    }
+
+    /// Moves every entry with `expiry ≤ moved` into `out` (the others stay).
+    fn drain_expired(&mut self, moved: f64, out: &mut Vec<Sep>) {
         let last = self.bucket(moved);
         loop {
             let i = self.cur.rem_euclid(RING) as usize;
             let mut s = std::mem::replace(&mut self.fine[i], NIL);
             while s != NIL {
-                scanned += 1;
                 let next = self.slab[s as usize].next;
                 let sep = self.slab[s as usize].sep;
                 if sep.expiry <= moved {
@@ -196,29 +159,42 @@ impl Buckets {
             }
             self.cur += 1;
             if self.cur.rem_euclid(RING) == 0 {
-                // A new block: its coarse bucket moves into the fine level; when the coarse
-                // level wraps, the far list is re-sorted.
+                // A new block: its coarse bucket moves into the fine level.
                 let block = self.cur.div_euclid(RING);
-                let mut s =
-                    std::mem::replace(&mut self.coarse[block.rem_euclid(RING) as usize], NIL);
-                while s != NIL {
-                    let next = self.slab[s as usize].next;
-                    let k = self.bucket(self.slab[s as usize].sep.expiry);
-                    self.link(s, k);
-                    s = next;
-                }
+                let c = std::mem::replace(&mut self.coarse[block.rem_euclid(RING) as usize], NIL);
+                self.relink_list(c);
                 if block.rem_euclid(RING / 2) == 0 {
-                    let mut s = std::mem::replace(&mut self.far, NIL);
-                    while s != NIL {
-                        let next = self.slab[s as usize].next;
-                        let k = self.bucket(self.slab[s as usize].sep.expiry);
-                        self.link(s, k);
-                        s = next;
-                    }
+                    let f = std::mem::replace(&mut self.far, NIL);
+                    self.relink_list(f);
                 }
             }
         }
-        scanned
+    }
+
+    /// A lower bound on every expiry in the queue: exact over the current fine bucket (which
+    /// also holds entries pushed already due), bucket starts beyond it.
+    fn min_bound(&self) -> f64 {
+        let mut m = f64::INFINITY;
+        let mut s = self.fine[self.cur.rem_euclid(RING) as usize];
+        while s != NIL {
+            m = m.min(self.slab[s as usize].sep.expiry);
+            s = self.slab[s as usize].next;
+        }
+        let block = self.cur.div_euclid(RING);
+        for k in self.cur + 1..(block + 1) * RING {
+            if self.fine[k.rem_euclid(RING) as usize] != NIL {
+                return m.min(k as f64 * self.width);
+            }
+        }
+        for kb in block + 1..block + RING {
+            if self.coarse[kb.rem_euclid(RING) as usize] != NIL {
+                return m.min((kb * RING) as f64 * self.width);
+            }
+        }
+        if self.far != NIL {
+            m = m.min(((block + RING) * RING) as f64 * self.width);
+        }
+        m
     }
 }
 
@@ -232,6 +208,18 @@ pub(crate) struct Hit {
     pub split: u32,
     /// Key of the traversal pair at depth `split` above this leaf pair (multipoint).
     pub key: u64,
+}
+
+impl Hit {
+    fn new(a: u32, b: u32, c: [f32; 3]) -> Hit {
+        Hit {
+            a,
+            b,
+            c,
+            split: u32::MAX,
+            key: 0,
+        }
+    }
 }
 
 /// The tracked front of one pair.
@@ -251,10 +239,6 @@ pub(crate) struct Front {
     last: Option<Pose>,
     /// Front size after the last rebuild.
     built: usize,
-    /// Motion bound of the last frame.
-    last_delta: f64,
-    /// Counters for diagnostics: rebuilds, re-bucketings, entries scanned while draining.
-    pub stats: [u64; 3],
 }
 
 /// Upper bound on the displacement of any point of B between two relative poses.
@@ -278,20 +262,7 @@ impl Front {
             moved: 0.0,
             last: None,
             built: 0,
-            last_delta: 0.0,
-            stats: [0; 3],
         }
-    }
-
-    /// (front entries, hits, rebuilds, re-bucketings, entries scanned).
-    pub(crate) fn diagnostics(&self) -> [u64; 5] {
-        [
-            self.queue.len as u64,
-            self.hits.len() as u64,
-            self.stats[0],
-            self.stats[1],
-            self.stats[2],
-        ]
     }
 
     /// Forgets the front; the next update rebuilds it.
@@ -299,6 +270,11 @@ impl Front {
         self.last = None;
         self.queue.clear(1.0);
         self.hits.clear();
+    }
+
+    /// (separated pairs, overlapping leaf pairs) on the front.
+    pub(crate) fn size(&self) -> (usize, usize) {
+        (self.queue.len, self.hits.len())
     }
 
     /// Smallest remaining separation margin of the separated pairs (a lower bound on the
@@ -314,16 +290,15 @@ impl Front {
             None => f64::INFINITY,
         };
         let size = self.queue.len + self.hits.len();
-        let small = (ctx.a[0].r.min(ctx.b[0].r)) as f64;
+        let small = ctx.a[0].r.min(ctx.b[0].r) as f64;
         let rebuild =
             delta.is_nan() || delta > 0.25 * small || size > (8 * self.built).max(1 << 14);
         let slack2 = 2.0 * ctx.slack as f64;
         let mut tests = 0;
         if rebuild {
-            // Bucket width: an eighth of a frame's motion, at least a small fraction of the
-            // bodies.
-            self.stats[0] += 1;
-            self.queue.clear((small * 1e-4).max(self.last_delta / 8.0));
+            // Bucket width: a small fraction of the bodies (about a frame's motion at haptic
+            // rates); a frame crosses at most a few thousand buckets before a rebuild.
+            self.queue.clear((small * 1e-4).max(f64::MIN_POSITIVE));
             self.hits.clear();
             self.pending.clear();
             self.moved = 0.0;
@@ -333,14 +308,9 @@ impl Front {
             }
             self.built = self.queue.len + self.hits.len();
         } else {
-            if delta > 64.0 * self.queue.width {
-                self.stats[1] += 1;
-                self.queue
-                    .rebucket(delta / 8.0, self.moved, &mut self.pending);
-            }
             self.moved += delta;
             self.pending.clear();
-            // Contacts: still overlapping, or separated from now on.
+            // Hits: still overlapping, or separated from now on.
             let mut i = 0;
             while i < self.hits.len() {
                 let h = self.hits[i];
@@ -361,7 +331,7 @@ impl Front {
             }
             // Separated pairs whose margin the motion may have used up.
             self.due.clear();
-            self.stats[2] += self.queue.drain_expired(self.moved, &mut self.due);
+            self.queue.drain_expired(self.moved, &mut self.due);
             for k in 0..self.due.len() {
                 let e = self.due[k];
                 tests += self.refine(ctx, e.a, e.b, slack2);
@@ -371,9 +341,6 @@ impl Front {
             }
         }
         self.last = Some(ctx.rel);
-        if delta.is_finite() {
-            self.last_delta = delta;
-        }
         tests
     }
 
@@ -392,13 +359,7 @@ impl Front {
             return 1;
         }
         if ctx.a[a as usize].is_leaf() && ctx.b[b as usize].is_leaf() {
-            self.hits.push(Hit {
-                a,
-                b,
-                c,
-                split: u32::MAX,
-                key: 0,
-            });
+            self.hits.push(Hit::new(a, b, c));
             return 1;
         }
         let mut tests = 1;
@@ -412,13 +373,7 @@ impl Front {
                 tests += 1;
                 if d2 < sr * sr {
                     if leafs {
-                        hits.push(Hit {
-                            a: i,
-                            b: j,
-                            c,
-                            split: u32::MAX,
-                            key: 0,
-                        });
+                        hits.push(Hit::new(i, j, c));
                     } else {
                         work.push(Item {
                             a: i,

@@ -17,14 +17,14 @@
 //! | the paper's distance traversal (III-A) | [`distance_traversal`] | contact yes/no, a contact, a separation bound |
 //! | the paper's backtracking traversal (III-B, Alg. 1–2) | [`backtracking`] | same, restarting from last frame's contact |
 //! | the paper's multipoint traversal (III-C) | [`multipoint`] | up to `k` contacts, one per split-depth node |
-//! | first contact from the kinetic front (ours) | [`contact`] | same answer as the traversals, re-testing only what the motion could change |
+//! | first contact from the kinetic front (ours) | [`contact`] | same answer, re-testing only what the motion could change |
 //! | penetration volume, force, torque, patches | [`penetration`] | exact volume of the intersection of the sphere unions |
 //! | time-critical penetration volume | [`penetration_budgeted`] | volume found so far and an upper bound |
 //!
-//! Kinetic front tracking (ours; [`contact`], and [`penetration`] and [`multipoint`] with
+//! Kinetic front tracking (ours; [`contact`], [`penetration`] by default, [`multipoint`] with
 //! `tracking`): the frontier of the overlap traversal is kept from frame to frame and each
 //! separated node pair on it is re-tested only once the relative motion since its last test
-//! could have closed its separation; the contacts are exactly the overlapping leaf pairs.
+//! could have closed its separation; its hits are exactly the overlapping leaf pairs.
 //!
 //! Broad phase and safe motion: every query first rejects on the root spheres, and a query
 //! that proved the bodies separated by `d` lets the contact queries skip later frames until

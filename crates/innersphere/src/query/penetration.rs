@@ -21,13 +21,14 @@ pub struct PenetrationOptions {
     /// A pair joins the patch whose first point is nearest when within this distance (model
     /// units); 0 = automatic: 1/8 of the smaller root-sphere radius.
     pub patch_radius: f64,
-    /// Skip (answer "no penetration") while the last proved separation holds.
+    /// Skip (answer "no penetration") while the last proved separation holds (traversal
+    /// only; the front needs no skip).
     pub safe_motion: bool,
-    /// `false` (default): a depth-first traversal from the roots every query. `true`: take
-    /// the overlapping leaf pairs from the kinetic front (re-testing only what the motion
-    /// since the last query could change). Same result; the front tests far fewer node
-    /// pairs, but each test is a cache miss, so it only pays off in deep, lasting
-    /// interpenetration (see the benchmark).
+    /// `true` (default): take the overlapping leaf pairs from the kinetic front, re-testing
+    /// only what the motion since the last query could change. `false`: a depth-first
+    /// traversal from the roots every query. Same result. The front tests far fewer node
+    /// pairs, but each test is a cache miss: on the jaw pair it is 4–6× faster with trees of
+    /// 30k–100k leaves and no better with 500k (see the benchmark).
     pub tracking: bool,
 }
 
@@ -38,7 +39,7 @@ impl Default for PenetrationOptions {
             max_patches: 8,
             patch_radius: 0.0,
             safe_motion: true,
-            tracking: false,
+            tracking: true,
         }
     }
 }

@@ -183,10 +183,9 @@ impl PairState {
         self.s.front.reset();
     }
 
-    /// Diagnostics of the kinetic front: (separated pairs on it, overlapping leaf pairs,
-    /// rebuilds, re-bucketings, queue entries scanned), cumulative since creation.
-    pub fn front_diagnostics(&self) -> [u64; 5] {
-        self.s.front.diagnostics()
+    /// Size of the kinetic front: (separated node pairs on it, overlapping leaf pairs).
+    pub fn front_size(&self) -> (usize, usize) {
+        self.s.front.size()
     }
 
     /// The last separation bound recorded by a query, if any.
@@ -317,4 +316,3 @@ pub(crate) fn expand_larger<F: FnMut(u32, u32, [f32; 3], f32, f32, bool)>(
         }
     }
 }
-

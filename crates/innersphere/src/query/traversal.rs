@@ -423,9 +423,9 @@ pub fn backtracking(
 /// First contact from the kinetic front (ours, beyond the paper): the same contact answer as
 /// [`distance_traversal`] and [`backtracking`], but each frame re-tests only the separated
 /// node pairs whose margin the relative motion since their last test could have used up,
-/// and last frame's contacts (see the module documentation). The first frame, and a frame
-/// after a jump, builds the front by a full traversal. `opts` is not needed (the front
-/// subsumes the safe-motion skip).
+/// and last frame's overlapping leaf pairs (see the module documentation). The first frame,
+/// and a frame after a jump, builds the front by a full traversal. The front subsumes the
+/// safe-motion skip, so `opts` changes nothing.
 pub fn contact(
     a: &SphereTree,
     pose_a: &Pose,

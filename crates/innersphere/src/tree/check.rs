@@ -1,13 +1,12 @@
 //! Independent verification of a tree against its mesh (what `ist check` runs): leaves inside
 //! the mesh, leaves disjoint, parents enclosing children. It does not trust the tree's
 //! hierarchy for any of it: protrusion uses the mesh's triangle BVH and winding number,
-//! overlap uses a uniform grid over the leaves.
+//! overlap is a self-join over the hierarchy, sound once enclosure is verified.
 
 use super::SphereTree;
 use crate::mesh::bvh::TriangleBvh;
 use crate::mesh::winding::FastWinding;
 use crate::Mesh;
-use glam::DVec3;
 use rayon::prelude::*;
 
 /// Result of [`check`]; `ok` is the verdict.
@@ -60,7 +59,7 @@ pub fn check(tree: &SphereTree, mesh: &Mesh) -> crate::Result<CheckReport> {
         })
         .reduce(|| (0.0, 0), |a, b| (a.0.max(b.0), a.1 + b.1));
 
-    let max_overlap = max_leaf_overlap(&leaves.iter().map(|&n| sphere(n)).collect::<Vec<_>>());
+    let max_overlap = max_leaf_overlap(tree);
 
     let enclosure_violations = (0..tree.len())
         .into_par_iter()
@@ -88,44 +87,60 @@ pub fn check(tree: &SphereTree, mesh: &Mesh) -> crate::Result<CheckReport> {
     })
 }
 
-/// Largest pairwise overlap among `balls`, found with a uniform grid (cell = twice the median
-/// radius; every ball is entered in each cell its bounding box touches).
-pub fn max_leaf_overlap(balls: &[(DVec3, f64)]) -> f64 {
-    if balls.len() < 2 {
+/// Largest overlap r_a + r_b − |c_a − c_b| between two distinct leaves, by a self-join over
+/// the tree's own hierarchy. This is sound only when every parent encloses its children, which
+/// [`check`] verifies independently (and reports as not ok otherwise): then every overlapping
+/// leaf pair lies under a chain of overlapping node pairs and is found.
+pub fn max_leaf_overlap(tree: &SphereTree) -> f64 {
+    let sphere = |n: usize| {
+        let (c, r) = tree.sphere(n);
+        (c.as_dvec3(), r as f64)
+    };
+    let overlap = |a: usize, b: usize| {
+        let (ca, ra) = sphere(a);
+        let (cb, rb) = sphere(b);
+        ra + rb - (ca - cb).length()
+    };
+    // Seed with the root's children pairs so that the work splits across threads.
+    let mut seeds = Vec::new();
+    if tree.is_leaf(0) {
         return 0.0;
     }
-    let mut radii: Vec<f64> = balls.iter().map(|b| b.1).collect();
-    radii.sort_by(f64::total_cmp);
-    let cell = (2.0 * radii[radii.len() / 2]).max(1e-12);
-    let lo = balls
-        .iter()
-        .fold(DVec3::splat(f64::MAX), |l, b| l.min(b.0 - b.1));
-    let key = |p: DVec3| {
-        let q = ((p - lo) / cell).floor();
-        (q.x as i64, q.y as i64, q.z as i64)
-    };
-    let mut cells: std::collections::HashMap<(i64, i64, i64), Vec<u32>> =
-        std::collections::HashMap::new();
-    for (i, b) in balls.iter().enumerate() {
-        let a = key(b.0 - b.1);
-        let z = key(b.0 + b.1);
-        for x in a.0..=z.0 {
-            for y in a.1..=z.1 {
-                for w in a.2..=z.2 {
-                    cells.entry((x, y, w)).or_default().push(i as u32);
-                }
-            }
+    let top: Vec<usize> = tree.children(0).collect();
+    for (i, &a) in top.iter().enumerate() {
+        for &b in &top[i..] {
+            seeds.push((a, b));
         }
     }
-    cells
-        .par_iter()
-        .map(|(_, ids)| {
+    seeds
+        .into_par_iter()
+        .map(|seed| {
             let mut worst = 0.0f64;
-            for (a, &i) in ids.iter().enumerate() {
-                for &j in &ids[a + 1..] {
-                    let (ci, ri) = balls[i as usize];
-                    let (cj, rj) = balls[j as usize];
-                    worst = worst.max(ri + rj - (ci - cj).length());
+            let mut stack = vec![seed];
+            while let Some((a, b)) = stack.pop() {
+                if a == b {
+                    let ch: Vec<usize> = tree.children(a).collect();
+                    for (i, &x) in ch.iter().enumerate() {
+                        for &y in &ch[i..] {
+                            stack.push((x, y));
+                        }
+                    }
+                    continue;
+                }
+                if overlap(a, b) <= 0.0 {
+                    continue;
+                }
+                match (tree.is_leaf(a), tree.is_leaf(b)) {
+                    (true, true) => worst = worst.max(overlap(a, b)),
+                    (la, lb) => {
+                        // Descend the larger inner node.
+                        let split_a = !la && (lb || tree.r[a] >= tree.r[b]);
+                        if split_a {
+                            stack.extend(tree.children(a).map(|c| (c, b)));
+                        } else {
+                            stack.extend(tree.children(b).map(|c| (a, c)));
+                        }
+                    }
                 }
             }
             worst

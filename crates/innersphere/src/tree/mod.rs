@@ -152,11 +152,11 @@ impl SphereTree {
             if f <= i || f + c > n {
                 return bad(format!("node {i} has children out of range"));
             }
-            for ch in f..f + c {
-                if seen_as_child[ch] {
+            for (ch, seen) in seen_as_child.iter_mut().enumerate().skip(f).take(c) {
+                if *seen {
                     return bad(format!("node {ch} has two parents"));
                 }
-                seen_as_child[ch] = true;
+                *seen = true;
                 if self.parent[ch] as usize != i || self.depth[ch] != self.depth[i] + 1 {
                     return bad(format!("node {ch} disagrees with its parent {i}"));
                 }

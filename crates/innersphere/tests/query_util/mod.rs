@@ -65,9 +65,14 @@ pub fn box_tree(c: DVec3, half: DVec3, h: f64, fanout: u32) -> SphereTree {
 
 /// A ball.
 pub fn ball_tree(c: DVec3, r: f64, h: f64, fanout: u32) -> SphereTree {
-    analytic_tree(c - DVec3::splat(r), c + DVec3::splat(r), h, fanout, c, move |p| {
-        r - (p - c).length()
-    })
+    analytic_tree(
+        c - DVec3::splat(r),
+        c + DVec3::splat(r),
+        h,
+        fanout,
+        c,
+        move |p| r - (p - c).length(),
+    )
 }
 
 /// A torus around z.
@@ -85,10 +90,20 @@ pub fn trees() -> &'static [SphereTree] {
     static T: OnceLock<Vec<SphereTree>> = OnceLock::new();
     T.get_or_init(|| {
         vec![
-            box_tree(DVec3::new(0.3, -0.2, 0.1), DVec3::new(0.8, 0.5, 0.3), 0.1, 4),
+            box_tree(
+                DVec3::new(0.3, -0.2, 0.1),
+                DVec3::new(0.8, 0.5, 0.3),
+                0.1,
+                4,
+            ),
             ball_tree(DVec3::new(-0.2, 0.4, 0.0), 0.6, 0.1, 2),
             torus_tree(0.6, 0.22, 0.075, 8),
-            box_tree(DVec3::new(2.0, 1.0, -1.0), DVec3::new(0.3, 0.9, 0.4), 0.09, 3),
+            box_tree(
+                DVec3::new(2.0, 1.0, -1.0),
+                DVec3::new(0.3, 0.9, 0.4),
+                0.09,
+                3,
+            ),
         ]
     })
 }

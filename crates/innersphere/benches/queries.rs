@@ -19,7 +19,7 @@ use innersphere::build::{build_tree, BuildOptions, Resolution};
 use innersphere::query::{
     backtracking, contact, distance_traversal, multipoint, penetration, penetration_budgeted,
     proximity, ContactOptions, MultipointOptions, PairState, PenetrationOptions, Pose,
-    ProximityOptions,
+    ProximityOptions, Tracking,
 };
 use innersphere::tree::file;
 use innersphere::SphereTree;
@@ -277,7 +277,7 @@ fn main() {
             "penetration traversal",
             Box::new(|p, st| {
                 let o = PenetrationOptions {
-                    tracking: false,
+                    tracking: Tracking::Traversal,
                     ..Default::default()
                 };
                 let r = penetration(a, &id, b, p, st, &o);

@@ -5,7 +5,10 @@ use innersphere::progress::Silent;
 use std::time::Instant;
 
 fn main() {
-    let h: f64 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(0.01);
+    let h: f64 = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0.01);
     let half = DVec3::new(1.0, 0.7, 0.3);
     let grid = VoxelGrid::covering(-half, half, h).unwrap();
     let sdf = |p: DVec3| {
@@ -22,13 +25,43 @@ fn main() {
             dist.push(d);
         }
     }
-    let field = DistanceField { grid, inside, dist, method: InsideMethod::ClosedExact };
+    let field = DistanceField {
+        grid,
+        inside,
+        dist,
+        method: InsideMethod::ClosedExact,
+    };
     let t = Instant::now();
     let spheres = innersphere::packing::pack(&field, &Default::default(), None, &Silent);
-    println!("voxels {} spheres {} packing {:.2}s", field.inside.len(), spheres.len(), t.elapsed().as_secs_f64());
+    println!(
+        "voxels {} spheres {} packing {:.2}s",
+        field.inside.len(),
+        spheres.len(),
+        t.elapsed().as_secs_f64()
+    );
     let t = Instant::now();
-    let meta = innersphere::tree::TreeMeta { fanout: 4, voxel_size: h, min_radius: 0.0, mesh_volume: 1.0, center_of_mass: [0.0;3], bbox_min: [0.0;3], bbox_max: [0.0;3], coverage: 0.0, mesh_closed: true };
-    let (tree, stats) = innersphere::hierarchy::build(&spheres, &Default::default(), meta, &Silent).unwrap();
-    println!("nodes {} depth {} hierarchy {:.2}s {:?}", tree.len(), tree.max_depth(), t.elapsed().as_secs_f64(), stats);
-    println!("peak {:?} MB", innersphere::eval::sysinfo::peak_memory_bytes().map(|b| b >> 20));
+    let meta = innersphere::tree::TreeMeta {
+        fanout: 4,
+        voxel_size: h,
+        min_radius: 0.0,
+        mesh_volume: 1.0,
+        center_of_mass: [0.0; 3],
+        bbox_min: [0.0; 3],
+        bbox_max: [0.0; 3],
+        coverage: 0.0,
+        mesh_closed: true,
+    };
+    let (tree, stats) =
+        innersphere::hierarchy::build(&spheres, &Default::default(), meta, &Silent).unwrap();
+    println!(
+        "nodes {} depth {} hierarchy {:.2}s {:?}",
+        tree.len(),
+        tree.max_depth(),
+        t.elapsed().as_secs_f64(),
+        stats
+    );
+    println!(
+        "peak {:?} MB",
+        innersphere::eval::sysinfo::peak_memory_bytes().map(|b| b >> 20)
+    );
 }

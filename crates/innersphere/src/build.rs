@@ -121,7 +121,9 @@ pub fn validate_options(opts: &BuildOptions) -> Result<()> {
         )));
     }
     if opts.packing.max_spheres == 0 {
-        return Err(Error::InvalidOption("maximum sphere count must be at least 1".into()));
+        return Err(Error::InvalidOption(
+            "maximum sphere count must be at least 1".into(),
+        ));
     }
     let f = opts.hierarchy.fanout;
     if !(2..=hierarchy::bng::MAX_PROTOTYPES as u32).contains(&f) {
@@ -232,9 +234,9 @@ pub fn build_tree(
             hstats.fallback_splits
         ));
     }
-    let (min_r, max_r) = spheres
-        .iter()
-        .fold((f64::MAX, 0.0f64), |(a, b), s| (a.min(s.radius), b.max(s.radius)));
+    let (min_r, max_r) = spheres.iter().fold((f64::MAX, 0.0f64), |(a, b), s| {
+        (a.min(s.radius), b.max(s.radius))
+    });
     let report = BuildReport {
         spheres: spheres.len(),
         nodes: tree.len(),

@@ -156,11 +156,7 @@ pub fn molar(subdivisions: u32, phase: f64) -> Mesh {
         let (x, y, z) = (v.x, v.y, v.z);
         let az = y.atan2(x) + phase;
         // Crown: wide on top, with four cusps; root: narrower towards -z.
-        let width = if z > 0.0 {
-            5.0
-        } else {
-            5.0 * (1.0 + 0.45 * z)
-        };
+        let width = if z > 0.0 { 5.0 } else { 5.0 * (1.0 + 0.45 * z) };
         let height = if z > 0.0 { 4.0 } else { 12.0 };
         let cusps = if z > 0.2 {
             1.0 + 0.22 * (z - 0.2) * (2.0 * az).cos().powi(2) * (1.0 - (2.0 * az).sin().abs() * 0.3)

@@ -37,7 +37,11 @@ fn generated_meshes_build_valid_deterministic_trees() {
     ] {
         let a = build_and_check(&mesh, &opts(40));
         let (b, _) = build_tree(&mesh, &opts(40), &Silent).unwrap();
-        assert_eq!(file::to_bytes(&a), file::to_bytes(&b), "build is not deterministic");
+        assert_eq!(
+            file::to_bytes(&a),
+            file::to_bytes(&b),
+            "build is not deterministic"
+        );
     }
 }
 
@@ -62,7 +66,11 @@ fn open_meshes_build_with_a_warning_and_soups_are_errors() {
 
     let soup: Vec<[DVec3; 3]> = (0..50)
         .map(|i| {
-            let o = DVec3::new(i as f64 * 0.37 % 1.0, i as f64 * 0.61 % 1.0, i as f64 * 0.13 % 1.0);
+            let o = DVec3::new(
+                i as f64 * 0.37 % 1.0,
+                i as f64 * 0.61 % 1.0,
+                i as f64 * 0.13 % 1.0,
+            );
             [o, o + DVec3::X * 0.5, o + DVec3::Y * 0.5]
         })
         .collect();
@@ -78,11 +86,26 @@ fn bad_inputs_and_absurd_options_are_clear_errors() {
     nan.vertices[3].x = f64::NAN;
     assert!(build_tree(&nan, &opts(32), &Silent).is_err());
     for bad in [
-        BuildOptions { resolution: Resolution::Cells(1), ..Default::default() },
-        BuildOptions { resolution: Resolution::Cells(100_000), ..Default::default() },
-        BuildOptions { resolution: Resolution::VoxelSize(-1.0), ..Default::default() },
-        BuildOptions { resolution: Resolution::VoxelSize(f64::NAN), ..Default::default() },
-        BuildOptions { resolution: Resolution::VoxelSize(1e-9), ..Default::default() },
+        BuildOptions {
+            resolution: Resolution::Cells(1),
+            ..Default::default()
+        },
+        BuildOptions {
+            resolution: Resolution::Cells(100_000),
+            ..Default::default()
+        },
+        BuildOptions {
+            resolution: Resolution::VoxelSize(-1.0),
+            ..Default::default()
+        },
+        BuildOptions {
+            resolution: Resolution::VoxelSize(f64::NAN),
+            ..Default::default()
+        },
+        BuildOptions {
+            resolution: Resolution::VoxelSize(1e-9),
+            ..Default::default()
+        },
     ] {
         assert!(build_tree(&mesh, &bad, &Silent).is_err());
     }
@@ -94,7 +117,10 @@ fn bad_inputs_and_absurd_options_are_clear_errors() {
     assert!(build_tree(&mesh, &o, &Silent).is_err());
     let mut o = opts(32);
     o.packing.min_radius = 10.0;
-    assert!(build_tree(&mesh, &o, &Silent).is_err(), "no sphere fits: error, not an empty tree");
+    assert!(
+        build_tree(&mesh, &o, &Silent).is_err(),
+        "no sphere fits: error, not an empty tree"
+    );
 }
 
 proptest! {

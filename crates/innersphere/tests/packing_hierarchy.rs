@@ -70,7 +70,11 @@ fn assert_packing_invariants(spheres: &[Sphere], sdf: &dyn Fn(DVec3) -> f64) {
 
 fn assert_tree_invariants(tree: &SphereTree, spheres: &[Sphere]) {
     tree.validate_structure().unwrap();
-    assert_eq!(tree.leaf_count(), spheres.len(), "every leaf holds exactly one sphere");
+    assert_eq!(
+        tree.leaf_count(),
+        spheres.len(),
+        "every leaf holds exactly one sphere"
+    );
     for n in 0..tree.len() {
         let (cp, rp) = tree.sphere(n);
         for ch in tree.children(n) {
@@ -157,7 +161,11 @@ fn hierarchy_is_deterministic_and_round_trips_through_the_file_format() {
         let (a, _) = hierarchy::build(&spheres, &opts, meta(), &Silent).unwrap();
         let (b, _) = hierarchy::build(&spheres, &opts, meta(), &Silent).unwrap();
         let bytes = file::to_bytes(&a);
-        assert_eq!(bytes, file::to_bytes(&b), "fanout {fanout}: not deterministic");
+        assert_eq!(
+            bytes,
+            file::to_bytes(&b),
+            "fanout {fanout}: not deterministic"
+        );
         assert!(a.child_count.iter().all(|&c| c as u32 <= fanout));
         assert_tree_invariants(&a, &spheres);
         let back = file::from_bytes(&bytes).unwrap();
@@ -176,7 +184,10 @@ fn corrupt_tree_files_are_errors() {
     let bytes = file::to_bytes(&tree);
     // Every truncation.
     for len in (0..bytes.len()).step_by(7) {
-        assert!(file::from_bytes(&bytes[..len]).is_err(), "truncated to {len}");
+        assert!(
+            file::from_bytes(&bytes[..len]).is_err(),
+            "truncated to {len}"
+        );
     }
     // Every single-byte flip is caught (checksum, magic or size).
     for pos in (0..bytes.len()).step_by(5) {

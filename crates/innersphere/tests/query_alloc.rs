@@ -8,6 +8,7 @@ use glam::DVec3;
 use innersphere::query::{
     backtracking, contact, distance_traversal, multipoint, penetration, penetration_budgeted,
     proximity, ContactOptions, MultipointOptions, PairState, PenetrationOptions, ProximityOptions,
+    Tracking,
 };
 use query_util::*;
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -145,7 +146,7 @@ fn run_all(
             s6,
             &PenetrationOptions {
                 safe_motion: false,
-                tracking: false,
+                tracking: Tracking::Traversal,
                 ..Default::default()
             },
         );

@@ -4,7 +4,9 @@
 mod query_util;
 
 use glam::DVec3;
-use innersphere::query::{brute, penetration, penetration_budgeted, PairState, PenetrationOptions};
+use innersphere::query::{
+    brute, penetration, penetration_budgeted, PairState, PenetrationOptions, Tracking,
+};
 use proptest::prelude::*;
 use query_util::*;
 
@@ -30,7 +32,7 @@ proptest! {
         stiffness in 0.1..1000.0f64,
         max_patches in 0usize..6,
         patch_radius in prop_oneof![Just(0.0), 0.05..1.0f64],
-        tracking in any::<bool>(),
+        tracking in prop_oneof![Just(Tracking::Auto), Just(Tracking::Front), Just(Tracking::Traversal)],
     ) {
         let t = trees();
         let (a, b) = (&t[ia], &t[ib]);
@@ -85,7 +87,7 @@ proptest! {
         let scale = (a.r[0] + b.r[0]) as f64;
         let (pa, pb) = pair_poses(a, b, Default::default(), quat(qb[0], qb[1], qb[2], qb[3]), off * 0.8 * scale);
         let mut st = PairState::new(a, b);
-        let exact = penetration(a, &pa, b, &pb, &mut st, &PenetrationOptions { safe_motion: false, tracking: false, ..Default::default() }).volume;
+        let exact = penetration(a, &pa, b, &pb, &mut st, &PenetrationOptions { safe_motion: false, tracking: Tracking::Traversal, ..Default::default() }).volume;
         let tol = 1e-9 * exact + 1e-15;
         let mut last_visits = 0;
         for budget in [0u64, 1, 5, 20, 100, 400, 2000, 10_000, u64::MAX] {
@@ -119,8 +121,8 @@ proptest! {
         let frames = motion(a, b, dir, side, axis, spin, 120);
         let mut tracked = PairState::new(a, b);
         let mut plain = PairState::new(a, b);
-        let topt = PenetrationOptions { tracking: true, ..Default::default() };
-        let popt = PenetrationOptions { tracking: false, safe_motion: false, ..Default::default() };
+        let topt = PenetrationOptions { tracking: Tracking::Front, ..Default::default() };
+        let popt = PenetrationOptions { tracking: Tracking::Traversal, safe_motion: false, ..Default::default() };
         for (f, (pa, pb)) in frames.iter().enumerate() {
             let q = penetration(a, pa, b, pb, &mut tracked, &topt);
             let (qv, qp, qf) = (q.volume, q.pairs, q.force);

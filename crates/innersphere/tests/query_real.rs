@@ -11,7 +11,7 @@ use innersphere::progress::Silent;
 use innersphere::query::{
     backtracking, brute, contact, distance_traversal, multipoint, penetration,
     penetration_budgeted, proximity, ContactOptions, MultipointOptions, PairState,
-    PenetrationOptions, Pose, ProximityOptions,
+    PenetrationOptions, Pose, ProximityOptions, Tracking,
 };
 use innersphere::SphereTree;
 use query_util::{close, motion, pair_poses};
@@ -65,7 +65,7 @@ fn check_pose(a: &SphereTree, b: &SphereTree, pa: &Pose, pb: &Pose, st: &mut [Pa
         &PenetrationOptions {
             stiffness: 2.0,
             safe_motion: false,
-            tracking: false,
+            tracking: Tracking::Traversal,
             ..Default::default()
         },
     );

@@ -7,7 +7,7 @@ mod query_util;
 use glam::DVec3;
 use innersphere::query::{
     backtracking, brute, contact, distance_traversal, multipoint, penetration, proximity,
-    ContactOptions, MultipointOptions, PairState, PenetrationOptions, ProximityOptions,
+    ContactOptions, MultipointOptions, PairState, PenetrationOptions, ProximityOptions, Tracking,
 };
 use proptest::prelude::*;
 use query_util::*;
@@ -63,7 +63,7 @@ proptest! {
             prop_assert_eq!(distance_traversal(a, pa, b, pb, &mut s_dt, &on).in_contact(), truth, "distance traversal, frame {}", f);
             let m = multipoint(a, pa, b, pb, &mut s_mp, &MultipointOptions { k: 3, split_depth: 2, ..Default::default() });
             prop_assert_eq!(!m.contacts.is_empty(), truth, "multipoint, frame {}", f);
-            let p = penetration(a, pa, b, pb, &mut s_pen, &PenetrationOptions { tracking: false, ..Default::default() });
+            let p = penetration(a, pa, b, pb, &mut s_pen, &PenetrationOptions { tracking: Tracking::Traversal, ..Default::default() });
             prop_assert_eq!(p.pairs > 0, truth, "penetration, frame {}", f);
             if p.skipped {
                 prop_assert!(p.distance > 0.0 && p.distance <= bd);
@@ -105,7 +105,7 @@ fn root_spheres_reject_far_pairs() {
         &mut st,
         &PenetrationOptions {
             safe_motion: false,
-            tracking: false,
+            tracking: Tracking::Traversal,
             ..Default::default()
         },
     );

@@ -1,5 +1,5 @@
 //! Evaluation: the demo, build benchmarks, replay of motions (later: the paper's figures).
 
-pub mod demo;
 pub mod bench;
+pub mod demo;
 pub mod sysinfo;

@@ -26,7 +26,9 @@ impl VoxelGrid {
             )));
         }
         if !(lo.is_finite() && hi.is_finite()) || hi.cmplt(lo).any() {
-            return Err(crate::Error::InvalidMesh("empty or non-finite bounding box".into()));
+            return Err(crate::Error::InvalidMesh(
+                "empty or non-finite bounding box".into(),
+            ));
         }
         let ext = hi - lo;
         let mut dims = [0u32; 3];

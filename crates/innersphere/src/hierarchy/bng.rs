@@ -39,11 +39,10 @@ pub const MAX_PROTOTYPES: usize = 32;
 pub fn cluster(points: &[DVec3], weights: &[f64], n: usize, opts: &BngOptions) -> Vec<u8> {
     let n = n.clamp(1, MAX_PROTOTYPES).min(points.len().max(1));
     let mut protos = initial_prototypes(points, n);
-    let (lo, hi) = points
-        .iter()
-        .fold((DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)), |(l, h), p| {
-            (l.min(*p), h.max(*p))
-        });
+    let (lo, hi) = points.iter().fold(
+        (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
+        |(l, h), p| (l.min(*p), h.max(*p)),
+    );
     let extent = (hi - lo).max_element().max(1e-300);
     let lambda0 = n as f64 / 2.0;
     let lambda_end = 0.01f64;
@@ -135,7 +134,10 @@ fn initial_prototypes(points: &[DVec3], n: usize) -> Vec<DVec3> {
         }
     }
     let mut protos = vec![points[first]];
-    let mut min_d: Vec<f64> = points.iter().map(|p| p.distance_squared(protos[0])).collect();
+    let mut min_d: Vec<f64> = points
+        .iter()
+        .map(|p| p.distance_squared(protos[0]))
+        .collect();
     while protos.len() < n {
         let mut best = 0;
         let mut best_d = -1.0;

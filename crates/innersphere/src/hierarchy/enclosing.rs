@@ -128,7 +128,10 @@ fn reach(c: DVec3, b: &Ball) -> f64 {
 /// returned with its support (indices into `set`).
 fn smallest_over_subsets(set: &[Ball], scratch: &mut Vec<Ball>) -> (Ball, Vec<usize>) {
     let n = set.len();
-    let scale = set.iter().map(|b| b.0.abs().max_element() + b.1).fold(1e-300, f64::max);
+    let scale = set
+        .iter()
+        .map(|b| b.0.abs().max_element() + b.1)
+        .fold(1e-300, f64::max);
     let tol = 1e-10 * scale;
     let mut best: Option<(Ball, u32)> = None;
     let mut subset = [(DVec3::ZERO, 0.0); 4];
@@ -154,13 +157,13 @@ fn smallest_over_subsets(set: &[Ball], scratch: &mut Vec<Ball>) -> (Ball, Vec<us
         }
     }
     best.map(|(b, mask)| (b, (0..n).filter(|i| mask & (1 << i) != 0).collect()))
-    .unwrap_or_else(|| {
-        // Cannot happen for a non-empty set (the largest ball's own candidate set includes a
-        // valid 2-ball solution); fall back to centroid + farthest reach.
-        let c = set.iter().map(|b| b.0).sum::<DVec3>() / n.max(1) as f64;
-        let r = set.iter().map(|b| reach(c, b)).fold(0.0, f64::max);
-        ((c, r), (0..n).collect())
-    })
+        .unwrap_or_else(|| {
+            // Cannot happen for a non-empty set (the largest ball's own candidate set includes a
+            // valid 2-ball solution); fall back to centroid + farthest reach.
+            let c = set.iter().map(|b| b.0).sum::<DVec3>() / n.max(1) as f64;
+            let r = set.iter().map(|b| reach(c, b)).fold(0.0, f64::max);
+            ((c, r), (0..n).collect())
+        })
 }
 
 /// Minimal enclosing ball of `balls` (non-empty). The result encloses every ball exactly in
@@ -174,7 +177,10 @@ pub fn enclose(balls: &[Ball]) -> Ball {
         .unwrap_or(0);
     let mut support: Vec<Ball> = vec![balls[first]];
     let mut ball = balls[first];
-    let scale = balls.iter().map(|b| b.0.abs().max_element() + b.1).fold(1e-300, f64::max);
+    let scale = balls
+        .iter()
+        .map(|b| b.0.abs().max_element() + b.1)
+        .fold(1e-300, f64::max);
     let tol = 1e-12 * scale;
     for _ in 0..64 {
         // The ball that sticks out farthest.
@@ -182,7 +188,10 @@ pub fn enclose(balls: &[Ball]) -> Ball {
             .iter()
             .enumerate()
             .map(|(i, b)| (i, reach(ball.0, b) - ball.1))
-            .fold((usize::MAX, tol), |acc, x| if x.1 > acc.1 { x } else { acc });
+            .fold(
+                (usize::MAX, tol),
+                |acc, x| if x.1 > acc.1 { x } else { acc },
+            );
         if worst == usize::MAX {
             break;
         }
@@ -213,12 +222,7 @@ mod tests {
     use proptest::prelude::*;
 
     fn ball() -> impl Strategy<Value = Ball> {
-        (
-            -10.0..10.0f64,
-            -10.0..10.0f64,
-            -10.0..10.0f64,
-            0.0..3.0f64,
-        )
+        (-10.0..10.0f64, -10.0..10.0f64, -10.0..10.0f64, 0.0..3.0f64)
             .prop_map(|(x, y, z, r)| (DVec3::new(x, y, z), r))
     }
 

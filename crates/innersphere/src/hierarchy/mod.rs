@@ -75,7 +75,10 @@ pub fn build(
     }
     progress.start("clustering (BNG)", spheres.len() as u64);
     // Leaf balls rounded to f32 conservatively first; all enclosing happens on those.
-    let leaves: Vec<Ball> = spheres.iter().map(|s| round_leaf(s.center, s.radius)).collect();
+    let leaves: Vec<Ball> = spheres
+        .iter()
+        .map(|s| round_leaf(s.center, s.radius))
+        .collect();
     let mut idx: Vec<u32> = (0..spheres.len() as u32).collect();
     let fallbacks = std::sync::atomic::AtomicUsize::new(0);
     let root = split(&leaves, &mut idx, opts, progress, &fallbacks, 0);
@@ -145,7 +148,10 @@ fn split(
         bounds.extend(0..=idx.len());
     } else {
         let points: Vec<DVec3> = idx.iter().map(|&i| leaves[i as usize].0).collect();
-        let weights: Vec<f64> = idx.iter().map(|&i| leaves[i as usize].1.powi(3).max(1e-300)).collect();
+        let weights: Vec<f64> = idx
+            .iter()
+            .map(|&i| leaves[i as usize].1.powi(3).max(1e-300))
+            .collect();
         let labels = bng::cluster(&points, &weights, k, &opts.bng);
         let mut order: Vec<(u8, u32)> = labels.iter().copied().zip(idx.iter().copied()).collect();
         order.sort_by_key(|&(l, _)| l); // stable: keeps the input order within a group

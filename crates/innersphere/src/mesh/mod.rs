@@ -12,8 +12,6 @@ pub use report::MeshReport;
 
 use glam::DVec3;
 
-
-
 /// An indexed triangle mesh in f64, with duplicate vertices welded.
 ///
 /// Triangles are counter-clockwise seen from outside when the mesh is outward facing.
@@ -119,7 +117,9 @@ impl Mesh {
     /// Checks that the mesh can be used at all: not empty, finite coordinates, valid indices.
     pub fn validate(&self) -> crate::Result<()> {
         if self.triangles.is_empty() {
-            return Err(crate::Error::InvalidMesh("the mesh has no triangles".into()));
+            return Err(crate::Error::InvalidMesh(
+                "the mesh has no triangles".into(),
+            ));
         }
         if let Some(i) = self.vertices.iter().position(|v| !v.is_finite()) {
             return Err(crate::Error::InvalidMesh(format!(
@@ -128,7 +128,11 @@ impl Mesh {
             )));
         }
         let n = self.vertices.len() as u32;
-        if let Some(t) = self.triangles.iter().position(|t| t.iter().any(|&i| i >= n)) {
+        if let Some(t) = self
+            .triangles
+            .iter()
+            .position(|t| t.iter().any(|&i| i >= n))
+        {
             return Err(crate::Error::InvalidMesh(format!(
                 "triangle {t} refers to a vertex that does not exist"
             )));

@@ -97,7 +97,9 @@ pub fn pack(
     let dims = grid.dims;
     let mut covered_since_report = 0u64;
     let mut refiner = match surface {
-        Some(bvh) if opts.refine_steps > 0 => Some(refine::Refiner::new(grid, bvh, opts.refine_steps)),
+        Some(bvh) if opts.refine_steps > 0 => {
+            Some(refine::Refiner::new(grid, bvh, opts.refine_steps))
+        }
         _ => None,
     };
     while let Some(Entry { value, cell }) = heap.pop() {
@@ -128,7 +130,11 @@ pub fn pack(
         // The sphere may sit off the voxel grid: measure from its real centre. The popped
         // voxel is always covered (refinement keeps it inside the sphere).
         let fc = (center - grid.origin) / h;
-        let (ci, cj, ck) = (fc.x.round() as u32, fc.y.round() as u32, fc.z.round() as u32);
+        let (ci, cj, ck) = (
+            fc.x.round() as u32,
+            fc.y.round() as u32,
+            fc.z.round() as u32,
+        );
 
         // Visit the cells within 2·radius of the centre, row by row.
         let reach = 2.0 * radius;

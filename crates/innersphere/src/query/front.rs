@@ -37,13 +37,15 @@ struct Slot {
 }
 
 const NIL: u32 = u32::MAX;
-/// Buckets per level of the bucket queue.
+/// Fine buckets per block (the fine level holds the current block).
+const FINE: i64 = 32;
+/// Coarse buckets (one block each).
 const RING: i64 = 1024;
 
 /// A two-level bucket queue of separated pairs by expiry (linked lists in one slab). Fine
-/// buckets of width `width` hold the current block of `RING` fine buckets; coarse buckets
+/// buckets of width `width` hold the current block of `FINE` fine buckets; coarse buckets
 /// (one block each) hold the next `RING − 1` blocks and move into the fine level when their
-/// block begins; anything beyond sits in a far list, re-sorted when the coarse level has
+/// block begins (small blocks, so that this never moves much of the front at once); anything beyond sits in a far list, re-sorted when the coarse level has
 /// advanced by half a ring. Push and pop are O(1); no allocation once the slab has grown to
 /// the front's size.
 #[derive(Debug)]
@@ -64,7 +66,7 @@ impl Buckets {
         Buckets {
             slab: Vec::with_capacity(n),
             free: NIL,
-            fine: vec![NIL; RING as usize],
+            fine: vec![NIL; FINE as usize],
             coarse: vec![NIL; RING as usize],
             far: NIL,
             cur: 0,
@@ -94,10 +96,10 @@ impl Buckets {
     #[inline]
     fn link(&mut self, slot: u32, k: i64) {
         let k = k.max(self.cur);
-        let block = self.cur.div_euclid(RING);
-        let kb = k.div_euclid(RING);
+        let block = self.cur.div_euclid(FINE);
+        let kb = k.div_euclid(FINE);
         let head = if kb == block {
-            &mut self.fine[k.rem_euclid(RING) as usize]
+            &mut self.fine[k.rem_euclid(FINE) as usize]
         } else if kb < block + RING {
             &mut self.coarse[kb.rem_euclid(RING) as usize]
         } else {
@@ -137,7 +139,7 @@ impl Buckets {
     fn drain_expired(&mut self, moved: f64, out: &mut Vec<Sep>) {
         let last = self.bucket(moved);
         loop {
-            let i = self.cur.rem_euclid(RING) as usize;
+            let i = self.cur.rem_euclid(FINE) as usize;
             let mut s = std::mem::replace(&mut self.fine[i], NIL);
             while s != NIL {
                 let next = self.slab[s as usize].next;
@@ -158,9 +160,9 @@ impl Buckets {
                 break;
             }
             self.cur += 1;
-            if self.cur.rem_euclid(RING) == 0 {
+            if self.cur.rem_euclid(FINE) == 0 {
                 // A new block: its coarse bucket moves into the fine level.
-                let block = self.cur.div_euclid(RING);
+                let block = self.cur.div_euclid(FINE);
                 let c = std::mem::replace(&mut self.coarse[block.rem_euclid(RING) as usize], NIL);
                 self.relink_list(c);
                 if block.rem_euclid(RING / 2) == 0 {
@@ -175,24 +177,24 @@ impl Buckets {
     /// also holds entries pushed already due), bucket starts beyond it.
     fn min_bound(&self) -> f64 {
         let mut m = f64::INFINITY;
-        let mut s = self.fine[self.cur.rem_euclid(RING) as usize];
+        let mut s = self.fine[self.cur.rem_euclid(FINE) as usize];
         while s != NIL {
             m = m.min(self.slab[s as usize].sep.expiry);
             s = self.slab[s as usize].next;
         }
-        let block = self.cur.div_euclid(RING);
-        for k in self.cur + 1..(block + 1) * RING {
-            if self.fine[k.rem_euclid(RING) as usize] != NIL {
+        let block = self.cur.div_euclid(FINE);
+        for k in self.cur + 1..(block + 1) * FINE {
+            if self.fine[k.rem_euclid(FINE) as usize] != NIL {
                 return m.min(k as f64 * self.width);
             }
         }
         for kb in block + 1..block + RING {
             if self.coarse[kb.rem_euclid(RING) as usize] != NIL {
-                return m.min((kb * RING) as f64 * self.width);
+                return m.min((kb * FINE) as f64 * self.width);
             }
         }
         if self.far != NIL {
-            m = m.min(((block + RING) * RING) as f64 * self.width);
+            m = m.min(((block + RING) * FINE) as f64 * self.width);
         }
         m
     }

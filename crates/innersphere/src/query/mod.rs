@@ -21,8 +21,8 @@
 //! | penetration volume, force, torque, patches | [`penetration`] | exact volume of the intersection of the sphere unions |
 //! | time-critical penetration volume | [`penetration_budgeted`] | volume found so far and an upper bound |
 //!
-//! Kinetic front tracking (ours; [`contact`], [`penetration`] by default, [`multipoint`] with
-//! `tracking`): the frontier of the overlap traversal is kept from frame to frame and each
+//! Kinetic front tracking (ours; [`contact`], [`penetration`] with [`Tracking`] (automatic
+//! by tree size), [`multipoint`] with `tracking`): the frontier of the overlap traversal is kept from frame to frame and each
 //! separated node pair on it is re-tested only once the relative motion since its last test
 //! could have closed its separation; its hits are exactly the overlapping leaf pairs.
 //!
@@ -49,6 +49,7 @@ pub use info::TreeInfo;
 pub use parse::parse_pose;
 pub use penetration::{
     penetration, penetration_budgeted, BudgetedVolume, Patch, Penetration, PenetrationOptions,
+    Tracking, AUTO_FRONT_NODES,
 };
 pub use pose::Pose;
 pub use proximity::{proximity, Proximity, ProximityOptions};

@@ -24,12 +24,8 @@ pub struct PenetrationOptions {
     /// Skip (answer "no penetration") while the last proved separation holds (traversal
     /// only; the front needs no skip).
     pub safe_motion: bool,
-    /// `true` (default): take the overlapping leaf pairs from the kinetic front, re-testing
-    /// only what the motion since the last query could change. `false`: a depth-first
-    /// traversal from the roots every query. Same result. The front tests far fewer node
-    /// pairs, but each test is a cache miss: on the jaw pair it is 4–6× faster with trees of
-    /// 30k–100k leaves and no better with 500k (see the benchmark).
-    pub tracking: bool,
+    /// Where the overlapping leaf pairs come from (default [`Tracking::Auto`]).
+    pub tracking: Tracking,
 }
 
 impl Default for PenetrationOptions {
@@ -39,10 +35,29 @@ impl Default for PenetrationOptions {
             max_patches: 8,
             patch_radius: 0.0,
             safe_motion: true,
-            tracking: true,
+            tracking: Tracking::Auto,
         }
     }
 }
+
+/// How [`penetration`] finds the overlapping leaf pairs. Same result either way.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Tracking {
+    /// The front for trees of up to [`AUTO_FRONT_NODES`] nodes together, else the traversal.
+    #[default]
+    Auto,
+    /// The kinetic front (ours): re-test only what the motion since the last query could
+    /// change. Far fewer node-pair tests, but each is a likely cache miss.
+    Front,
+    /// A depth-first traversal from the roots every query (larger sphere refined first).
+    Traversal,
+}
+
+/// [`Tracking::Auto`] uses the front up to this many nodes in both trees together: on the
+/// jaw pair the front is 3–6× faster than the traversal with trees of 30k–100k leaves
+/// (≈ 80k–300k nodes together) and slower with 570k (1.7M nodes), where its scattered
+/// memory accesses dominate.
+pub const AUTO_FRONT_NODES: usize = 1_000_000;
 
 /// A cluster of overlapping leaf pairs (world frame).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -222,7 +237,12 @@ pub fn penetration<'s>(
     let mut min_sep = f32::INFINITY;
     let mut sums = Sums::default();
     let mut skipped = false;
-    let safe = if opts.safe_motion && !opts.tracking {
+    let front = match opts.tracking {
+        Tracking::Front => true,
+        Tracking::Traversal => false,
+        Tracking::Auto => ia.nodes + ib.nodes <= AUTO_FRONT_NODES,
+    };
+    let safe = if opts.safe_motion && !front {
         safe_separation(ia, ib, s.separation, &ctx.rel).filter(|&d| d > 0.0)
     } else {
         None
@@ -244,7 +264,7 @@ pub fn penetration<'s>(
         };
         let maxp = opts.max_patches;
         let (na, nb) = (ctx.a, ctx.b);
-        if opts.tracking {
+        if front {
             visits = s.front.update(&ctx, ib);
             for h in &s.front.hits {
                 let n = &na[h.a as usize];

@@ -116,6 +116,14 @@ mod tests {
         let via = a.inverse().transform_point(b.transform_point(p));
         assert!((rel.transform_point(p) - via).length() < 1e-12);
         assert!(Pose::from_array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).is_none());
-        assert!((Pose::from_array([0.0; 7].map(|_| 1.0)).unwrap().rotation.length() - 1.0).abs() < 1e-12);
+        assert!(
+            (Pose::from_array([0.0; 7].map(|_| 1.0))
+                .unwrap()
+                .rotation
+                .length()
+                - 1.0)
+                .abs()
+                < 1e-12
+        );
     }
 }

@@ -33,7 +33,10 @@ pub fn write_csv(tree: &SphereTree, which: Which, out: &mut dyn Write) -> std::i
 /// Writes an ASCII PLY point cloud with `radius` and `depth` vertex properties.
 pub fn write_ply(tree: &SphereTree, which: Which, out: &mut dyn Write) -> std::io::Result<()> {
     let count = nodes(tree, which).count();
-    writeln!(out, "ply\nformat ascii 1.0\ncomment innersphere inner spheres")?;
+    writeln!(
+        out,
+        "ply\nformat ascii 1.0\ncomment innersphere inner spheres"
+    )?;
     writeln!(out, "element vertex {count}")?;
     writeln!(
         out,

@@ -65,7 +65,10 @@ pub fn to_bytes(tree: &SphereTree) -> Vec<u8> {
 pub fn from_bytes(bytes: &[u8]) -> Result<SphereTree> {
     let bad = |m: String| Err(Error::CorruptTree(m));
     if bytes.len() < HEADER + 4 {
-        return bad(format!("file too short ({} bytes) to be a tree file", bytes.len()));
+        return bad(format!(
+            "file too short ({} bytes) to be a tree file",
+            bytes.len()
+        ));
     }
     if bytes[..8] != MAGIC {
         return bad("not an innersphere tree file (wrong magic number)".into());

@@ -285,7 +285,7 @@ fn main() {
             }),
         ),
         (
-            "penetration front (default)",
+            "penetration (default: auto)",
             Box::new(|p, st| {
                 let r = penetration(a, &id, b, p, st, &PenetrationOptions::default());
                 (r.pairs > 0, r.visits)

@@ -42,6 +42,13 @@ enum Command {
 }
 
 fn main() {
+    // Die quietly like other Unix tools when the reader of our output goes away
+    // (`ist export ... | head`), instead of panicking on a broken pipe.
+    #[cfg(unix)]
+    // SAFETY: restoring the default disposition of SIGPIPE before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(a) => demo::run(a),

@@ -1,6 +1,6 @@
 //! Times packing and hierarchy on an analytic field (a wavy slab) with millions of voxels.
 use glam::DVec3;
-use innersphere::field::{DistanceField, InsideMethod, VoxelGrid};
+use innersphere::field::{DistanceField, VoxelGrid};
 use innersphere::progress::Silent;
 use std::time::Instant;
 
@@ -16,21 +16,7 @@ fn main() {
         let wave = 0.05 * (p.x * 40.0).sin() * (p.y * 30.0).cos();
         (half - p.abs()).min_element().min(half.z - wave - p.z)
     };
-    let mut inside = Vec::new();
-    let mut dist = Vec::new();
-    for idx in 0..grid.len() {
-        let d = sdf(grid.center_of(idx));
-        if d > 0.0 {
-            inside.push(idx as u32);
-            dist.push(d);
-        }
-    }
-    let field = DistanceField {
-        grid,
-        inside,
-        dist,
-        method: InsideMethod::ClosedExact,
-    };
+    let field = DistanceField::from_signed_distance(grid, sdf);
     let t = Instant::now();
     let spheres = innersphere::packing::pack(&field, &Default::default(), None, &Silent);
     println!(

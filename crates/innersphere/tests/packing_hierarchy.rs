@@ -2,7 +2,7 @@
 //! they are tested independently of the mesh pipeline.
 
 use glam::DVec3;
-use innersphere::field::{DistanceField, InsideMethod, VoxelGrid};
+use innersphere::field::{DistanceField, VoxelGrid};
 use innersphere::hierarchy::{self, HierarchyOptions};
 use innersphere::packing::{self, PackingOptions, Sphere};
 use innersphere::progress::Silent;
@@ -12,21 +12,7 @@ use proptest::prelude::*;
 /// The distance field of an analytic solid given by its signed distance (positive inside).
 fn analytic_field(lo: DVec3, hi: DVec3, h: f64, sdf: impl Fn(DVec3) -> f64) -> DistanceField {
     let grid = VoxelGrid::covering(lo, hi, h).unwrap();
-    let mut inside = Vec::new();
-    let mut dist = Vec::new();
-    for idx in 0..grid.len() {
-        let d = sdf(grid.center_of(idx));
-        if d > 0.0 {
-            inside.push(idx as u32);
-            dist.push(d);
-        }
-    }
-    DistanceField {
-        grid,
-        inside,
-        dist,
-        method: InsideMethod::ClosedExact,
-    }
+    DistanceField::from_signed_distance(grid, sdf)
 }
 
 fn box_sdf(half: DVec3) -> impl Fn(DVec3) -> f64 {

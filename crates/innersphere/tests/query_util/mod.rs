@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use glam::{DQuat, DVec3};
-use innersphere::field::{DistanceField, InsideMethod, VoxelGrid};
+use innersphere::field::{DistanceField, VoxelGrid};
 use innersphere::hierarchy::{self, HierarchyOptions};
 use innersphere::packing::{self, PackingOptions};
 use innersphere::progress::Silent;
@@ -22,21 +22,7 @@ pub fn analytic_tree(
     sdf: impl Fn(DVec3) -> f64,
 ) -> SphereTree {
     let grid = VoxelGrid::covering(lo, hi, h).unwrap();
-    let mut inside = Vec::new();
-    let mut dist = Vec::new();
-    for idx in 0..grid.len() {
-        let d = sdf(grid.center_of(idx));
-        if d > 0.0 {
-            inside.push(idx as u32);
-            dist.push(d);
-        }
-    }
-    let field = DistanceField {
-        grid,
-        inside,
-        dist,
-        method: InsideMethod::ClosedExact,
-    };
+    let field = DistanceField::from_signed_distance(grid, sdf);
     let spheres = packing::pack(&field, &PackingOptions::default(), None, &Silent);
     let meta = TreeMeta {
         fanout,

@@ -10,6 +10,7 @@ mod inspect;
 mod motion;
 mod progress;
 mod query;
+mod replay;
 
 use clap::{Parser, Subcommand};
 
@@ -37,6 +38,9 @@ enum Command {
     Query(query::Args),
     /// Generate a hand-recorded-looking motion of body B against body A (a CSV at 1 kHz).
     Motion(motion::Args),
+    /// Replay a motion frame by frame as a haptic loop would: timings, and accuracy against
+    /// the exact mesh distance.
+    Replay(replay::Args),
     /// Benchmarks (build).
     Bench(bench::Args),
 }
@@ -58,6 +62,7 @@ fn main() {
         Command::Export(a) => export::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Motion(a) => motion::run(a),
+        Command::Replay(a) => replay::run(a),
         Command::Query(a) => query::run(a),
     };
     match result {

@@ -14,17 +14,31 @@ pub struct Args {
     /// Print JSON.
     #[arg(long)]
     json: bool,
+    /// Seconds of generated chewing motion to replay (0 = build only).
+    #[arg(long, default_value_t = 2.0)]
+    seconds: f64,
 }
 
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     let opts = args.opts.options();
     let bars = Bars::new(args.quiet || args.json);
+    anyhow::ensure!(
+        args.seconds.is_finite() && (0.0..=600.0).contains(&args.seconds),
+        "--seconds must be between 0 and 600"
+    );
     let pair = innersphere::eval::demo::build_pair(&opts, &bars)?;
+    let replay = if args.seconds > 0.0 {
+        Some(innersphere::eval::demo::replay_pair(&pair, args.seconds)?)
+    } else {
+        None
+    };
     if args.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&serde_json::json!({ "a": pair.a.2, "b": pair.b.2 }))?
+            serde_json::to_string_pretty(
+                &serde_json::json!({ "a": pair.a.2, "b": pair.b.2, "replay": replay })
+            )?
         );
         return Ok(0);
     }
@@ -36,6 +50,33 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             "| {name} | {} | {} | {} | {} | {} | {:.3} | {:.2} |",
             r.mesh.triangles, r.voxels_inside, r.spheres, r.nodes, r.depth, r.coverage, r.seconds
         );
+    }
+    if let Some(rep) = replay {
+        println!();
+        println!(
+            "replay of a generated {:.1} s chewing motion ({} frames at 1 kHz), one thread:",
+            args.seconds, rep.frames
+        );
+        println!("| query | sustained rate (1/p99) | p50 µs | p99 µs | worst frame µs | frames over 1 ms |");
+        println!("|---|---|---|---|---|---|");
+        for k in &rep.kinds {
+            println!(
+                "| {:?} | {:.0} Hz | {:.1} | {:.1} | {:.1} | {} |",
+                k.kind,
+                1e6 / k.p99_us.max(1e-3),
+                k.p50_us,
+                k.p99_us,
+                k.max_us,
+                k.frames_over_1ms
+            );
+        }
+        if let Some(acc) = &rep.accuracy {
+            println!(
+                "distance error against the exact mesh distance ({} separated frames): p50 {:.4}, p95 {:.4}, max {:.4}; missed contacts {} ({} deeper than 0.1), false contacts {}",
+                acc.separated_frames, acc.abs_err_p50, acc.abs_err_p95, acc.abs_err_max,
+                acc.missed_contacts, acc.missed_contacts_deep, acc.false_contacts
+            );
+        }
     }
     Ok(0)
 }

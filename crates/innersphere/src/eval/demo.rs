@@ -1,5 +1,6 @@
-//! The built-in demo: a generated pair of interlocking tooth-like bodies, their trees, and the
-//! facts of the build — runs on a fresh clone with no files.
+//! The built-in demo: a generated pair of interlocking tooth-like bodies, their trees, a
+//! generated chewing motion replayed frame by frame through every query kind — runs on a fresh
+//! clone with no files.
 
 use crate::build::{build_tree, BuildOptions, BuildReport};
 use crate::progress::Progress;
@@ -22,4 +23,29 @@ pub fn build_pair(opts: &BuildOptions, progress: &dyn Progress) -> Result<DemoPa
         a: (ma, ta, ra),
         b: (mb, tb, rb),
     })
+}
+
+/// Generates a chewing motion of `seconds` for the pair (seed 1) and replays it through every
+/// query kind, with the exact mesh distance as reference on every 10th frame.
+pub fn replay_pair(pair: &DemoPair, seconds: f64) -> Result<crate::eval::replay::ReplayReport> {
+    let motion = crate::motion::generate(
+        crate::motion::Scenario::Chew,
+        seconds,
+        1,
+        &pair.a.0,
+        &pair.b.0,
+    )?;
+    let ea = crate::exact::ExactMesh::new(&pair.a.0)?;
+    let eb = crate::exact::ExactMesh::new(&pair.b.0)?;
+    let opts = crate::eval::replay::ReplayOptions {
+        every: 10,
+        ..Default::default()
+    };
+    Ok(crate::eval::replay::replay(
+        &pair.a.1,
+        &pair.b.1,
+        &motion,
+        Some((&ea, &eb)),
+        &opts,
+    ))
 }

@@ -14,6 +14,12 @@ pub struct Args {
     /// Print JSON.
     #[arg(long)]
     json: bool,
+    /// Body A's mesh instead of the generated upper tooth (needs --b too).
+    #[arg(long, requires = "b")]
+    a: Option<std::path::PathBuf>,
+    /// Body B's mesh instead of the generated lower tooth (needs --a too).
+    #[arg(long, requires = "a")]
+    b: Option<std::path::PathBuf>,
     /// Seconds of generated chewing motion to replay (0 = build only).
     #[arg(long, default_value_t = 2.0)]
     seconds: f64,
@@ -27,7 +33,15 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         args.seconds.is_finite() && (0.0..=600.0).contains(&args.seconds),
         "--seconds must be between 0 and 600"
     );
-    let pair = innersphere::eval::demo::build_pair(&opts, &bars)?;
+    let pair = match (&args.a, &args.b) {
+        (Some(a), Some(b)) => innersphere::eval::demo::build_pair_from(
+            innersphere::mesh::io::load(a)?,
+            innersphere::mesh::io::load(b)?,
+            &opts,
+            &bars,
+        )?,
+        _ => innersphere::eval::demo::build_pair(&opts, &bars)?,
+    };
     let replay = if args.seconds > 0.0 {
         Some(innersphere::eval::demo::replay_pair(&pair, args.seconds)?)
     } else {
@@ -42,7 +56,14 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         );
         return Ok(0);
     }
-    println!("innersphere demo: two generated interlocking tooth-like bodies");
+    match (&args.a, &args.b) {
+        (Some(a), Some(b)) => println!(
+            "innersphere demo: {} (A) and {} (B)",
+            a.display(),
+            b.display()
+        ),
+        _ => println!("innersphere demo: two generated interlocking tooth-like bodies"),
+    }
     println!("| body | triangles | inside voxels | spheres | nodes | depth | coverage | build s |");
     println!("|---|---|---|---|---|---|---|---|");
     for (name, (_, _, r)) in [("A (upper)", &pair.a), ("B (lower)", &pair.b)] {

@@ -17,6 +17,16 @@ pub struct DemoPair {
 /// Generates the tooth pair (see [`crate::shapes::tooth_pair`]) and builds both trees.
 pub fn build_pair(opts: &BuildOptions, progress: &dyn Progress) -> Result<DemoPair> {
     let (ma, mb) = crate::shapes::tooth_pair(5);
+    build_pair_from(ma, mb, opts, progress)
+}
+
+/// Builds the trees of a given pair of meshes (A fixed, B moved by the motion).
+pub fn build_pair_from(
+    ma: Mesh,
+    mb: Mesh,
+    opts: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<DemoPair> {
     let (ta, ra) = build_tree(&ma, opts, progress)?;
     let (tb, rb) = build_tree(&mb, opts, progress)?;
     Ok(DemoPair {

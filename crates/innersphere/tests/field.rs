@@ -100,28 +100,7 @@ fn sphere(r: f64, n: usize) -> Mesh {
 
 /// A torus around z with major radius `big`, tube radius `small`.
 fn torus(big: f64, small: f64, nu: u32, nv: u32) -> Mesh {
-    let mut vertices = Vec::new();
-    for i in 0..nu {
-        let u = i as f64 / nu as f64 * std::f64::consts::TAU;
-        for j in 0..nv {
-            let v = j as f64 / nv as f64 * std::f64::consts::TAU;
-            let rr = big + small * v.cos();
-            vertices.push(DVec3::new(rr * u.cos(), rr * u.sin(), small * v.sin()));
-        }
-    }
-    let id = |i: u32, j: u32| (i % nu) * nv + (j % nv);
-    let mut triangles = Vec::new();
-    for i in 0..nu {
-        for j in 0..nv {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            triangles.push([a, b, c]);
-            triangles.push([a, c, d]);
-        }
-    }
-    Mesh {
-        vertices,
-        triangles,
-    }
+    innersphere::shapes::torus(big, small, nu, nv)
 }
 
 fn flipped(m: &Mesh) -> Mesh {

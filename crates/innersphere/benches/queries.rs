@@ -9,7 +9,10 @@
 //! median, p99, max and mean per query kind and phase (`jaw_chew_demo.phases.csv` labels
 //! every 5th frame; the frames in between take the label of the frame before).
 //!
-//! Environment: `QUERY_BENCH_TREES` (cache folder), `QUERY_BENCH_VOXEL` (voxel size, default 0.15), `QUERY_BENCH_REBUILD=1`
+//! Environment: `QUERY_BENCH_TREES` (cache folder), `QUERY_BENCH_VOXEL` (voxel size, default
+//! 0.15), `QUERY_BENCH_MIN_RADIUS` and `QUERY_BENCH_REFINE` (packing options, default 0),
+//! `QUERY_BENCH_MOTION` / `QUERY_BENCH_PHASES` (another motion and its labels, e.g. from
+//! `ist motion --labels`), `QUERY_BENCH_REBUILD=1`
 //! (rebuild cached trees), `QUERY_BENCH_PASSES` (timed passes over the motion, default 2),
 //! `QUERY_BENCH_ONLY` (comma-separated substrings of query names to run),
 //! `QUERY_BENCH_AGG=max` (per frame the worst instead of the best of the timed passes),
@@ -40,11 +43,32 @@ fn cache_dir() -> PathBuf {
         })
 }
 
+/// Build options of the benchmark trees: voxel size `h`, and the minimum radius and
+/// off-grid refinement steps from `QUERY_BENCH_MIN_RADIUS` / `QUERY_BENCH_REFINE`.
+fn options(h: f64) -> (BuildOptions, String) {
+    let env = |k: &str| std::env::var(k).ok().and_then(|s| s.parse::<f64>().ok());
+    let mr = env("QUERY_BENCH_MIN_RADIUS").unwrap_or(0.0);
+    let rs = env("QUERY_BENCH_REFINE").unwrap_or(0.0) as u32;
+    let mut o = BuildOptions {
+        resolution: Resolution::VoxelSize(h),
+        ..Default::default()
+    };
+    o.packing.min_radius = mr;
+    o.packing.refine_steps = rs;
+    let tag = if mr > 0.0 || rs > 0 {
+        format!("{h}_m{mr}_r{rs}")
+    } else {
+        format!("{h}")
+    };
+    (o, tag)
+}
+
 /// The tree of `mesh` at voxel size `h`, from the cache or built and cached.
 fn tree(mesh: &Path, name: &str, h: f64) -> SphereTree {
     let dir = cache_dir();
     std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(format!("{name}_{h}.ist"));
+    let (opts, tag) = options(h);
+    let path = dir.join(format!("{name}_{tag}.ist"));
     if path.is_file() && std::env::var_os("QUERY_BENCH_REBUILD").is_none() {
         if let Ok(t) = file::load(&path) {
             return t;
@@ -56,10 +80,6 @@ fn tree(mesh: &Path, name: &str, h: f64) -> SphereTree {
     );
     let t0 = Instant::now();
     let m = innersphere::mesh::io::load(mesh).unwrap();
-    let opts = BuildOptions {
-        resolution: Resolution::VoxelSize(h),
-        ..Default::default()
-    };
     let (t, _) = build_tree(&m, &opts, &innersphere::progress::Silent).unwrap();
     file::save(&t, &path).unwrap();
     eprintln!(
@@ -121,8 +141,12 @@ fn main() {
     let dir = data_dir();
     let fa = dir.join("jaw/ofj_p26_maxilla_teeth.stl.gz");
     let fb = dir.join("jaw/ofj_p26_mandible_teeth.stl.gz");
-    let fm = dir.join("motion/jaw_chew_demo.csv");
-    let fp = dir.join("motion/jaw_chew_demo.phases.csv");
+    let fm = std::env::var_os("QUERY_BENCH_MOTION")
+        .map_or_else(|| dir.join("motion/jaw_chew_demo.csv"), PathBuf::from);
+    let fp = std::env::var_os("QUERY_BENCH_PHASES").map_or_else(
+        || dir.join("motion/jaw_chew_demo.phases.csv"),
+        PathBuf::from,
+    );
     if !(fa.is_file() && fb.is_file() && fm.is_file()) {
         println!(
             "queries bench skipped: jaw data not found under {}",

@@ -33,6 +33,7 @@
 //! [`brute`] holds O(n·m) references over all leaf pairs that the tests compare against.
 
 pub mod brute;
+mod buckets;
 mod front;
 mod geometry;
 mod heap;

@@ -35,6 +35,9 @@ pub enum Error {
     /// A tree file that is truncated, corrupted or of another version.
     #[error("corrupt tree file: {0}")]
     CorruptTree(String),
+    /// An output (a chart, a report) that could not be produced.
+    #[error("cannot write output: {0}")]
+    Output(String),
     /// A motion file that cannot be used.
     #[error("{path}:{line}: {message}")]
     Motion {

@@ -1,0 +1,565 @@
+//! `ist bench paper`: the paper's evaluation (section IV) on a pair of meshes along a motion,
+//! with our queries beside the paper's: speed against leaf count (Fig. 6), against fan-out and
+//! depth at about 3k and 16k leaves (Figs. 7–8), distance error against leaf count (Fig. 9),
+//! backtracking against the full traversal while in contact, multipoint against `k`, and our
+//! exact proximity and penetration volume beside the paper's traversals and the exact mesh
+//! distance. Writes one CSV per figure and a PNG chart of each.
+
+use super::plot::{line_chart, Chart, Series};
+use super::replay::{replay, ReplayOptions};
+use crate::build::{build_tree, BuildOptions, Resolution};
+use crate::exact::{self, ExactMesh, ExactScratch};
+use crate::mesh::Mesh;
+use crate::motion::Motion;
+use crate::progress::Silent;
+use crate::query::{
+    backtracking, contact, distance_traversal, multipoint, penetration, proximity, ContactOptions,
+    MultipointOptions, PairState, PenetrationOptions, Pose, ProximityOptions,
+};
+use crate::{Error, Result, SphereTree};
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+/// What `ist bench paper` measures.
+#[derive(Debug, Clone)]
+pub struct PaperOptions {
+    /// Voxel sizes (model units) of the trees of the leaf-count sweep (Figs. 6 and 9).
+    pub voxel_sizes: Vec<f64>,
+    /// Fan-outs of the depth sweep (Figs. 7–8).
+    pub fanouts: Vec<u32>,
+    /// Leaf counts (per body, about) at which the fan-out sweep runs; the sweep's voxel size
+    /// with the nearest count is used.
+    pub fanout_leaves: Vec<usize>,
+    /// Contacts asked of multipoint.
+    pub ks: Vec<usize>,
+    /// Compare with the exact mesh distance on every `every`-th frame.
+    pub every: usize,
+    /// Build options of the main trees (backtracking, multipoint, ours vs paper).
+    pub main: BuildOptions,
+}
+
+impl PaperOptions {
+    /// Defaults for a pair whose larger bounding box has longest side `size`: voxel sizes
+    /// from size/48 to size/384, fan-outs 2–16 at about 3k and 16k leaves, k = 1–32, the exact
+    /// reference on every 10th frame, main trees at size/384.
+    pub fn for_size(size: f64) -> PaperOptions {
+        PaperOptions {
+            voxel_sizes: [48.0, 64.0, 96.0, 128.0, 192.0, 256.0, 384.0]
+                .iter()
+                .map(|d| size / d)
+                .collect(),
+            fanouts: vec![2, 4, 8, 16],
+            fanout_leaves: vec![3_000, 16_000],
+            ks: vec![1, 2, 4, 8, 16, 32],
+            every: 10,
+            main: BuildOptions {
+                resolution: Resolution::VoxelSize(size / 384.0),
+                ..Default::default()
+            },
+        }
+    }
+}
+
+/// Per-frame times (µs) of one query kind along the motion and whether it reported contact.
+struct Timed {
+    us: Vec<f64>,
+    contact: Vec<bool>,
+}
+
+/// Runs `f` over every frame twice through one state (the first pass warms caches and
+/// buffers; the state is reset before each pass) and keeps the second pass's times.
+fn time_frames<F: FnMut(&Pose, &mut PairState) -> bool>(
+    a: &SphereTree,
+    b: &SphereTree,
+    motion: &Motion,
+    mut f: F,
+) -> Timed {
+    let mut st = PairState::new(a, b);
+    let mut out = Timed {
+        us: vec![0.0; motion.frames.len()],
+        contact: vec![false; motion.frames.len()],
+    };
+    for pass in 0..2 {
+        st.reset();
+        for (i, fr) in motion.frames.iter().enumerate() {
+            let t0 = Instant::now();
+            let c = f(&fr.pose, &mut st);
+            let us = t0.elapsed().as_secs_f64() * 1e6;
+            if pass == 1 {
+                out.us[i] = us;
+                out.contact[i] = c;
+            }
+        }
+    }
+    out
+}
+
+/// p50, p99, max, mean of `v` (µs).
+fn stats(v: &[f64]) -> [f64; 4] {
+    if v.is_empty() {
+        return [f64::NAN; 4];
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let q = |p: f64| s[((s.len() - 1) as f64 * p).round() as usize];
+    [
+        q(0.5),
+        q(0.99),
+        s[s.len() - 1],
+        s.iter().sum::<f64>() / s.len() as f64,
+    ]
+}
+
+/// The query kinds of the sweeps: the paper's two traversals and ours.
+const SWEEP_KINDS: [&str; 5] = [
+    "paper distance traversal",
+    "paper backtracking",
+    "proximity (ours)",
+    "contact kinetic front (ours)",
+    "penetration (ours)",
+];
+
+fn time_kind(a: &SphereTree, b: &SphereTree, motion: &Motion, kind: &str) -> Timed {
+    let id = Pose::IDENTITY;
+    let off = ContactOptions { safe_motion: false };
+    match kind {
+        "paper distance traversal" => time_frames(a, b, motion, |p, st| {
+            distance_traversal(a, &id, b, p, st, &off).in_contact()
+        }),
+        "paper backtracking" => time_frames(a, b, motion, |p, st| {
+            backtracking(a, &id, b, p, st, &off).in_contact()
+        }),
+        "proximity (ours)" => time_frames(a, b, motion, |p, st| {
+            proximity(a, &id, b, p, st, &ProximityOptions::default()).overlapping
+        }),
+        "contact kinetic front (ours)" => time_frames(a, b, motion, |p, st| {
+            contact(a, &id, b, p, st, &ContactOptions::default()).in_contact()
+        }),
+        _ => time_frames(a, b, motion, |p, st| {
+            penetration(a, &id, b, p, st, &PenetrationOptions::default()).pairs > 0
+        }),
+    }
+}
+
+fn build(mesh: &Mesh, opts: &BuildOptions) -> Result<(SphereTree, f64)> {
+    let t0 = Instant::now();
+    let (t, _) = build_tree(mesh, opts, &Silent)?;
+    Ok((t, t0.elapsed().as_secs_f64()))
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> Result<()> {
+    let p = dir.join(name);
+    std::fs::write(&p, text).map_err(|e| Error::io(p, e))
+}
+
+/// What [`run`] measured, in brief (the CSV files hold everything).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PaperSummary {
+    /// Files written into the output folder.
+    pub files: Vec<String>,
+    /// Leaves of A and B of the main trees.
+    pub main_leaves: (usize, usize),
+    /// p99 (µs) of our exact proximity on the main trees, all frames.
+    pub proximity_p99_us: f64,
+    /// p99 (µs) of the exact mesh distance on the compared frames.
+    pub exact_p99_us: f64,
+    /// Backtracking against the full traversal on contact frames: (mean full / mean
+    /// backtracking).
+    pub backtracking_speedup_in_contact: f64,
+    /// Distance error p95 of the main trees (model units).
+    pub main_abs_err_p95: f64,
+}
+
+/// Runs the whole evaluation of the pair (`mesh_a` fixed, `mesh_b` moved by `motion`) and
+/// writes CSV files and PNG charts into `out`; `log` receives one line per step.
+pub fn run(
+    mesh_a: &Mesh,
+    mesh_b: &Mesh,
+    motion: &Motion,
+    opts: &PaperOptions,
+    out: &Path,
+    log: &mut dyn FnMut(&str),
+) -> Result<PaperSummary> {
+    if motion.frames.is_empty() {
+        return Err(Error::InvalidOption("the motion has no frames".into()));
+    }
+    if opts.voxel_sizes.is_empty() || opts.voxel_sizes.iter().any(|h| h.is_nan() || *h <= 0.0) {
+        return Err(Error::InvalidOption(
+            "voxel sizes must be positive numbers".into(),
+        ));
+    }
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let ea = ExactMesh::new(mesh_a)?;
+    let eb = ExactMesh::new(mesh_b)?;
+    let mut files = Vec::new();
+    let id = Pose::IDENTITY;
+
+    // Figs. 6 and 9: speed and error against leaf count.
+    let mut speed = String::from(
+        "voxel,leaves_a,leaves_b,depth_a,depth_b,build_s,query,p50_us,p99_us,max_us,mean_us\n",
+    );
+    let mut error = String::from(
+        "voxel,leaves_a,leaves_b,abs_err_p50,abs_err_p95,abs_err_max,rel_err_p50,rel_err_p95,missed_contacts,missed_contacts_deep,false_contacts\n",
+    );
+    let mut speed_series: Vec<Series> = SWEEP_KINDS
+        .iter()
+        .map(|k| Series {
+            name: format!("{k}, mean"),
+            points: vec![],
+        })
+        .collect();
+    let mut err_series = vec![
+        Series {
+            name: "abs error p50".into(),
+            points: vec![],
+        },
+        Series {
+            name: "abs error p95".into(),
+            points: vec![],
+        },
+    ];
+    let mut sweep_leaves: Vec<(f64, usize)> = Vec::new();
+    for &h in &opts.voxel_sizes {
+        let bo = BuildOptions {
+            resolution: Resolution::VoxelSize(h),
+            ..Default::default()
+        };
+        let (ta, sa) = build(mesh_a, &bo)?;
+        let (tb, sb) = build(mesh_b, &bo)?;
+        let leaves = (ta.leaf_count() + tb.leaf_count()) / 2;
+        sweep_leaves.push((h, leaves));
+        log(&format!(
+            "voxel {h:.4}: {} + {} leaves, built in {:.1} s",
+            ta.leaf_count(),
+            tb.leaf_count(),
+            sa + sb
+        ));
+        for (k, kind) in SWEEP_KINDS.iter().enumerate() {
+            let t = time_kind(&ta, &tb, motion, kind);
+            let [p50, p99, max, mean] = stats(&t.us);
+            let _ = writeln!(
+                speed,
+                "{h},{},{},{},{},{:.3},{kind},{p50:.2},{p99:.2},{max:.2},{mean:.2}",
+                ta.leaf_count(),
+                tb.leaf_count(),
+                ta.max_depth(),
+                tb.max_depth(),
+                sa + sb
+            );
+            speed_series[k].points.push((leaves as f64, mean));
+        }
+        let rep = replay(
+            &ta,
+            &tb,
+            motion,
+            Some((&ea, &eb)),
+            &ReplayOptions {
+                kinds: vec![],
+                every: opts.every,
+                ..Default::default()
+            },
+        );
+        if let Some(acc) = rep.accuracy {
+            let _ = writeln!(
+                error,
+                "{h},{},{},{},{},{},{},{},{},{},{}",
+                ta.leaf_count(),
+                tb.leaf_count(),
+                acc.abs_err_p50,
+                acc.abs_err_p95,
+                acc.abs_err_max,
+                acc.rel_err_p50,
+                acc.rel_err_p95,
+                acc.missed_contacts,
+                acc.missed_contacts_deep,
+                acc.false_contacts
+            );
+            err_series[0].points.push((leaves as f64, acc.abs_err_p50));
+            err_series[1].points.push((leaves as f64, acc.abs_err_p95));
+        }
+    }
+    write(out, "fig6_speed_vs_leaves.csv", &speed)?;
+    write(out, "fig9_error_vs_leaves.csv", &error)?;
+    line_chart(
+        &out.join("fig6_speed_vs_leaves.png"),
+        &Chart {
+            title: "Fig. 6: query time against leaf spheres (mean per frame)",
+            x_label: "leaf spheres per body",
+            y_label: "time per frame (µs)",
+            log_x: true,
+            log_y: true,
+        },
+        &speed_series,
+    )?;
+    line_chart(
+        &out.join("fig9_error_vs_leaves.png"),
+        &Chart {
+            title: "Fig. 9: distance error against the exact mesh distance",
+            x_label: "leaf spheres per body",
+            y_label: "absolute error (model units)",
+            log_x: true,
+            log_y: true,
+        },
+        &err_series,
+    )?;
+    files.extend(
+        [
+            "fig6_speed_vs_leaves.csv",
+            "fig6_speed_vs_leaves.png",
+            "fig9_error_vs_leaves.csv",
+            "fig9_error_vs_leaves.png",
+        ]
+        .map(String::from),
+    );
+
+    // Figs. 7–8: fan-out and depth at about 3k and 16k leaves.
+    let mut fan = String::from(
+        "target_leaves,voxel,fanout,leaves_a,leaves_b,depth_a,depth_b,query,p50_us,p99_us,mean_us\n",
+    );
+    let mut fan_series = Vec::new();
+    for &target in &opts.fanout_leaves {
+        let Some(&(h, _)) = sweep_leaves.iter().min_by(|x, y| {
+            let dx = (x.1 as f64 / target as f64).ln().abs();
+            let dy = (y.1 as f64 / target as f64).ln().abs();
+            dx.total_cmp(&dy)
+        }) else {
+            continue;
+        };
+        let mut s_dist = Series {
+            name: format!("~{}k leaves, paper distance traversal", target / 1000),
+            points: vec![],
+        };
+        let mut s_prox = Series {
+            name: format!("~{}k leaves, proximity (ours)", target / 1000),
+            points: vec![],
+        };
+        for &fo in &opts.fanouts {
+            let mut bo = BuildOptions {
+                resolution: Resolution::VoxelSize(h),
+                ..Default::default()
+            };
+            bo.hierarchy.fanout = fo;
+            let (ta, _) = build(mesh_a, &bo)?;
+            let (tb, _) = build(mesh_b, &bo)?;
+            for kind in ["paper distance traversal", "proximity (ours)"] {
+                let t = time_kind(&ta, &tb, motion, kind);
+                let [p50, p99, _, mean] = stats(&t.us);
+                let _ = writeln!(
+                    fan,
+                    "{target},{h},{fo},{},{},{},{},{kind},{p50:.2},{p99:.2},{mean:.2}",
+                    ta.leaf_count(),
+                    tb.leaf_count(),
+                    ta.max_depth(),
+                    tb.max_depth()
+                );
+                let s = if kind.starts_with("paper") {
+                    &mut s_dist
+                } else {
+                    &mut s_prox
+                };
+                s.points.push((fo as f64, mean));
+            }
+            log(&format!(
+                "fan-out {fo} at voxel {h:.4}: depth {} / {}",
+                ta.max_depth(),
+                tb.max_depth()
+            ));
+        }
+        fan_series.push(s_dist);
+        fan_series.push(s_prox);
+    }
+    write(out, "fig7_8_fanout.csv", &fan)?;
+    line_chart(
+        &out.join("fig7_8_fanout.png"),
+        &Chart {
+            title: "Figs. 7-8: query time against fan-out (depth falls as fan-out grows)",
+            x_label: "fan-out (children per node)",
+            y_label: "mean time per frame (µs)",
+            log_x: true,
+            log_y: true,
+        },
+        &fan_series,
+    )?;
+    files.extend(["fig7_8_fanout.csv", "fig7_8_fanout.png"].map(String::from));
+
+    // The main trees: backtracking, multipoint, ours against the paper and the exact mesh.
+    let (ta, sa) = build(mesh_a, &opts.main)?;
+    let (tb, sb) = build(mesh_b, &opts.main)?;
+    log(&format!(
+        "main trees: {} + {} leaves, built in {:.1} s",
+        ta.leaf_count(),
+        tb.leaf_count(),
+        sa + sb
+    ));
+    let full = time_kind(&ta, &tb, motion, "paper distance traversal");
+    let back = time_kind(&ta, &tb, motion, "paper backtracking");
+    let in_contact: Vec<usize> = (0..motion.frames.len())
+        .filter(|&i| full.contact[i])
+        .collect();
+    let pick = |t: &Timed| -> Vec<f64> { in_contact.iter().map(|&i| t.us[i]).collect() };
+    let (fc, bc) = (pick(&full), pick(&back));
+    let (sf, sbk) = (stats(&fc), stats(&bc));
+    let mut bt = String::from("query,contact_frames,p50_us,p99_us,max_us,mean_us\n");
+    for (name, s) in [("full distance traversal", sf), ("backtracking", sbk)] {
+        let _ = writeln!(
+            bt,
+            "{name},{},{:.3},{:.3},{:.3},{:.3}",
+            in_contact.len(),
+            s[0],
+            s[1],
+            s[2],
+            s[3]
+        );
+    }
+    write(out, "backtracking.csv", &bt)?;
+    let cdf = |name: &str, v: &[f64]| {
+        let mut s = v.to_vec();
+        s.sort_by(f64::total_cmp);
+        let n = s.len().max(1) as f64;
+        Series {
+            name: name.to_string(),
+            points: s
+                .iter()
+                .enumerate()
+                .map(|(i, &t)| (100.0 * (i + 1) as f64 / n, t.max(0.01)))
+                .collect(),
+        }
+    };
+    files.push("backtracking.csv".into());
+    if !in_contact.is_empty() {
+        line_chart(
+            &out.join("backtracking.png"),
+            &Chart {
+                title: "Backtracking against the full traversal, frames in contact",
+                x_label: "percentile of contact frames",
+                y_label: "time per frame (µs)",
+                log_x: false,
+                log_y: true,
+            },
+            &[
+                cdf("paper distance traversal (full)", &fc),
+                cdf("paper backtracking", &bc),
+            ],
+        )?;
+        files.push("backtracking.png".into());
+    } else {
+        log("no frame in contact: no backtracking chart");
+    }
+
+    let mut mp = String::from("k,p50_us,p99_us,max_us,mean_us,mean_contacts\n");
+    let mut mp_series = vec![
+        Series {
+            name: "p50".into(),
+            points: vec![],
+        },
+        Series {
+            name: "p99".into(),
+            points: vec![],
+        },
+    ];
+    for &k in &opts.ks {
+        let o = MultipointOptions {
+            k,
+            ..Default::default()
+        };
+        let mut n_contacts = 0usize;
+        let t = time_frames(&ta, &tb, motion, |p, st| {
+            let r = multipoint(&ta, &id, &tb, p, st, &o);
+            n_contacts += r.contacts.len();
+            !r.contacts.is_empty()
+        });
+        let [p50, p99, max, mean] = stats(&t.us);
+        let _ = writeln!(
+            mp,
+            "{k},{p50:.3},{p99:.3},{max:.3},{mean:.3},{:.2}",
+            n_contacts as f64 / (2 * motion.frames.len()) as f64
+        );
+        mp_series[0].points.push((k as f64, p50));
+        mp_series[1].points.push((k as f64, p99));
+    }
+    write(out, "multipoint_k.csv", &mp)?;
+    line_chart(
+        &out.join("multipoint_k.png"),
+        &Chart {
+            title: "Multipoint traversal against k",
+            x_label: "k (contacts asked)",
+            y_label: "time per frame (µs)",
+            log_x: true,
+            log_y: true,
+        },
+        &mp_series,
+    )?;
+    files.extend(["multipoint_k.csv", "multipoint_k.png"].map(String::from));
+
+    // Ours beside the paper's traversals and the exact mesh distance, per frame.
+    let mut kinds: Vec<(String, Vec<f64>)> = vec![
+        ("paper distance traversal".into(), full.us.clone()),
+        ("paper backtracking".into(), back.us.clone()),
+    ];
+    for kind in [
+        "proximity (ours)",
+        "contact kinetic front (ours)",
+        "penetration (ours)",
+    ] {
+        kinds.push((kind.into(), time_kind(&ta, &tb, motion, kind).us));
+    }
+    let mut scratch = ExactScratch::new();
+    let mut exact_us = Vec::new();
+    for f in motion.frames.iter().step_by(opts.every.max(1)) {
+        let t0 = Instant::now();
+        std::hint::black_box(exact::distance(&ea, &id, &eb, &f.pose, &mut scratch));
+        exact_us.push(t0.elapsed().as_secs_f64() * 1e6);
+    }
+    kinds.push(("exact mesh distance".into(), exact_us.clone()));
+    let mut ours = String::from("query,frames,p50_us,p99_us,max_us,mean_us,frames_over_1ms\n");
+    for (name, v) in &kinds {
+        let s = stats(v);
+        let _ = writeln!(
+            ours,
+            "{name},{},{:.3},{:.3},{:.3},{:.3},{}",
+            v.len(),
+            s[0],
+            s[1],
+            s[2],
+            s[3],
+            v.iter().filter(|&&t| t > 1000.0).count()
+        );
+    }
+    write(out, "ours_vs_paper.csv", &ours)?;
+    let series: Vec<Series> = kinds.iter().map(|(n, v)| cdf(n, v)).collect();
+    line_chart(
+        &out.join("ours_vs_paper.png"),
+        &Chart {
+            title: "Per-frame time along the motion (main trees)",
+            x_label: "percentile of frames",
+            y_label: "time per frame (µs)",
+            log_x: false,
+            log_y: true,
+        },
+        &series,
+    )?;
+    files.extend(["ours_vs_paper.csv", "ours_vs_paper.png"].map(String::from));
+
+    let acc = replay(
+        &ta,
+        &tb,
+        motion,
+        Some((&ea, &eb)),
+        &ReplayOptions {
+            kinds: vec![],
+            every: opts.every,
+            ..Default::default()
+        },
+    )
+    .accuracy;
+    let prox = &kinds[2].1;
+    Ok(PaperSummary {
+        files,
+        main_leaves: (ta.leaf_count(), tb.leaf_count()),
+        proximity_p99_us: stats(prox)[1],
+        exact_p99_us: stats(&exact_us)[1],
+        backtracking_speedup_in_contact: sf[3] / sbk[3],
+        main_abs_err_p95: acc.map_or(f64::NAN, |a| a.abs_err_p95),
+    })
+}

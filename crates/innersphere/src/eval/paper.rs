@@ -6,7 +6,7 @@
 //! distance. Writes one CSV per figure and a PNG chart of each.
 
 use super::plot::{line_chart, Chart, Series};
-use super::replay::{replay, ReplayOptions};
+use super::replay::{replay, Accuracy, ReplayOptions};
 use crate::build::{build_tree, BuildOptions, Resolution};
 use crate::exact::{self, ExactMesh, ExactScratch};
 use crate::mesh::Mesh;
@@ -148,9 +148,50 @@ fn build(mesh: &Mesh, opts: &BuildOptions) -> Result<(SphereTree, f64)> {
     Ok((t, t0.elapsed().as_secs_f64()))
 }
 
-fn write(dir: &Path, name: &str, text: &str) -> Result<()> {
-    let p = dir.join(name);
-    std::fs::write(&p, text).map_err(|e| Error::io(p, e))
+/// The output folder and the files written into it so far.
+struct Out<'a> {
+    dir: &'a Path,
+    files: Vec<String>,
+}
+
+impl Out<'_> {
+    /// Writes `text` to `name`.
+    fn csv(&mut self, name: &str, text: &str) -> Result<()> {
+        let p = self.dir.join(name);
+        std::fs::write(&p, text).map_err(|e| Error::io(p, e))?;
+        self.files.push(name.into());
+        Ok(())
+    }
+
+    /// Draws `series` into the PNG file `name`.
+    fn png(&mut self, name: &str, chart: &Chart, series: &[Series]) -> Result<()> {
+        line_chart(&self.dir.join(name), chart, series)?;
+        self.files.push(name.into());
+        Ok(())
+    }
+}
+
+/// Distance error and contact disagreement of the trees against the exact meshes on every
+/// `every`-th frame (a replay that times nothing).
+fn accuracy(
+    ta: &SphereTree,
+    tb: &SphereTree,
+    motion: &Motion,
+    exact: (&ExactMesh, &ExactMesh),
+    every: usize,
+) -> Option<Accuracy> {
+    replay(
+        ta,
+        tb,
+        motion,
+        Some(exact),
+        &ReplayOptions {
+            kinds: vec![],
+            every,
+            ..Default::default()
+        },
+    )
+    .accuracy
 }
 
 /// What [`run`] measured, in brief (the CSV files hold everything).
@@ -190,9 +231,12 @@ pub fn run(
         ));
     }
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let mut out = Out {
+        dir: out,
+        files: Vec::new(),
+    };
     let ea = ExactMesh::new(mesh_a)?;
     let eb = ExactMesh::new(mesh_b)?;
-    let mut files = Vec::new();
     let id = Pose::IDENTITY;
 
     // Figs. 6 and 9: speed and error against leaf count.
@@ -249,18 +293,7 @@ pub fn run(
             );
             speed_series[k].points.push((leaves as f64, mean));
         }
-        let rep = replay(
-            &ta,
-            &tb,
-            motion,
-            Some((&ea, &eb)),
-            &ReplayOptions {
-                kinds: vec![],
-                every: opts.every,
-                ..Default::default()
-            },
-        );
-        if let Some(acc) = rep.accuracy {
+        if let Some(acc) = accuracy(&ta, &tb, motion, (&ea, &eb), opts.every) {
             let _ = writeln!(
                 error,
                 "{h},{},{},{},{},{},{},{},{},{},{}",
@@ -279,10 +312,9 @@ pub fn run(
             err_series[1].points.push((leaves as f64, acc.abs_err_p95));
         }
     }
-    write(out, "fig6_speed_vs_leaves.csv", &speed)?;
-    write(out, "fig9_error_vs_leaves.csv", &error)?;
-    line_chart(
-        &out.join("fig6_speed_vs_leaves.png"),
+    out.csv("fig6_speed_vs_leaves.csv", &speed)?;
+    out.png(
+        "fig6_speed_vs_leaves.png",
         &Chart {
             title: "Fig. 6: query time against leaf spheres (mean per frame)",
             x_label: "leaf spheres per body",
@@ -292,8 +324,9 @@ pub fn run(
         },
         &speed_series,
     )?;
-    line_chart(
-        &out.join("fig9_error_vs_leaves.png"),
+    out.csv("fig9_error_vs_leaves.csv", &error)?;
+    out.png(
+        "fig9_error_vs_leaves.png",
         &Chart {
             title: "Fig. 9: distance error against the exact mesh distance",
             x_label: "leaf spheres per body",
@@ -303,15 +336,6 @@ pub fn run(
         },
         &err_series,
     )?;
-    files.extend(
-        [
-            "fig6_speed_vs_leaves.csv",
-            "fig6_speed_vs_leaves.png",
-            "fig9_error_vs_leaves.csv",
-            "fig9_error_vs_leaves.png",
-        ]
-        .map(String::from),
-    );
 
     // Figs. 7–8: fan-out and depth at about 3k and 16k leaves.
     let mut fan = String::from(
@@ -369,9 +393,9 @@ pub fn run(
         fan_series.push(s_dist);
         fan_series.push(s_prox);
     }
-    write(out, "fig7_8_fanout.csv", &fan)?;
-    line_chart(
-        &out.join("fig7_8_fanout.png"),
+    out.csv("fig7_8_fanout.csv", &fan)?;
+    out.png(
+        "fig7_8_fanout.png",
         &Chart {
             title: "Figs. 7-8: query time against fan-out (depth falls as fan-out grows)",
             x_label: "fan-out (children per node)",
@@ -381,7 +405,6 @@ pub fn run(
         },
         &fan_series,
     )?;
-    files.extend(["fig7_8_fanout.csv", "fig7_8_fanout.png"].map(String::from));
 
     // The main trees: backtracking, multipoint, ours against the paper and the exact mesh.
     let (ta, sa) = build(mesh_a, &opts.main)?;
@@ -412,7 +435,7 @@ pub fn run(
             s[3]
         );
     }
-    write(out, "backtracking.csv", &bt)?;
+    out.csv("backtracking.csv", &bt)?;
     let cdf = |name: &str, v: &[f64]| {
         let mut s = v.to_vec();
         s.sort_by(f64::total_cmp);
@@ -426,10 +449,9 @@ pub fn run(
                 .collect(),
         }
     };
-    files.push("backtracking.csv".into());
     if !in_contact.is_empty() {
-        line_chart(
-            &out.join("backtracking.png"),
+        out.png(
+            "backtracking.png",
             &Chart {
                 title: "Backtracking against the full traversal, frames in contact",
                 x_label: "percentile of contact frames",
@@ -442,7 +464,6 @@ pub fn run(
                 cdf("paper backtracking", &bc),
             ],
         )?;
-        files.push("backtracking.png".into());
     } else {
         log("no frame in contact: no backtracking chart");
     }
@@ -478,9 +499,9 @@ pub fn run(
         mp_series[0].points.push((k as f64, p50));
         mp_series[1].points.push((k as f64, p99));
     }
-    write(out, "multipoint_k.csv", &mp)?;
-    line_chart(
-        &out.join("multipoint_k.png"),
+    out.csv("multipoint_k.csv", &mp)?;
+    out.png(
+        "multipoint_k.png",
         &Chart {
             title: "Multipoint traversal against k",
             x_label: "k (contacts asked)",
@@ -490,7 +511,6 @@ pub fn run(
         },
         &mp_series,
     )?;
-    files.extend(["multipoint_k.csv", "multipoint_k.png"].map(String::from));
 
     // Ours beside the paper's traversals and the exact mesh distance, per frame.
     let mut kinds: Vec<(String, Vec<f64>)> = vec![
@@ -526,10 +546,10 @@ pub fn run(
             v.iter().filter(|&&t| t > 1000.0).count()
         );
     }
-    write(out, "ours_vs_paper.csv", &ours)?;
+    out.csv("ours_vs_paper.csv", &ours)?;
     let series: Vec<Series> = kinds.iter().map(|(n, v)| cdf(n, v)).collect();
-    line_chart(
-        &out.join("ours_vs_paper.png"),
+    out.png(
+        "ours_vs_paper.png",
         &Chart {
             title: "Per-frame time along the motion (main trees)",
             x_label: "percentile of frames",
@@ -539,23 +559,11 @@ pub fn run(
         },
         &series,
     )?;
-    files.extend(["ours_vs_paper.csv", "ours_vs_paper.png"].map(String::from));
 
-    let acc = replay(
-        &ta,
-        &tb,
-        motion,
-        Some((&ea, &eb)),
-        &ReplayOptions {
-            kinds: vec![],
-            every: opts.every,
-            ..Default::default()
-        },
-    )
-    .accuracy;
+    let acc = accuracy(&ta, &tb, motion, (&ea, &eb), opts.every);
     let prox = &kinds[2].1;
     Ok(PaperSummary {
-        files,
+        files: out.files,
         main_leaves: (ta.leaf_count(), tb.leaf_count()),
         proximity_p99_us: stats(prox)[1],
         exact_p99_us: stats(&exact_us)[1],

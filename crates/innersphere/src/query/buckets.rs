@@ -48,6 +48,9 @@ pub(crate) struct Buckets {
     fine: Vec<u32>,
     coarse: Vec<u32>,
     far: u32,
+    /// Smallest expiry in the far list (a far entry can be due as early as half a ring
+    /// after it was pushed, before the far list is next re-sorted).
+    far_min: f64,
     /// Index (expiry / width) of the first fine bucket not yet drained.
     cur: i64,
     width: f64,
@@ -63,6 +66,7 @@ impl Buckets {
             fine: vec![NIL; FINE as usize],
             coarse: vec![NIL; RING as usize],
             far: NIL,
+            far_min: f64::INFINITY,
             cur: 0,
             width: 1.0,
             len: 0,
@@ -76,6 +80,7 @@ impl Buckets {
         self.fine.iter_mut().for_each(|h| *h = NIL);
         self.coarse.iter_mut().for_each(|h| *h = NIL);
         self.far = NIL;
+        self.far_min = f64::INFINITY;
         self.cur = 0;
         self.width = width;
         self.len = 0;
@@ -126,6 +131,9 @@ impl Buckets {
     #[inline]
     fn link(&mut self, sep: Sep) {
         let k = self.bucket(sep.expiry);
+        if k.div_euclid(FINE) >= self.cur.div_euclid(FINE) + RING {
+            self.far_min = self.far_min.min(sep.expiry);
+        }
         let h = *self.head(k);
         let c = if h == NIL || self.pool[h as usize].len as usize == CHUNK {
             let c = self.new_chunk(h);
@@ -191,6 +199,7 @@ impl Buckets {
                 self.relink_chain(c);
                 if block.rem_euclid(RING / 2) == 0 {
                     let f = std::mem::replace(&mut self.far, NIL);
+                    self.far_min = f64::INFINITY;
                     self.relink_chain(f);
                 }
             }
@@ -221,7 +230,7 @@ impl Buckets {
             }
         }
         if self.far != NIL {
-            m = m.min(((block + RING) * FINE) as f64 * self.width);
+            m = m.min(self.far_min);
         }
         m
     }
@@ -274,5 +283,29 @@ mod tests {
             assert_eq!(q.len, all.len() - got);
         }
         assert_eq!(q.len, 0);
+    }
+
+    /// The lower bound holds when only far entries are left, also after the queue has
+    /// advanced since they were pushed (it once assumed they began a full ring ahead).
+    #[test]
+    fn min_bound_covers_far_entries() {
+        let mut q = Buckets::with_capacity(16);
+        q.clear(1.0);
+        let mut out = Vec::new();
+        // Advance by 100 blocks, then push an entry just beyond the ring.
+        q.drain_expired((100 * FINE) as f64, &mut out);
+        let e = ((100 + RING) * FINE) as f64 + 0.5;
+        q.push(Sep {
+            expiry: e,
+            a: 1,
+            b: 2,
+        });
+        for blocks in [200, 300, 400] {
+            q.drain_expired((blocks * FINE) as f64, &mut out);
+            assert!(out.is_empty());
+            assert!(q.min_bound() <= e, "{} > {e}", q.min_bound());
+        }
+        q.drain_expired(e, &mut out);
+        assert_eq!(out.len(), 1);
     }
 }

@@ -155,45 +155,61 @@ pub fn proximity(
             });
         }
     } else {
+        // Depth first without square roots: a pair is refined while its lower bound
+        // `|Δ| − s` is below the threshold `t` of the best pair so far, i.e. while
+        // `|Δ|² < (t + s)²`; the stack keeps `|Δ|²` and recomputes `s` from the nodes it
+        // reads anyway. Pruned pairs all had bounds ≥ the threshold of their time, so the
+        // final threshold is a proved lower bound.
+        let thr = |ub: f32| {
+            if signed && ub <= 0.0 {
+                ub - abs
+            } else {
+                (ub - abs).min(ub / (1.0 + rel))
+            }
+        };
+        // The squared comparison may round the other way than `sqrt(d2) − s < t` by an ulp;
+        // a relative margin of 2⁻¹⁸ keeps it on the refining side (inner pairs) and sends
+        // borderline leaf pairs to the exact comparison, so the answer equals brute force.
+        const MARGIN: f32 = 1.0 + 1.0 / 262_144.0;
+        let refine = |d2: f32, s: f32, t: f32| {
+            let l = t + s;
+            l > 0.0 && d2 < l * l * MARGIN
+        };
         let stack = &mut s.pstack;
         stack.clear();
-        stack.push(root);
+        let (dx, dy, dz) = (ctx.a[0].x - c0[0], ctx.a[0].y - c0[1], ctx.a[0].z - c0[2]);
+        stack.push(Entry {
+            key: dx * dx + dy * dy + dz * dz,
+            ..root
+        });
+        let a_nodes = ctx.a;
+        let b_nodes = ctx.b;
         while let Some(e) = stack.pop() {
-            let elb = clamp(e.key);
-            if done(elb, ub) {
-                lower = lower.min(elb);
+            let t = thr(ub);
+            if !signed && t <= 0.0 {
+                break;
+            }
+            let sr = a_nodes[e.a as usize].r + b_nodes[e.b as usize].r + ctx.slack;
+            if !refine(e.key, sr, t) {
                 continue;
             }
-            let base = stack.len();
             expand_larger(&ctx, e.a, e.b, e.c, |i, j, c, d2, sr, leafs| {
                 visits += 1;
-                let d = d2.sqrt() - sr;
                 if leafs {
-                    if d < ub {
-                        ub = d;
-                        best = (i, j);
+                    let l = ub + sr;
+                    if l > 0.0 && d2 < l * l * MARGIN {
+                        let d = d2.sqrt() - sr;
+                        if d < ub {
+                            ub = d;
+                            best = (i, j);
+                        }
                     }
-                } else if !done(clamp(d), ub) {
-                    stack.push(Entry {
-                        key: d,
-                        a: i,
-                        b: j,
-                        c,
-                    });
-                } else {
-                    lower = lower.min(clamp(d));
+                } else if refine(d2, sr, thr(ub)) {
+                    stack.push(Entry { key: d2, a: i, b: j, c });
                 }
             });
-            // Nearest child pair on top (insertion sort, descending keys; a handful).
-            let kids = &mut stack[base..];
-            for i in 1..kids.len() {
-                let mut j = i;
-                while j > 0 && kids[j - 1].key < kids[j].key {
-                    kids.swap(j - 1, j);
-                    j -= 1;
-                }
-            }
         }
+        lower = lower.min(if signed { thr(ub) } else { thr(ub).max(0.0) });
     }
     let lower = lower.min(ub);
     s.prox_pair = Some(best);

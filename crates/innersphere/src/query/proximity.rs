@@ -205,7 +205,12 @@ pub fn proximity(
                         }
                     }
                 } else if refine(d2, sr, thr(ub)) {
-                    stack.push(Entry { key: d2, a: i, b: j, c });
+                    stack.push(Entry {
+                        key: d2,
+                        a: i,
+                        b: j,
+                        c,
+                    });
                 }
             });
         }

@@ -61,12 +61,15 @@ fn assert_tree_invariants(tree: &SphereTree, spheres: &[Sphere]) {
         spheres.len(),
         "every leaf holds exactly one sphere"
     );
-    for n in 0..tree.len() {
-        let (cp, rp) = tree.sphere(n);
-        for ch in tree.children(n) {
-            let (cc, rc) = tree.sphere(ch);
-            let need = (cc.as_dvec3() - cp.as_dvec3()).length() + rc as f64;
-            assert!(need <= rp as f64, "node {n} does not enclose child {ch}");
+    // Every node encloses every leaf sphere below it (in f32 as stored, no tolerance).
+    for leaf in tree.leaves() {
+        let (cl, rl) = tree.sphere(leaf);
+        let mut n = tree.parent[leaf];
+        while n != innersphere::tree::NO_PARENT {
+            let (cp, rp) = tree.sphere(n as usize);
+            let need = (cl.as_dvec3() - cp.as_dvec3()).length() + rl as f64;
+            assert!(need <= rp as f64, "node {n} does not enclose leaf {leaf}");
+            n = tree.parent[n as usize];
         }
     }
     // Leaves (f32) stay inside their f64 spheres, hence inside the solid and disjoint.

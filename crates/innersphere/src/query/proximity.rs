@@ -175,6 +175,31 @@ pub fn proximity(
             let l = t + s;
             l > 0.0 && d2 < l * l * MARGIN
         };
+        if ub == f32::INFINITY {
+            // No pair from the last query: dive to a leaf pair along the nearest child pairs
+            // for a first upper bound (unordered depth first could wander far first).
+            let (mut ea, mut eb, mut ec) = (0u32, 0u32, c0);
+            loop {
+                let mut next = (f32::INFINITY, 0u32, 0u32, c0, false);
+                expand_larger(&ctx, ea, eb, ec, |i, j, c, d2, sr, leafs| {
+                    visits += 1;
+                    let d = d2.sqrt() - sr;
+                    if d < next.0 {
+                        next = (d, i, j, c, leafs);
+                    }
+                });
+                let (d, i, j, c, leafs) = next;
+                if leafs {
+                    ub = d;
+                    best = (i, j);
+                    break;
+                }
+                if d == f32::INFINITY {
+                    break;
+                }
+                (ea, eb, ec) = (i, j, c);
+            }
+        }
         let stack = &mut s.pstack;
         stack.clear();
         let (dx, dy, dz) = (ctx.a[0].x - c0[0], ctx.a[0].y - c0[1], ctx.a[0].z - c0[2]);

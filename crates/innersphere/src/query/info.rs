@@ -29,6 +29,21 @@ impl Node {
     }
 }
 
+/// Lanes of [`Kids`]: the children of a node side by side, for fan-outs up to 4.
+pub(crate) const LANES: usize = 4;
+
+/// The spheres of a node's children side by side (structure of arrays, one cache line), so
+/// that a traversal tests all children of a node against one sphere in one vectorised step
+/// instead of one branchy test per child. Unused lanes have radius −∞ (never refined).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C, align(64))]
+pub(crate) struct Kids {
+    pub x: [f32; LANES],
+    pub y: [f32; LANES],
+    pub z: [f32; LANES],
+    pub r: [f32; LANES],
+}
+
 /// Query-side facts about one tree, computed once ([`TreeInfo::new`], O(nodes)) and shared
 /// by every [`PairState`](super::PairState) that involves the tree.
 #[derive(Debug, Clone)]
@@ -55,6 +70,11 @@ pub struct TreeInfo {
     pub subtree_volume: Vec<f32>,
     /// The tree's nodes in the packed layout the traversals read (same f32 values).
     pub(crate) packed: Vec<Node>,
+    /// Per node, its children's spheres side by side (leaves: unused); empty when some node
+    /// has more than [`LANES`] children.
+    pub(crate) kids: Vec<Kids>,
+    /// Per node, bit `k` set when child `k` is a leaf.
+    pub(crate) leaf_kids: Vec<u8>,
 }
 
 /// Rounds a non-negative f64 up to the next f32.
@@ -91,11 +111,38 @@ impl TreeInfo {
                 radius = radius.max((c.as_dvec3() - root_center).length() + r as f64);
             }
         }
+        let max_children = tree.child_count.iter().copied().max().unwrap_or(0) as usize;
+        let (kids, leaf_kids) = if max_children <= LANES {
+            let mut kids = vec![
+                Kids {
+                    x: [0.0; LANES],
+                    y: [0.0; LANES],
+                    z: [0.0; LANES],
+                    r: [f32::NEG_INFINITY; LANES],
+                };
+                n
+            ];
+            let mut leaf_kids = vec![0u8; n];
+            for i in 0..n {
+                for (k, ch) in tree.children(i).enumerate() {
+                    kids[i].x[k] = tree.x[ch];
+                    kids[i].y[k] = tree.y[ch];
+                    kids[i].z[k] = tree.z[ch];
+                    kids[i].r[k] = tree.r[ch];
+                    if tree.is_leaf(ch) {
+                        leaf_kids[i] |= 1 << k;
+                    }
+                }
+            }
+            (kids, leaf_kids)
+        } else {
+            (Vec::new(), Vec::new())
+        };
         TreeInfo {
             nodes: n,
             leaves: tree.leaf_count(),
             max_depth: tree.max_depth(),
-            max_children: tree.child_count.iter().copied().max().unwrap_or(0) as usize,
+            max_children,
             root_center,
             radius,
             extent,
@@ -117,6 +164,8 @@ impl TreeInfo {
                     depth: tree.depth[i] as u32,
                 })
                 .collect(),
+            kids,
+            leaf_kids,
         }
     }
 }

@@ -2,6 +2,7 @@
 
 use super::geometry::{direction, leaf_pair};
 use super::heap::Entry;
+use super::info::LANES;
 use super::state::{expand_larger, PairState};
 use super::Pose;
 use crate::SphereTree;
@@ -84,7 +85,7 @@ pub fn proximity(
     st: &mut PairState,
     opts: &ProximityOptions,
 ) -> Proximity {
-    let (ctx, s, _, _) = st.begin(a, pose_a, b, pose_b);
+    let (ctx, s, ia, ib) = st.begin(a, pose_a, b, pose_b);
     let abs = opts.abs_tolerance.max(0.0) as f32;
     let rel = opts.rel_tolerance.max(0.0) as f32;
     let signed = opts.signed;
@@ -209,6 +210,97 @@ pub fn proximity(
         });
         let a_nodes = ctx.a;
         let b_nodes = ctx.b;
+        if !ia.kids.is_empty() && !ib.kids.is_empty() {
+            // Fan-out ≤ 4: all children of the split node in one 4-lane step.
+            let (ka, kb) = (&ia.kids, &ib.kids);
+            let (la, lb) = (&ia.leaf_kids, &ib.leaf_kids);
+            let m = &ctx.rel32.m;
+            let tr = &ctx.rel32.t;
+            while let Some(e) = stack.pop() {
+                let t = thr(ub);
+                if !signed && t <= 0.0 {
+                    break;
+                }
+                let na = &a_nodes[e.a as usize];
+                let nb = &b_nodes[e.b as usize];
+                if !refine(e.key, na.r + nb.r + ctx.slack, t) {
+                    continue;
+                }
+                let mut d2 = [0.0f32; LANES];
+                let mut sr = [0.0f32; LANES];
+                let (mut px, mut py, mut pz) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
+                let split_a = !na.is_leaf() && (nb.is_leaf() || na.r >= nb.r);
+                let (count, first, leaves) = if split_a {
+                    let k = &ka[e.a as usize];
+                    let c = e.c;
+                    for l in 0..LANES {
+                        let dx = k.x[l] - c[0];
+                        let dy = k.y[l] - c[1];
+                        let dz = k.z[l] - c[2];
+                        d2[l] = dx * dx + dy * dy + dz * dz;
+                        sr[l] = k.r[l] + nb.r;
+                    }
+                    let leaves = if nb.is_leaf() { la[e.a as usize] } else { 0 };
+                    (na.count, na.first, leaves)
+                } else {
+                    let k = &kb[e.b as usize];
+                    for l in 0..LANES {
+                        // Same operation order as `Rel32::apply` (bit-identical centres).
+                        let (x, y, z) = (k.x[l], k.y[l], k.z[l]);
+                        px[l] = m[0] * x + m[1] * y + m[2] * z + tr[0];
+                        py[l] = m[3] * x + m[4] * y + m[5] * z + tr[1];
+                        pz[l] = m[6] * x + m[7] * y + m[8] * z + tr[2];
+                        let dx = na.x - px[l];
+                        let dy = na.y - py[l];
+                        let dz = na.z - pz[l];
+                        d2[l] = dx * dx + dy * dy + dz * dz;
+                        sr[l] = na.r + k.r[l];
+                    }
+                    let leaves = if na.is_leaf() { lb[e.b as usize] } else { 0 };
+                    (nb.count, nb.first, leaves)
+                };
+                visits += count as u64;
+                let mut mask = 0u32;
+                for l in 0..LANES {
+                    if leaves & (1 << l) == 0 {
+                        sr[l] += ctx.slack;
+                    }
+                    let lim = t + sr[l];
+                    mask |= ((lim > 0.0 && d2[l] < lim * lim * MARGIN) as u32) << l;
+                }
+                mask &= (1u32 << count) - 1;
+                while mask != 0 {
+                    let l = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let child = first + l as u32;
+                    let (i, j, c) = if split_a {
+                        (child, e.b, e.c)
+                    } else {
+                        (e.a, child, [px[l], py[l], pz[l]])
+                    };
+                    if leaves & (1 << l) != 0 {
+                        let d = d2[l].sqrt() - sr[l];
+                        if d < ub {
+                            ub = d;
+                            best = (i, j);
+                        }
+                    } else if refine(d2[l], sr[l], thr(ub)) {
+                        prefetch(
+                            &ka[i as usize],
+                            &kb[j as usize],
+                            &a_nodes[i as usize],
+                            &b_nodes[j as usize],
+                        );
+                        stack.push(Entry {
+                            key: d2[l],
+                            a: i,
+                            b: j,
+                            c,
+                        });
+                    }
+                }
+            }
+        }
         while let Some(e) = stack.pop() {
             let t = thr(ub);
             if !signed && t <= 0.0 {
@@ -268,4 +360,23 @@ pub fn proximity(
         leaf_b: lb,
         visits,
     }
+}
+
+/// Hints the memory system that a pushed pair's nodes and children will be read soon.
+#[inline(always)]
+fn prefetch<T, U, V, W>(ka: &T, kb: &U, na: &V, nb: &W) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        // SAFETY: prefetching is a hint without architectural effect; the pointers come from
+        // references.
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(ka as *const T as *const i8);
+            _mm_prefetch::<_MM_HINT_T0>(kb as *const U as *const i8);
+            _mm_prefetch::<_MM_HINT_T0>(na as *const V as *const i8);
+            _mm_prefetch::<_MM_HINT_T0>(nb as *const W as *const i8);
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (ka, kb, na, nb);
 }

@@ -11,8 +11,8 @@ use glam::{DMat3, DVec3};
 /// so that they see bit-identical coordinates.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Rel32 {
-    pub(crate) m: [f32; 9],
-    pub(crate) t: [f32; 3],
+    m: [f32; 9],
+    t: [f32; 3],
 }
 
 impl Rel32 {

@@ -2,8 +2,8 @@
 
 use super::geometry::{direction, leaf_pair};
 use super::heap::Entry;
-use super::info::LANES;
-use super::state::{expand_larger, PairState};
+use super::info::{TreeInfo, LANES};
+use super::state::{expand_larger, prefetch, Ctx, PairState};
 use super::Pose;
 use crate::SphereTree;
 use glam::DVec3;
@@ -156,50 +156,10 @@ pub fn proximity(
             });
         }
     } else {
-        // Depth first without square roots: a pair is refined while its lower bound
-        // `|Δ| − s` is below the threshold `t` of the best pair so far, i.e. while
-        // `|Δ|² < (t + s)²`; the stack keeps `|Δ|²` and recomputes `s` from the nodes it
-        // reads anyway. Pruned pairs all had bounds ≥ the threshold of their time, so the
-        // final threshold is a proved lower bound.
-        let thr = |ub: f32| {
-            if signed && ub <= 0.0 {
-                ub - abs
-            } else {
-                (ub - abs).min(ub / (1.0 + rel))
-            }
-        };
-        // The squared comparison may round the other way than `sqrt(d2) − s < t` by an ulp;
-        // a relative margin of 2⁻¹⁸ keeps it on the refining side (inner pairs) and sends
-        // borderline leaf pairs to the exact comparison, so the answer equals brute force.
-        const MARGIN: f32 = 1.0 + 1.0 / 262_144.0;
-        let refine = |d2: f32, s: f32, t: f32| {
-            let l = t + s;
-            l > 0.0 && d2 < l * l * MARGIN
-        };
-        if ub == f32::INFINITY {
-            // No pair from the last query: dive to a leaf pair along the nearest child pairs
-            // for a first upper bound (unordered depth first could wander far first).
-            let (mut ea, mut eb, mut ec) = (0u32, 0u32, c0);
-            loop {
-                let mut next = (f32::INFINITY, 0u32, 0u32, c0, false);
-                expand_larger(&ctx, ea, eb, ec, |i, j, c, d2, sr, leafs| {
-                    visits += 1;
-                    let d = d2.sqrt() - sr;
-                    if d < next.0 {
-                        next = (d, i, j, c, leafs);
-                    }
-                });
-                let (d, i, j, c, leafs) = next;
-                if leafs {
-                    ub = d;
-                    best = (i, j);
-                    break;
-                }
-                if d == f32::INFINITY {
-                    break;
-                }
-                (ea, eb, ec) = (i, j, c);
-            }
+        let prune = Prune { abs, rel, signed };
+        let mut f = Found { ub, best, visits };
+        if f.ub == f32::INFINITY {
+            dive(&ctx, c0, &mut f);
         }
         let stack = &mut s.pstack;
         stack.clear();
@@ -208,130 +168,19 @@ pub fn proximity(
             key: dx * dx + dy * dy + dz * dz,
             ..root
         });
-        let a_nodes = ctx.a;
-        let b_nodes = ctx.b;
         if !ia.kids.is_empty() && !ib.kids.is_empty() {
-            // Fan-out ≤ 4: all children of the split node in one 4-lane step.
-            let (ka, kb) = (&ia.kids, &ib.kids);
-            let (la, lb) = (&ia.leaf_kids, &ib.leaf_kids);
-            let m = &ctx.rel32.m;
-            let tr = &ctx.rel32.t;
-            while let Some(e) = stack.pop() {
-                let t = thr(ub);
-                if !signed && t <= 0.0 {
-                    break;
-                }
-                let na = &a_nodes[e.a as usize];
-                let nb = &b_nodes[e.b as usize];
-                if !refine(e.key, na.r + nb.r + ctx.slack, t) {
-                    continue;
-                }
-                let mut d2 = [0.0f32; LANES];
-                let mut sr = [0.0f32; LANES];
-                let (mut px, mut py, mut pz) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
-                let split_a = !na.is_leaf() && (nb.is_leaf() || na.r >= nb.r);
-                let (count, first, leaves) = if split_a {
-                    let k = &ka[e.a as usize];
-                    let c = e.c;
-                    for l in 0..LANES {
-                        let dx = k.x[l] - c[0];
-                        let dy = k.y[l] - c[1];
-                        let dz = k.z[l] - c[2];
-                        d2[l] = dx * dx + dy * dy + dz * dz;
-                        sr[l] = k.r[l] + nb.r;
-                    }
-                    let leaves = if nb.is_leaf() { la[e.a as usize] } else { 0 };
-                    (na.count, na.first, leaves)
-                } else {
-                    let k = &kb[e.b as usize];
-                    for l in 0..LANES {
-                        // Same operation order as `Rel32::apply` (bit-identical centres).
-                        let (x, y, z) = (k.x[l], k.y[l], k.z[l]);
-                        px[l] = m[0] * x + m[1] * y + m[2] * z + tr[0];
-                        py[l] = m[3] * x + m[4] * y + m[5] * z + tr[1];
-                        pz[l] = m[6] * x + m[7] * y + m[8] * z + tr[2];
-                        let dx = na.x - px[l];
-                        let dy = na.y - py[l];
-                        let dz = na.z - pz[l];
-                        d2[l] = dx * dx + dy * dy + dz * dz;
-                        sr[l] = na.r + k.r[l];
-                    }
-                    let leaves = if na.is_leaf() { lb[e.b as usize] } else { 0 };
-                    (nb.count, nb.first, leaves)
-                };
-                visits += count as u64;
-                let mut mask = 0u32;
-                for l in 0..LANES {
-                    if leaves & (1 << l) == 0 {
-                        sr[l] += ctx.slack;
-                    }
-                    let lim = t + sr[l];
-                    mask |= ((lim > 0.0 && d2[l] < lim * lim * MARGIN) as u32) << l;
-                }
-                mask &= (1u32 << count) - 1;
-                while mask != 0 {
-                    let l = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let child = first + l as u32;
-                    let (i, j, c) = if split_a {
-                        (child, e.b, e.c)
-                    } else {
-                        (e.a, child, [px[l], py[l], pz[l]])
-                    };
-                    if leaves & (1 << l) != 0 {
-                        let d = d2[l].sqrt() - sr[l];
-                        if d < ub {
-                            ub = d;
-                            best = (i, j);
-                        }
-                    } else if refine(d2[l], sr[l], thr(ub)) {
-                        prefetch(
-                            &ka[i as usize],
-                            &kb[j as usize],
-                            &a_nodes[i as usize],
-                            &b_nodes[j as usize],
-                        );
-                        stack.push(Entry {
-                            key: d2[l],
-                            a: i,
-                            b: j,
-                            c,
-                        });
-                    }
-                }
-            }
+            depth_first_lanes(&ctx, ia, ib, stack, prune, &mut f);
+        } else {
+            depth_first_nodes(&ctx, stack, prune, &mut f);
         }
-        while let Some(e) = stack.pop() {
-            let t = thr(ub);
-            if !signed && t <= 0.0 {
-                break;
-            }
-            let sr = a_nodes[e.a as usize].r + b_nodes[e.b as usize].r + ctx.slack;
-            if !refine(e.key, sr, t) {
-                continue;
-            }
-            expand_larger(&ctx, e.a, e.b, e.c, |i, j, c, d2, sr, leafs| {
-                visits += 1;
-                if leafs {
-                    let l = ub + sr;
-                    if l > 0.0 && d2 < l * l * MARGIN {
-                        let d = d2.sqrt() - sr;
-                        if d < ub {
-                            ub = d;
-                            best = (i, j);
-                        }
-                    }
-                } else if refine(d2, sr, thr(ub)) {
-                    stack.push(Entry {
-                        key: d2,
-                        a: i,
-                        b: j,
-                        c,
-                    });
-                }
-            });
-        }
-        lower = lower.min(if signed { thr(ub) } else { thr(ub).max(0.0) });
+        (ub, best, visits) = (f.ub, f.best, f.visits);
+        // Pruned pairs all had bounds ≥ the threshold of their time, so the final threshold
+        // is a proved lower bound.
+        lower = if signed {
+            prune.thr(ub)
+        } else {
+            prune.thr(ub).max(0.0)
+        };
     }
     let lower = lower.min(ub);
     s.prox_pair = Some(best);
@@ -362,21 +211,207 @@ pub fn proximity(
     }
 }
 
-/// Hints the memory system that a pushed pair's nodes and children will be read soon.
-#[inline(always)]
-fn prefetch<T, U, V, W>(ka: &T, kb: &U, na: &V, nb: &W) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        // SAFETY: prefetching is a hint without architectural effect; the pointers come from
-        // references.
-        unsafe {
-            _mm_prefetch::<_MM_HINT_T0>(ka as *const T as *const i8);
-            _mm_prefetch::<_MM_HINT_T0>(kb as *const U as *const i8);
-            _mm_prefetch::<_MM_HINT_T0>(na as *const V as *const i8);
-            _mm_prefetch::<_MM_HINT_T0>(nb as *const W as *const i8);
+/// The best leaf pair so far of the depth-first search, and the node-pair tests spent.
+struct Found {
+    ub: f32,
+    best: (u32, u32),
+    visits: u64,
+}
+
+/// The depth-first search's pruning rule, without square roots: a pair is refined while its
+/// lower bound `|Δ| − s` is below the threshold `t` of the best pair so far, i.e. while
+/// `|Δ|² < (t + s)²`; the stack keeps `|Δ|²` and recomputes `s` from the nodes.
+#[derive(Clone, Copy)]
+struct Prune {
+    abs: f32,
+    rel: f32,
+    signed: bool,
+}
+
+/// The squared comparison may round the other way than `sqrt(d2) − s < t` by an ulp; a
+/// relative margin of 2⁻¹⁸ keeps it on the refining side (inner pairs) and sends borderline
+/// leaf pairs to the exact comparison, so the answer equals brute force.
+const MARGIN: f32 = 1.0 + 1.0 / 262_144.0;
+
+impl Prune {
+    /// Bound below which a pair can still improve the best distance `ub` by more than the
+    /// tolerances.
+    #[inline(always)]
+    fn thr(&self, ub: f32) -> f32 {
+        if self.signed && ub <= 0.0 {
+            ub - self.abs
+        } else {
+            (ub - self.abs).min(ub / (1.0 + self.rel))
         }
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (ka, kb, na, nb);
+
+    /// True when nothing is left to improve (non-signed mode, overlap found).
+    #[inline(always)]
+    fn finished(&self, t: f32) -> bool {
+        !self.signed && t <= 0.0
+    }
+
+    /// Whether a pair at squared centre distance `d2` with radius sum `s` may hold a leaf
+    /// pair closer than the threshold `t`.
+    #[inline(always)]
+    fn refine(d2: f32, s: f32, t: f32) -> bool {
+        let l = t + s;
+        l > 0.0 && d2 < l * l * MARGIN
+    }
+}
+
+/// No pair from the last query: dives to a leaf pair along the nearest child pairs for a
+/// first upper bound (unordered depth first could wander far first).
+fn dive(ctx: &Ctx, c0: [f32; 3], f: &mut Found) {
+    let (mut ea, mut eb, mut ec) = (0u32, 0u32, c0);
+    loop {
+        let mut next = (f32::INFINITY, 0u32, 0u32, c0, false);
+        expand_larger(ctx, ea, eb, ec, |i, j, c, d2, sr, leafs| {
+            f.visits += 1;
+            let d = d2.sqrt() - sr;
+            if d < next.0 {
+                next = (d, i, j, c, leafs);
+            }
+        });
+        let (d, i, j, c, leafs) = next;
+        if leafs {
+            f.ub = d;
+            f.best = (i, j);
+            return;
+        }
+        if d == f32::INFINITY {
+            return;
+        }
+        (ea, eb, ec) = (i, j, c);
+    }
+}
+
+/// Depth first over the stack, one child at a time (any fan-out).
+fn depth_first_nodes(ctx: &Ctx, stack: &mut Vec<Entry>, p: Prune, f: &mut Found) {
+    while let Some(e) = stack.pop() {
+        let t = p.thr(f.ub);
+        if p.finished(t) {
+            break;
+        }
+        let sr = ctx.a[e.a as usize].r + ctx.b[e.b as usize].r + ctx.slack;
+        if !Prune::refine(e.key, sr, t) {
+            continue;
+        }
+        expand_larger(ctx, e.a, e.b, e.c, |i, j, c, d2, sr, leafs| {
+            f.visits += 1;
+            if leafs {
+                if Prune::refine(d2, sr, f.ub) {
+                    let d = d2.sqrt() - sr;
+                    if d < f.ub {
+                        f.ub = d;
+                        f.best = (i, j);
+                    }
+                }
+            } else if Prune::refine(d2, sr, p.thr(f.ub)) {
+                stack.push(Entry {
+                    key: d2,
+                    a: i,
+                    b: j,
+                    c,
+                });
+            }
+        });
+    }
+}
+
+/// Depth first over the stack for fan-outs ≤ 4: all children of the split node in one
+/// 4-lane step ([`TreeInfo`]'s side-by-side children), prefetching every pushed pair.
+fn depth_first_lanes(
+    ctx: &Ctx,
+    ia: &TreeInfo,
+    ib: &TreeInfo,
+    stack: &mut Vec<Entry>,
+    p: Prune,
+    f: &mut Found,
+) {
+    while let Some(e) = stack.pop() {
+        let t = p.thr(f.ub);
+        if p.finished(t) {
+            break;
+        }
+        let na = &ctx.a[e.a as usize];
+        let nb = &ctx.b[e.b as usize];
+        if !Prune::refine(e.key, na.r + nb.r + ctx.slack, t) {
+            continue;
+        }
+        let mut d2 = [0.0f32; LANES];
+        let mut sr = [0.0f32; LANES];
+        let mut pc = [[0.0f32; 3]; LANES];
+        let split_a = !na.is_leaf() && (nb.is_leaf() || na.r >= nb.r);
+        let (count, first, leaves) = if split_a {
+            let k = &ia.kids[e.a as usize];
+            let c = e.c;
+            for l in 0..LANES {
+                let dx = k.x[l] - c[0];
+                let dy = k.y[l] - c[1];
+                let dz = k.z[l] - c[2];
+                d2[l] = dx * dx + dy * dy + dz * dz;
+                sr[l] = k.r[l] + nb.r;
+            }
+            let leaves = if nb.is_leaf() {
+                ia.leaf_kids[e.a as usize]
+            } else {
+                0
+            };
+            (na.count, na.first, leaves)
+        } else {
+            let k = &ib.kids[e.b as usize];
+            for l in 0..LANES {
+                pc[l] = ctx.rel32.apply(k.x[l], k.y[l], k.z[l]);
+                let dx = na.x - pc[l][0];
+                let dy = na.y - pc[l][1];
+                let dz = na.z - pc[l][2];
+                d2[l] = dx * dx + dy * dy + dz * dz;
+                sr[l] = na.r + k.r[l];
+            }
+            let leaves = if na.is_leaf() {
+                ib.leaf_kids[e.b as usize]
+            } else {
+                0
+            };
+            (nb.count, nb.first, leaves)
+        };
+        f.visits += count as u64;
+        let mut mask = 0u32;
+        for l in 0..LANES {
+            if leaves & (1 << l) == 0 {
+                sr[l] += ctx.slack;
+            }
+            mask |= (Prune::refine(d2[l], sr[l], t) as u32) << l;
+        }
+        mask &= (1u32 << count) - 1;
+        while mask != 0 {
+            let l = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let child = first + l as u32;
+            let (i, j, c) = if split_a {
+                (child, e.b, e.c)
+            } else {
+                (e.a, child, pc[l])
+            };
+            if leaves & (1 << l) != 0 {
+                let d = d2[l].sqrt() - sr[l];
+                if d < f.ub {
+                    f.ub = d;
+                    f.best = (i, j);
+                }
+            } else if Prune::refine(d2[l], sr[l], p.thr(f.ub)) {
+                prefetch(&ia.kids[i as usize]);
+                prefetch(&ib.kids[j as usize]);
+                prefetch(&ctx.a[i as usize]);
+                prefetch(&ctx.b[j as usize]);
+                stack.push(Entry {
+                    key: d2[l],
+                    a: i,
+                    b: j,
+                    c,
+                });
+            }
+        }
+    }
 }

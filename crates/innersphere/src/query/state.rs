@@ -79,18 +79,8 @@ impl Ctx<'_> {
     /// memory latency, and this overlaps the loads of queued pairs).
     #[inline(always)]
     pub(crate) fn prefetch(&self, ia: u32, ib: u32) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            let fa = self.a[ia as usize].first as usize;
-            let fb = self.b[ib as usize].first as usize;
-            // SAFETY: prefetching is a hint without architectural effect; the pointers are
-            // in bounds (first children of existing nodes, 0 for leaves).
-            unsafe {
-                _mm_prefetch::<_MM_HINT_T0>(self.a.as_ptr().add(fa) as *const i8);
-                _mm_prefetch::<_MM_HINT_T0>(self.b.as_ptr().add(fb) as *const i8);
-            }
-        }
+        prefetch(&self.a[self.a[ia as usize].first as usize]);
+        prefetch(&self.b[self.b[ib as usize].first as usize]);
     }
 
     /// Test of node pair (`ia`, `ib`) with B's centre `cb`: (overlap, lower bound of the
@@ -107,6 +97,20 @@ impl Ctx<'_> {
         let d2 = dx * dx + dy * dy + dz * dz;
         (d2 < s * s, d2.sqrt() - s)
     }
+}
+
+/// Hints the memory system that the cache line holding `r` will be read soon (a hint without
+/// architectural effect; nothing on other targets).
+#[inline(always)]
+pub(crate) fn prefetch<T>(r: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: prefetching a valid reference's address has no architectural effect.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>(r as *const T as *const i8);
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = r;
 }
 
 /// Per-pair state: what temporal coherence needs (last contact pairs, last separation bound

@@ -130,11 +130,16 @@ pub fn proximity(
                 key: key_of(root_lb, sr),
                 ..root
             });
+        } else {
+            lower = clamp(root_lb);
         }
+        // The proved lower bound is the smallest bound of everything pruned and of what is
+        // left on the heap when the search stops (a child's sphere may reach beyond its
+        // parent's, so heap keys need not grow as the search goes on).
         while let Some(e) = heap.pop() {
             let elb = clamp(e.key);
             if done(elb, ub) {
-                lower = elb;
+                lower = lower.min(elb);
                 break;
             }
             expand_larger(&ctx, e.a, e.b, e.c, |i, j, c, d2, sr, leafs| {
@@ -152,6 +157,8 @@ pub fn proximity(
                         b: j,
                         c,
                     });
+                } else {
+                    lower = lower.min(clamp(d));
                 }
             });
         }

@@ -29,19 +29,24 @@ impl Node {
     }
 }
 
-/// Lanes of [`Kids`]: the children of a node side by side, for fan-outs up to 4.
+/// Lanes of a [`Block`]: the children of a node side by side, for fan-outs up to 4.
 pub(crate) const LANES: usize = 4;
 
-/// The spheres of a node's children side by side (structure of arrays, one cache line), so
-/// that a traversal tests all children of a node against one sphere in one vectorised step
-/// instead of one branchy test per child. Unused lanes have radius −∞ (never refined).
+/// An inner node's children side by side (structure of arrays, the spheres in the first
+/// cache line, what to descend to in the second), so that a traversal tests all children of
+/// one node against all children of another in one vectorised 4×4 step instead of one
+/// branchy test per pair. Unused lanes have radius −∞ (never refined).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[repr(C, align(64))]
-pub(crate) struct Kids {
+pub(crate) struct Block {
     pub x: [f32; LANES],
     pub y: [f32; LANES],
     pub z: [f32; LANES],
     pub r: [f32; LANES],
+    /// Per child: its block index when it is an inner node, its node index when a leaf.
+    pub child: [u32; LANES],
+    /// Bit `k` set when child `k` is a leaf.
+    pub leaf: u32,
 }
 
 /// Query-side facts about one tree, computed once ([`TreeInfo::new`], O(nodes)) and shared
@@ -70,11 +75,9 @@ pub struct TreeInfo {
     pub subtree_volume: Vec<f32>,
     /// The tree's nodes in the packed layout the traversals read (same f32 values).
     pub(crate) packed: Vec<Node>,
-    /// Per node, its children's spheres side by side (leaves: unused); empty when some node
-    /// has more than [`LANES`] children.
-    pub(crate) kids: Vec<Kids>,
-    /// Per node, bit `k` set when child `k` is a leaf.
-    pub(crate) leaf_kids: Vec<u8>,
+    /// One [`Block`] per inner node, in node order (the root's is block 0); empty when some
+    /// node has more than [`LANES`] children.
+    pub(crate) blocks: Vec<Block>,
 }
 
 /// Rounds a non-negative f64 up to the next f32.
@@ -112,31 +115,43 @@ impl TreeInfo {
             }
         }
         let max_children = tree.child_count.iter().copied().max().unwrap_or(0) as usize;
-        let (kids, leaf_kids) = if max_children <= LANES {
-            let mut kids = vec![
-                Kids {
+        let blocks = if max_children <= LANES {
+            // Block index of every inner node: its rank among the inner nodes.
+            let mut rank = vec![u32::MAX; n];
+            let mut next = 0u32;
+            for (i, r) in rank.iter_mut().enumerate() {
+                if !tree.is_leaf(i) {
+                    *r = next;
+                    next += 1;
+                }
+            }
+            let mut blocks = Vec::with_capacity(next as usize);
+            for i in (0..n).filter(|&i| !tree.is_leaf(i)) {
+                let mut b = Block {
                     x: [0.0; LANES],
                     y: [0.0; LANES],
                     z: [0.0; LANES],
                     r: [f32::NEG_INFINITY; LANES],
+                    child: [0; LANES],
+                    leaf: 0,
                 };
-                n
-            ];
-            let mut leaf_kids = vec![0u8; n];
-            for i in 0..n {
                 for (k, ch) in tree.children(i).enumerate() {
-                    kids[i].x[k] = tree.x[ch];
-                    kids[i].y[k] = tree.y[ch];
-                    kids[i].z[k] = tree.z[ch];
-                    kids[i].r[k] = tree.r[ch];
+                    b.x[k] = tree.x[ch];
+                    b.y[k] = tree.y[ch];
+                    b.z[k] = tree.z[ch];
+                    b.r[k] = tree.r[ch];
                     if tree.is_leaf(ch) {
-                        leaf_kids[i] |= 1 << k;
+                        b.leaf |= 1 << k;
+                        b.child[k] = ch as u32;
+                    } else {
+                        b.child[k] = rank[ch];
                     }
                 }
+                blocks.push(b);
             }
-            (kids, leaf_kids)
+            blocks
         } else {
-            (Vec::new(), Vec::new())
+            Vec::new()
         };
         TreeInfo {
             nodes: n,
@@ -164,8 +179,7 @@ impl TreeInfo {
                     depth: tree.depth[i] as u32,
                 })
                 .collect(),
-            kids,
-            leaf_kids,
+            blocks,
         }
     }
 }

@@ -2,7 +2,7 @@
 
 use super::geometry::{direction, leaf_pair};
 use super::heap::Entry;
-use super::info::{TreeInfo, LANES};
+use super::info::{Block, TreeInfo, LANES};
 use super::state::{expand_larger, prefetch, Ctx, PairState};
 use super::Pose;
 use crate::SphereTree;
@@ -168,16 +168,17 @@ pub fn proximity(
         if f.ub == f32::INFINITY {
             dive(&ctx, c0, &mut f);
         }
-        let stack = &mut s.pstack;
-        stack.clear();
-        let (dx, dy, dz) = (ctx.a[0].x - c0[0], ctx.a[0].y - c0[1], ctx.a[0].z - c0[2]);
-        stack.push(Entry {
-            key: dx * dx + dy * dy + dz * dz,
-            ..root
-        });
-        if !ia.kids.is_empty() && !ib.kids.is_empty() {
-            depth_first_lanes(&ctx, ia, ib, stack, prune, &mut f);
+        if !ia.blocks.is_empty() && !ib.blocks.is_empty() {
+            let root = root_entry(&ctx, c0);
+            depth_first_blocks(&ctx, ia, ib, root, &mut s.bstack, prune, &mut f);
         } else {
+            let stack = &mut s.pstack;
+            stack.clear();
+            let (dx, dy, dz) = (ctx.a[0].x - c0[0], ctx.a[0].y - c0[1], ctx.a[0].z - c0[2]);
+            stack.push(Entry {
+                key: dx * dx + dy * dy + dz * dz,
+                ..root
+            });
             depth_first_nodes(&ctx, stack, prune, &mut f);
         }
         (ub, best, visits) = (f.ub, f.best, f.visits);
@@ -326,99 +327,226 @@ fn depth_first_nodes(ctx: &Ctx, stack: &mut Vec<Entry>, p: Prune, f: &mut Found)
     }
 }
 
-/// Depth first over the stack for fan-outs ≤ 4: all children of the split node in one
-/// 4-lane step ([`TreeInfo`]'s side-by-side children), prefetching every pushed pair.
-fn depth_first_lanes(
+/// A pair on the 4×4 search's stack: two inner nodes (block indices), or a leaf and an
+/// inner node with the leaf's sphere inline (centre in A's frame), plus the pair's squared
+/// centre distance and radius sum at the time it was pushed.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct BlockEntry {
+    /// Block of A's node, or A's leaf node index when `kind == A_LEAF`.
+    a: u32,
+    /// Block of B's node, or B's leaf node index when `kind == B_LEAF`.
+    b: u32,
+    kind: u32,
+    d2: f32,
+    s: f32,
+    /// The leaf's sphere (A's frame) when one side is a leaf.
+    p: [f32; 4],
+}
+
+const INNER: u32 = 0;
+const A_LEAF: u32 = 1;
+const B_LEAF: u32 = 2;
+
+/// Records leaf pair (`i`, `j`) at `d2`, `s` when it beats the best so far.
+#[inline(always)]
+fn leaf_pair_found(f: &mut Found, d2: f32, s: f32, i: u32, j: u32) {
+    let d = d2.sqrt() - s;
+    if d < f.ub {
+        f.ub = d;
+        f.best = (i, j);
+    }
+}
+
+/// B's block centres in A's frame, lane by lane (the same operation order as
+/// [`Rel32::apply`](super::geometry::Rel32), so leaf distances equal brute force).
+#[inline(always)]
+fn block_in_a(ctx: &Ctx, k: &Block) -> ([f32; LANES], [f32; LANES], [f32; LANES]) {
+    let mut x = [0.0f32; LANES];
+    let mut y = [0.0f32; LANES];
+    let mut z = [0.0f32; LANES];
+    for l in 0..LANES {
+        [x[l], y[l], z[l]] = ctx.rel32.apply(k.x[l], k.y[l], k.z[l]);
+    }
+    (x, y, z)
+}
+
+/// Depth first for fan-outs ≤ 4, splitting both nodes of a pair at once: the children of
+/// both are tested 4×4 in one vectorised step from their [`Block`]s (two cache lines per
+/// node), a pair with a leaf side tests the leaf against the other's 4 children. Twice the
+/// sphere tests of splitting the larger node, but half the stack pops, and a pop is what
+/// costs (≈ 30 ns against ≈ 1 ns per lane test; measured in session 4).
+fn depth_first_blocks(
     ctx: &Ctx,
     ia: &TreeInfo,
     ib: &TreeInfo,
-    stack: &mut Vec<Entry>,
+    root: BlockEntry,
+    stack: &mut Vec<BlockEntry>,
     p: Prune,
     f: &mut Found,
 ) {
+    stack.clear();
+    stack.push(root);
+    let (ba, bb) = (&ia.blocks[..], &ib.blocks[..]);
     while let Some(e) = stack.pop() {
         let t = p.thr(f.ub);
         if p.finished(t) {
             break;
         }
-        let na = &ctx.a[e.a as usize];
-        let nb = &ctx.b[e.b as usize];
-        if !Prune::refine(e.key, na.r + nb.r + ctx.slack, t) {
+        if !Prune::refine(e.d2, e.s, t) {
             continue;
         }
-        let mut d2 = [0.0f32; LANES];
-        let mut sr = [0.0f32; LANES];
-        let mut pc = [[0.0f32; 3]; LANES];
-        let split_a = !na.is_leaf() && (nb.is_leaf() || na.r >= nb.r);
-        let (count, first, leaves) = if split_a {
-            let k = &ia.kids[e.a as usize];
-            let c = e.c;
-            for l in 0..LANES {
-                let dx = k.x[l] - c[0];
-                let dy = k.y[l] - c[1];
-                let dz = k.z[l] - c[2];
-                d2[l] = dx * dx + dy * dy + dz * dz;
-                sr[l] = k.r[l] + nb.r;
-            }
-            let leaves = if nb.is_leaf() {
-                ia.leaf_kids[e.a as usize]
-            } else {
-                0
-            };
-            (na.count, na.first, leaves)
-        } else {
-            let k = &ib.kids[e.b as usize];
-            for l in 0..LANES {
-                pc[l] = ctx.rel32.apply(k.x[l], k.y[l], k.z[l]);
-                let dx = na.x - pc[l][0];
-                let dy = na.y - pc[l][1];
-                let dz = na.z - pc[l][2];
-                d2[l] = dx * dx + dy * dy + dz * dz;
-                sr[l] = na.r + k.r[l];
-            }
-            let leaves = if na.is_leaf() {
-                ib.leaf_kids[e.b as usize]
-            } else {
-                0
-            };
-            (nb.count, nb.first, leaves)
-        };
-        f.visits += count as u64;
-        let mut mask = 0u32;
-        for l in 0..LANES {
-            if leaves & (1 << l) == 0 {
-                sr[l] += ctx.slack;
-            }
-            mask |= (Prune::refine(d2[l], sr[l], t) as u32) << l;
-        }
-        mask &= (1u32 << count) - 1;
-        while mask != 0 {
-            let l = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            let child = first + l as u32;
-            let (i, j, c) = if split_a {
-                (child, e.b, e.c)
-            } else {
-                (e.a, child, pc[l])
-            };
-            if leaves & (1 << l) != 0 {
-                let d = d2[l].sqrt() - sr[l];
-                if d < f.ub {
-                    f.ub = d;
-                    f.best = (i, j);
+        match e.kind {
+            INNER => {
+                let ka = &ba[e.a as usize];
+                let kb = &bb[e.b as usize];
+                let (bx, by, bz) = block_in_a(ctx, kb);
+                let mut d2 = [[0.0f32; LANES]; LANES];
+                let mut sr = [[0.0f32; LANES]; LANES];
+                let mut mask = 0u32;
+                for i in 0..LANES {
+                    for l in 0..LANES {
+                        let dx = ka.x[i] - bx[l];
+                        let dy = ka.y[i] - by[l];
+                        let dz = ka.z[i] - bz[l];
+                        d2[i][l] = dx * dx + dy * dy + dz * dz;
+                        let both = (ka.leaf >> i) & (kb.leaf >> l) & 1;
+                        sr[i][l] = ka.r[i] + kb.r[l];
+                        if both == 0 {
+                            sr[i][l] += ctx.slack;
+                        }
+                        mask |= (Prune::refine(d2[i][l], sr[i][l], t) as u32) << (i * LANES + l);
+                    }
                 }
-            } else if Prune::refine(d2[l], sr[l], p.thr(f.ub)) {
-                prefetch(&ia.kids[i as usize]);
-                prefetch(&ib.kids[j as usize]);
-                prefetch(&ctx.a[i as usize]);
-                prefetch(&ctx.b[j as usize]);
-                stack.push(Entry {
-                    key: d2[l],
-                    a: i,
-                    b: j,
-                    c,
-                });
+                f.visits += 16;
+                while mask != 0 {
+                    let q = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let (i, l) = (q / LANES, q % LANES);
+                    let (a_leaf, b_leaf) = ((ka.leaf >> i) & 1 != 0, (kb.leaf >> l) & 1 != 0);
+                    let (ca, cb) = (ka.child[i], kb.child[l]);
+                    let (d2, s) = (d2[i][l], sr[i][l]);
+                    if a_leaf && b_leaf {
+                        leaf_pair_found(f, d2, s, ca, cb);
+                        continue;
+                    }
+                    if !Prune::refine(d2, s, p.thr(f.ub)) {
+                        continue;
+                    }
+                    let (kind, pp) = if a_leaf {
+                        prefetch(&bb[cb as usize]);
+                        (A_LEAF, [ka.x[i], ka.y[i], ka.z[i], ka.r[i]])
+                    } else if b_leaf {
+                        prefetch(&ba[ca as usize]);
+                        (B_LEAF, [bx[l], by[l], bz[l], kb.r[l]])
+                    } else {
+                        prefetch(&ba[ca as usize]);
+                        prefetch(&bb[cb as usize]);
+                        (INNER, [0.0; 4])
+                    };
+                    stack.push(BlockEntry {
+                        a: ca,
+                        b: cb,
+                        kind,
+                        d2,
+                        s,
+                        p: pp,
+                    });
+                }
+            }
+            A_LEAF => {
+                let kb = &bb[e.b as usize];
+                let (bx, by, bz) = block_in_a(ctx, kb);
+                let [px, py, pz, pr] = e.p;
+                let mut d2 = [0.0f32; LANES];
+                let mut sr = [0.0f32; LANES];
+                let mut mask = 0u32;
+                for l in 0..LANES {
+                    let dx = px - bx[l];
+                    let dy = py - by[l];
+                    let dz = pz - bz[l];
+                    d2[l] = dx * dx + dy * dy + dz * dz;
+                    sr[l] = pr + kb.r[l];
+                    if (kb.leaf >> l) & 1 == 0 {
+                        sr[l] += ctx.slack;
+                    }
+                    mask |= (Prune::refine(d2[l], sr[l], t) as u32) << l;
+                }
+                f.visits += 4;
+                while mask != 0 {
+                    let l = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let cb = kb.child[l];
+                    if (kb.leaf >> l) & 1 != 0 {
+                        leaf_pair_found(f, d2[l], sr[l], e.a, cb);
+                    } else if Prune::refine(d2[l], sr[l], p.thr(f.ub)) {
+                        prefetch(&bb[cb as usize]);
+                        stack.push(BlockEntry {
+                            b: cb,
+                            d2: d2[l],
+                            s: sr[l],
+                            ..e
+                        });
+                    }
+                }
+            }
+            _ => {
+                let ka = &ba[e.a as usize];
+                let [px, py, pz, pr] = e.p;
+                let mut d2 = [0.0f32; LANES];
+                let mut sr = [0.0f32; LANES];
+                let mut mask = 0u32;
+                for i in 0..LANES {
+                    let dx = ka.x[i] - px;
+                    let dy = ka.y[i] - py;
+                    let dz = ka.z[i] - pz;
+                    d2[i] = dx * dx + dy * dy + dz * dz;
+                    sr[i] = ka.r[i] + pr;
+                    if (ka.leaf >> i) & 1 == 0 {
+                        sr[i] += ctx.slack;
+                    }
+                    mask |= (Prune::refine(d2[i], sr[i], t) as u32) << i;
+                }
+                f.visits += 4;
+                while mask != 0 {
+                    let i = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let ca = ka.child[i];
+                    if (ka.leaf >> i) & 1 != 0 {
+                        leaf_pair_found(f, d2[i], sr[i], ca, e.b);
+                    } else if Prune::refine(d2[i], sr[i], p.thr(f.ub)) {
+                        prefetch(&ba[ca as usize]);
+                        stack.push(BlockEntry {
+                            a: ca,
+                            d2: d2[i],
+                            s: sr[i],
+                            ..e
+                        });
+                    }
+                }
             }
         }
+    }
+}
+
+/// The 4×4 search's first pair: the two roots.
+fn root_entry(ctx: &Ctx, c0: [f32; 3]) -> BlockEntry {
+    let (na, nb) = (&ctx.a[0], &ctx.b[0]);
+    let (dx, dy, dz) = (na.x - c0[0], na.y - c0[1], na.z - c0[2]);
+    let d2 = dx * dx + dy * dy + dz * dz;
+    let s = na.r + nb.r + ctx.slack;
+    let (kind, p) = if na.is_leaf() {
+        (A_LEAF, [na.x, na.y, na.z, na.r])
+    } else if nb.is_leaf() {
+        (B_LEAF, [c0[0], c0[1], c0[2], nb.r])
+    } else {
+        (INNER, [0.0; 4])
+    };
+    BlockEntry {
+        a: 0,
+        b: 0,
+        kind,
+        d2,
+        s,
+        p,
     }
 }

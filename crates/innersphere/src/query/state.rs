@@ -5,6 +5,7 @@ use super::geometry::{pruning_slack, Contact, Rel32};
 use super::heap::{Entry, PairHeap};
 use super::info::{Node, TreeInfo};
 use super::penetration::{Patch, PatchAcc};
+use super::proximity::BlockEntry;
 use super::Pose;
 use crate::SphereTree;
 use glam::DVec3;
@@ -36,6 +37,8 @@ pub(crate) struct Scratch {
     pub stack: Vec<Item>,
     /// Depth-first stack of keyed pairs (proximity).
     pub pstack: Vec<Entry>,
+    /// Depth-first stack of the 4×4 proximity search.
+    pub bstack: Vec<BlockEntry>,
     pub heap: PairHeap,
     pub anc_a: Vec<u32>,
     pub anc_b: Vec<u32>,
@@ -148,6 +151,8 @@ impl PairState {
             s: Scratch {
                 stack: Vec::with_capacity((depth * fan + 16).max(heap_cap / 4)),
                 pstack: Vec::with_capacity((depth * fan + 16).max(heap_cap / 4)),
+                // Each pop of the 4×4 search pushes at most 16 pairs, one level deeper.
+                bstack: Vec::with_capacity(depth * 16 + 16),
                 heap: PairHeap::with_capacity(heap_cap),
                 anc_a: Vec::with_capacity(a.max_depth as usize + 1),
                 anc_b: Vec::with_capacity(b.max_depth as usize + 1),

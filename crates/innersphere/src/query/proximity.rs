@@ -402,19 +402,31 @@ fn depth_first_blocks(
                 let (bx, by, bz) = block_in_a(ctx, kb);
                 let mut d2 = [[0.0f32; LANES]; LANES];
                 let mut sr = [[0.0f32; LANES]; LANES];
+                // The rounding slack for every pair but leaf pairs (+0 leaves those exact).
+                let mut b_slack = [ctx.slack; LANES];
+                for (l, v) in b_slack.iter_mut().enumerate() {
+                    if (kb.leaf >> l) & 1 != 0 {
+                        *v = 0.0;
+                    }
+                }
                 let mut mask = 0u32;
                 for i in 0..LANES {
+                    let rs = if (ka.leaf >> i) & 1 != 0 {
+                        b_slack
+                    } else {
+                        [ctx.slack; LANES]
+                    };
+                    let mut row = [false; LANES];
                     for l in 0..LANES {
                         let dx = ka.x[i] - bx[l];
                         let dy = ka.y[i] - by[l];
                         let dz = ka.z[i] - bz[l];
                         d2[i][l] = dx * dx + dy * dy + dz * dz;
-                        let both = (ka.leaf >> i) & (kb.leaf >> l) & 1;
-                        sr[i][l] = ka.r[i] + kb.r[l];
-                        if both == 0 {
-                            sr[i][l] += ctx.slack;
-                        }
-                        mask |= (Prune::refine(d2[i][l], sr[i][l], t) as u32) << (i * LANES + l);
+                        sr[i][l] = (ka.r[i] + kb.r[l]) + rs[l];
+                        row[l] = Prune::refine(d2[i][l], sr[i][l], t);
+                    }
+                    for (l, &v) in row.iter().enumerate() {
+                        mask |= (v as u32) << (i * LANES + l);
                     }
                 }
                 f.visits += 16;

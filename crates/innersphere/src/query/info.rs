@@ -45,8 +45,12 @@ pub(crate) struct Block {
     pub r: [f32; LANES],
     /// Per child: its block index when it is an inner node, its node index when a leaf.
     pub child: [u32; LANES],
+    /// Per child: its node index.
+    pub node: [u32; LANES],
     /// Bit `k` set when child `k` is a leaf.
     pub leaf: u32,
+    /// Number of children.
+    pub count: u32,
 }
 
 /// Query-side facts about one tree, computed once ([`TreeInfo::new`], O(nodes)) and shared
@@ -78,6 +82,8 @@ pub struct TreeInfo {
     /// One [`Block`] per inner node, in node order (the root's is block 0); empty when some
     /// node has more than [`LANES`] children.
     pub(crate) blocks: Vec<Block>,
+    /// Block index of every inner node (`u32::MAX` for leaves; empty with `blocks`).
+    pub(crate) block_of: Vec<u32>,
 }
 
 /// Rounds a non-negative f64 up to the next f32.
@@ -115,7 +121,7 @@ impl TreeInfo {
             }
         }
         let max_children = tree.child_count.iter().copied().max().unwrap_or(0) as usize;
-        let blocks = if max_children <= LANES {
+        let (blocks, block_of) = if max_children <= LANES {
             // Block index of every inner node: its rank among the inner nodes.
             let mut rank = vec![u32::MAX; n];
             let mut next = 0u32;
@@ -133,13 +139,16 @@ impl TreeInfo {
                     z: [0.0; LANES],
                     r: [f32::NEG_INFINITY; LANES],
                     child: [0; LANES],
+                    node: [0; LANES],
                     leaf: 0,
+                    count: tree.child_count[i] as u32,
                 };
                 for (k, ch) in tree.children(i).enumerate() {
                     b.x[k] = tree.x[ch];
                     b.y[k] = tree.y[ch];
                     b.z[k] = tree.z[ch];
                     b.r[k] = tree.r[ch];
+                    b.node[k] = ch as u32;
                     if tree.is_leaf(ch) {
                         b.leaf |= 1 << k;
                         b.child[k] = ch as u32;
@@ -149,9 +158,9 @@ impl TreeInfo {
                 }
                 blocks.push(b);
             }
-            blocks
+            (blocks, rank)
         } else {
-            Vec::new()
+            (Vec::new(), Vec::new())
         };
         TreeInfo {
             nodes: n,
@@ -180,6 +189,7 @@ impl TreeInfo {
                 })
                 .collect(),
             blocks,
+            block_of,
         }
     }
 }

@@ -3,9 +3,10 @@
 use super::front::Front;
 use super::geometry::{pruning_slack, Contact, Rel32};
 use super::heap::{Entry, PairHeap};
-use super::info::{Node, TreeInfo};
+use super::info::{Block, Node, TreeInfo};
 use super::penetration::{Patch, PatchAcc};
 use super::proximity::BlockEntry;
+use super::traversal::TItem;
 use super::Pose;
 use crate::SphereTree;
 use glam::DVec3;
@@ -39,6 +40,8 @@ pub(crate) struct Scratch {
     pub pstack: Vec<Entry>,
     /// Depth-first stack of the 4×4 proximity search.
     pub bstack: Vec<BlockEntry>,
+    /// Depth-first stack of the paper's traversals on blocks.
+    pub tstack: Vec<TItem>,
     pub heap: PairHeap,
     pub anc_a: Vec<u32>,
     pub anc_b: Vec<u32>,
@@ -63,6 +66,11 @@ pub(crate) struct Scratch {
 pub(crate) struct Ctx<'t> {
     pub a: &'t [Node],
     pub b: &'t [Node],
+    /// A's and B's [`Block`]s (empty for fan-outs over 4) and each node's block index.
+    pub blocks_a: &'t [Block],
+    pub blocks_b: &'t [Block],
+    pub block_of_a: &'t [u32],
+    pub block_of_b: &'t [u32],
     pub pose_a: Pose,
     pub rel: Pose,
     pub rel32: Rel32,
@@ -153,6 +161,7 @@ impl PairState {
                 pstack: Vec::with_capacity((depth * fan + 16).max(heap_cap / 4)),
                 // Each pop of the 4×4 search pushes at most 16 pairs, one level deeper.
                 bstack: Vec::with_capacity(depth * 16 + 16),
+                tstack: Vec::with_capacity((depth * fan + 16).max(heap_cap / 4)),
                 heap: PairHeap::with_capacity(heap_cap),
                 anc_a: Vec::with_capacity(a.max_depth as usize + 1),
                 anc_b: Vec::with_capacity(b.max_depth as usize + 1),
@@ -238,6 +247,10 @@ impl PairState {
             Ctx {
                 a: &ia.packed,
                 b: &ib.packed,
+                blocks_a: &ia.blocks,
+                blocks_b: &ib.blocks,
+                block_of_a: &ia.block_of,
+                block_of_b: &ib.block_of,
                 pose_a: *pose_a,
                 rel,
                 rel32,

@@ -20,8 +20,8 @@
 //! * Multipoint has no cap on `k` (the paper's code stops at 3).
 
 use super::geometry::{make_contact, Contact};
-use super::info::{Node, TreeInfo};
-use super::state::{pair_key, safe_separation, Ctx, Item, PairState, Scratch};
+use super::info::{Block, Node, TreeInfo, LANES};
+use super::state::{pair_key, prefetch, safe_separation, Ctx, Item, PairState, Scratch};
 use super::Pose;
 use crate::tree::NO_PARENT;
 use crate::SphereTree;
@@ -201,6 +201,284 @@ fn dfs_sim(
     None
 }
 
+/// A pair on the blocked traversal's stack (fan-outs ≤ 4): the node indices (for keys and
+/// results), the block indices of the inner sides, which sides are leaves, the traversal
+/// depth, and B's node centre in A's frame (used when B's side is a leaf).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct TItem {
+    na: u32,
+    nb: u32,
+    ba: u32,
+    bb: u32,
+    kind: u32,
+    depth: u32,
+    c: [f32; 3],
+}
+
+const INNER: u32 = 0;
+const A_LEAF: u32 = 1;
+const B_LEAF: u32 = 2;
+const LEAFS: u32 = 3;
+
+impl TItem {
+    /// The pair of nodes `na`, `nb` (B's centre `c` in A's frame) at traversal `depth`.
+    fn new(ctx: &Ctx, na: u32, nb: u32, c: [f32; 3], depth: u32) -> TItem {
+        let al = ctx.a[na as usize].is_leaf();
+        let bl = ctx.b[nb as usize].is_leaf();
+        let kind = match (al, bl) {
+            (false, false) => INNER,
+            (true, false) => A_LEAF,
+            (false, true) => B_LEAF,
+            (true, true) => LEAFS,
+        };
+        TItem {
+            na,
+            nb,
+            ba: if al { 0 } else { ctx.block_of_a[na as usize] },
+            bb: if bl { 0 } else { ctx.block_of_b[nb as usize] },
+            kind,
+            depth,
+            c,
+        }
+    }
+}
+
+/// One side of a blocked step, lane by lane (centres in A's frame): a node's children from
+/// its block, or a leaf standing for itself in lane 0.
+struct Side {
+    x: [f32; LANES],
+    y: [f32; LANES],
+    z: [f32; LANES],
+    r: [f32; LANES],
+    leaf: u32,
+    count: u32,
+    node: [u32; LANES],
+    child: [u32; LANES],
+}
+
+impl Side {
+    /// A leaf standing for itself: centre `c` (A's frame), radius `r`, node `n`.
+    #[inline(always)]
+    fn leaf(c: [f32; 3], r: f32, n: u32) -> Side {
+        let mut s = Side {
+            x: [0.0; LANES],
+            y: [0.0; LANES],
+            z: [0.0; LANES],
+            r: [f32::NEG_INFINITY; LANES],
+            leaf: 1,
+            count: 1,
+            node: [n; LANES],
+            child: [n; LANES],
+        };
+        (s.x[0], s.y[0], s.z[0], s.r[0]) = (c[0], c[1], c[2], r);
+        s
+    }
+
+    /// The children of A's node from its block.
+    #[inline(always)]
+    fn a_block(k: &Block) -> Side {
+        Side {
+            x: k.x,
+            y: k.y,
+            z: k.z,
+            r: k.r,
+            leaf: k.leaf,
+            count: k.count,
+            node: k.node,
+            child: k.child,
+        }
+    }
+
+    /// The children of B's node from its block, moved into A's frame (the same operation
+    /// order as [`Rel32::apply`](super::geometry::Rel32), so leaf tests equal brute force).
+    #[inline(always)]
+    fn b_block(ctx: &Ctx, k: &Block) -> Side {
+        let mut s = Side::a_block(k);
+        for l in 0..LANES {
+            [s.x[l], s.y[l], s.z[l]] = ctx.rel32.apply(k.x[l], k.y[l], k.z[l]);
+        }
+        s
+    }
+}
+
+/// [`expand_sim`] on blocks: all child pairs of `e` tested side by side (4×4, or 1×4 when a
+/// side is a leaf), overlapping ones pushed in the same order (so that they pop in child
+/// order), the same exclusions, the same separation bound.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+fn expand_blocks(
+    ctx: &Ctx,
+    stack: &mut Vec<TItem>,
+    excl: &[u64],
+    split: u32,
+    skip: u64,
+    e: TItem,
+    min_sep: &mut f32,
+    visits: &mut u64,
+) {
+    let sa = if e.kind == A_LEAF {
+        let n = &ctx.a[e.na as usize];
+        Side::leaf([n.x, n.y, n.z], n.r, e.na)
+    } else {
+        Side::a_block(&ctx.blocks_a[e.ba as usize])
+    };
+    let sb = if e.kind == B_LEAF {
+        Side::leaf(e.c, ctx.b[e.nb as usize].r, e.nb)
+    } else {
+        Side::b_block(ctx, &ctx.blocks_b[e.bb as usize])
+    };
+    let mut b_slack = [ctx.slack; LANES];
+    for (l, v) in b_slack.iter_mut().enumerate() {
+        if (sb.leaf >> l) & 1 != 0 {
+            *v = 0.0;
+        }
+    }
+    let m = *min_sep;
+    // Bit `l·4 + i`: A's lane `i` against B's lane `l`.
+    let (mut over, mut near) = (0u32, 0u32);
+    let mut d2 = [[0.0f32; LANES]; LANES];
+    let mut sr = [[0.0f32; LANES]; LANES];
+    for i in 0..LANES {
+        let rs = if (sa.leaf >> i) & 1 != 0 {
+            b_slack
+        } else {
+            [ctx.slack; LANES]
+        };
+        for l in 0..LANES {
+            let dx = sa.x[i] - sb.x[l];
+            let dy = sa.y[i] - sb.y[l];
+            let dz = sa.z[i] - sb.z[l];
+            let q = dx * dx + dy * dy + dz * dz;
+            let s = (sa.r[i] + sb.r[l]) + rs[l];
+            d2[i][l] = q;
+            sr[i][l] = s;
+            let valid = (i < sa.count as usize) & (l < sb.count as usize);
+            let ov = q < s * s;
+            over |= ((valid & ov) as u32) << (l * LANES + i);
+            near |= ((valid & !ov & (q < (s + m) * (s + m))) as u32) << (l * LANES + i);
+        }
+    }
+    *visits += (sa.count * sb.count) as u64;
+    while near != 0 {
+        let q = near.trailing_zeros() as usize;
+        near &= near - 1;
+        let (l, i) = (q / LANES, q % LANES);
+        let lb = d2[i][l].sqrt() - sr[i][l];
+        if lb < *min_sep {
+            *min_sep = lb;
+        }
+    }
+    let depth = e.depth + 1;
+    let check = depth <= split && !excl.is_empty();
+    while over != 0 {
+        let q = 31 - over.leading_zeros() as usize;
+        over &= !(1 << q);
+        let (l, i) = (q / LANES, q % LANES);
+        let (na, nb) = (sa.node[i], sb.node[l]);
+        let key = pair_key(na, nb);
+        if key == skip || (check && excl.binary_search(&key).is_ok()) {
+            continue;
+        }
+        let (al, bl) = ((sa.leaf >> i) & 1 != 0, (sb.leaf >> l) & 1 != 0);
+        let kind = match (al, bl) {
+            (false, false) => INNER,
+            (true, false) => A_LEAF,
+            (false, true) => B_LEAF,
+            (true, true) => LEAFS,
+        };
+        let (ba, bb) = (sa.child[i], sb.child[l]);
+        if !al {
+            prefetch(&ctx.blocks_a[ba as usize]);
+        }
+        if !bl {
+            prefetch(&ctx.blocks_b[bb as usize]);
+        }
+        stack.push(TItem {
+            na,
+            nb,
+            ba,
+            bb,
+            kind,
+            depth,
+            c: [sb.x[l], sb.y[l], sb.z[l]],
+        });
+    }
+}
+
+/// [`dfs_sim`] on blocks.
+#[allow(clippy::too_many_arguments)]
+fn dfs_blocks(
+    ctx: &Ctx,
+    stack: &mut Vec<TItem>,
+    excl: &[u64],
+    split: u32,
+    skip: u64,
+    min_sep: &mut f32,
+    visits: &mut u64,
+) -> Option<Item> {
+    while let Some(e) = stack.pop() {
+        if e.kind == LEAFS {
+            return Some(Item {
+                a: e.na,
+                b: e.nb,
+                c: e.c,
+                depth: e.depth,
+            });
+        }
+        expand_blocks(ctx, stack, excl, split, skip, e, min_sep, visits);
+    }
+    None
+}
+
+/// True when both trees have blocks (fan-out ≤ 4): the traversals then run on them.
+fn blocked(ctx: &Ctx) -> bool {
+    !ctx.blocks_a.is_empty() && !ctx.blocks_b.is_empty()
+}
+
+/// Starts a depth-first search at node pair (`a`, `b`), B's centre `c`, traversal `depth`.
+fn start(ctx: &Ctx, s: &mut Scratch, a: u32, b: u32, c: [f32; 3], depth: u32) {
+    if blocked(ctx) {
+        s.tstack.clear();
+        s.tstack.push(TItem::new(ctx, a, b, c, depth));
+    } else {
+        s.stack.clear();
+        s.stack.push(Item { a, b, c, depth });
+    }
+}
+
+/// Goes on with the search until the next overlapping leaf pair (or none), skipping the
+/// pair `skip` and, with `use_excluded`, the excluded pairs down to depth `split`.
+fn resume(
+    ctx: &Ctx,
+    s: &mut Scratch,
+    use_excluded: bool,
+    split: u32,
+    skip: u64,
+    min_sep: &mut f32,
+    visits: &mut u64,
+) -> Option<Item> {
+    let excl: &[u64] = if use_excluded { &s.excluded } else { &[] };
+    if blocked(ctx) {
+        dfs_blocks(ctx, &mut s.tstack, excl, split, skip, min_sep, visits)
+    } else {
+        dfs_sim(ctx, &mut s.stack, excl, split, skip, min_sep, visits)
+    }
+}
+
+/// Drops the pairs deeper than `split` from the search's stack (leaves the current
+/// split-depth pair after a contact was found in it).
+fn leave_below(ctx: &Ctx, s: &mut Scratch, split: u32) {
+    if blocked(ctx) {
+        while s.tstack.last().is_some_and(|t| t.depth > split) {
+            s.tstack.pop();
+        }
+    } else {
+        while s.stack.last().is_some_and(|t| t.depth > split) {
+            s.stack.pop();
+        }
+    }
+}
+
 /// Ancestors of `n`, root first (`out[d]` is the ancestor at depth `d`).
 fn chain(nodes: &[Node], n: u32, out: &mut Vec<u32>) {
     out.clear();
@@ -250,7 +528,6 @@ fn safe_skip(ia: &TreeInfo, ib: &TreeInfo, s: &Scratch, ctx: &Ctx, on: bool) -> 
 
 /// Root test, then a full traversal from the roots.
 fn full(ctx: &Ctx, s: &mut Scratch, min_sep: &mut f32, visits: &mut u64) -> Option<Item> {
-    s.stack.clear();
     let c0 = ctx.xf(0);
     let (ov, lb) = ctx.test(0, 0, c0);
     *visits += 1;
@@ -258,13 +535,8 @@ fn full(ctx: &Ctx, s: &mut Scratch, min_sep: &mut f32, visits: &mut u64) -> Opti
         *min_sep = min_sep.min(lb);
         return None;
     }
-    s.stack.push(Item {
-        a: 0,
-        b: 0,
-        c: c0,
-        depth: 0,
-    });
-    dfs_sim(ctx, &mut s.stack, &[], u32::MAX, NO_PAIR, min_sep, visits)
+    start(ctx, s, 0, 0, c0, 0);
+    resume(ctx, s, false, u32::MAX, NO_PAIR, min_sep, visits)
 }
 
 /// Climbs from the stale leaf pair (`la`, `lb`) toward the root (Algorithms 1–2): the leaf
@@ -306,14 +578,8 @@ fn climb(
             continue;
         }
         let skip = pair_key(s.anc_a[(k + 1).min(da)], s.anc_b[(k + 1).min(db)]);
-        s.stack.clear();
-        s.stack.push(Item {
-            a: pa,
-            b: pb,
-            c: cb,
-            depth: k as u32,
-        });
-        if let Some(e) = dfs_sim(ctx, &mut s.stack, &[], u32::MAX, skip, min_sep, visits) {
+        start(ctx, s, pa, pb, cb, k as u32);
+        if let Some(e) = resume(ctx, s, false, u32::MAX, skip, min_sep, visits) {
             return Some(e);
         }
     }
@@ -611,31 +877,15 @@ fn multipoint_search(
     }
     // (3) Search from the roots for the rest.
     if s.contacts.len() < k && s.excluded.binary_search(&pair_key(0, 0)).is_err() {
-        s.stack.clear();
-        s.stack.push(Item {
-            a: 0,
-            b: 0,
-            c: c0,
-            depth: 0,
-        });
-        while let Some(e) = dfs_sim(
-            ctx,
-            &mut s.stack,
-            &s.excluded,
-            split,
-            NO_PAIR,
-            min_sep,
-            visits,
-        ) {
+        start(ctx, s, 0, 0, c0, 0);
+        while let Some(e) = resume(ctx, s, true, split, NO_PAIR, min_sep, visits) {
             s.contacts
                 .push(make_contact(ctx.a, e.a, ctx.b, e.b, e.c, &ctx.pose_a));
             insert_sorted(&mut s.excluded, split_key(ctx, e.a, e.b, split));
             if s.contacts.len() >= k {
                 break;
             }
-            while s.stack.last().is_some_and(|t| t.depth > split) {
-                s.stack.pop();
-            }
+            leave_below(ctx, s, split);
         }
     }
 }

@@ -7,6 +7,7 @@
 use super::geometry::{direction, lens};
 use super::heap::Entry;
 use super::state::{expand_larger, safe_separation, Item, PairState};
+use super::traversal::{blocked, overlap_pairs_dispatch, TItem};
 use super::Pose;
 use crate::SphereTree;
 use glam::DVec3;
@@ -279,6 +280,18 @@ pub fn penetration<'s>(
         } else if na[0].is_leaf() && nb[0].is_leaf() {
             let (v, p, u, depth) = sums.add([na[0].x, na[0].y, na[0].z], na[0].r, c0, nb[0].r);
             assign_patch(&mut s.patch_acc, maxp, r2, v, p, u, depth);
+        } else if blocked(&ctx) {
+            // Fan-outs ≤ 4: blocked steps (4×4 child pairs at a time).
+            let stack = &mut s.tstack;
+            stack.clear();
+            stack.push(TItem::new(&ctx, 0, 0, c0, 0));
+            let patch_acc = &mut s.patch_acc;
+            let mut leaf = |i: u32, j: u32, cb: [f32; 3]| {
+                let n = &na[i as usize];
+                let (v, p, u, depth) = sums.add([n.x, n.y, n.z], n.r, cb, nb[j as usize].r);
+                assign_patch(patch_acc, maxp, r2, v, p, u, depth);
+            };
+            overlap_pairs_dispatch(&ctx, stack, &mut min_sep, &mut visits, &mut leaf);
         } else {
             s.stack.clear();
             s.stack.push(Item {

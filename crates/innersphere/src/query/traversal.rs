@@ -206,13 +206,13 @@ fn dfs_sim(
 /// depth, and B's node centre in A's frame (used when B's side is a leaf).
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct TItem {
-    na: u32,
-    nb: u32,
+    pub na: u32,
+    pub nb: u32,
     ba: u32,
     bb: u32,
     kind: u32,
     depth: u32,
-    c: [f32; 3],
+    pub c: [f32; 3],
 }
 
 const INNER: u32 = 0;
@@ -222,7 +222,7 @@ const LEAFS: u32 = 3;
 
 impl TItem {
     /// The pair of nodes `na`, `nb` (B's centre `c` in A's frame) at traversal `depth`.
-    fn new(ctx: &Ctx, na: u32, nb: u32, c: [f32; 3], depth: u32) -> TItem {
+    pub(crate) fn new(ctx: &Ctx, na: u32, nb: u32, c: [f32; 3], depth: u32) -> TItem {
         let al = ctx.a[na as usize].is_leaf();
         let bl = ctx.b[nb as usize].is_leaf();
         let kind = match (al, bl) {
@@ -245,7 +245,7 @@ impl TItem {
 
 /// One side of a blocked step, lane by lane (centres in A's frame): a node's children from
 /// its block, or a leaf standing for itself in lane 0.
-struct Side {
+pub(crate) struct Side {
     x: [f32; LANES],
     y: [f32; LANES],
     z: [f32; LANES],
@@ -301,21 +301,16 @@ impl Side {
     }
 }
 
-/// [`expand_sim`] on blocks: all child pairs of `e` tested side by side (4×4, or 1×4 when a
-/// side is a leaf), overlapping ones pushed in the same order (so that they pop in child
-/// order), the same exclusions, the same separation bound.
+/// One blocked step of the overlap traversals: all child pairs of `e` tested side by side
+/// (4×4, or 1×4 when a side is a leaf). Returns both sides and the mask of overlapping
+/// pairs (bit `l·4 + i`: A's lane `i` against B's lane `l`); separated pairs lower `min_sep`.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn expand_blocks(
+pub(crate) fn block_step(
     ctx: &Ctx,
-    stack: &mut Vec<TItem>,
-    excl: &[u64],
-    split: u32,
-    skip: u64,
-    e: TItem,
+    e: &TItem,
     min_sep: &mut f32,
     visits: &mut u64,
-) {
+) -> (Side, Side, u32) {
     let sa = if e.kind == A_LEAF {
         let n = &ctx.a[e.na as usize];
         Side::leaf([n.x, n.y, n.z], n.r, e.na)
@@ -334,7 +329,6 @@ fn expand_blocks(
         }
     }
     let m = *min_sep;
-    // Bit `l·4 + i`: A's lane `i` against B's lane `l`.
     let (mut over, mut near) = (0u32, 0u32);
     let mut d2 = [[0.0f32; LANES]; LANES];
     let mut sr = [[0.0f32; LANES]; LANES];
@@ -368,17 +362,13 @@ fn expand_blocks(
             *min_sep = lb;
         }
     }
-    let depth = e.depth + 1;
-    let check = depth <= split && !excl.is_empty();
-    while over != 0 {
-        let q = 31 - over.leading_zeros() as usize;
-        over &= !(1 << q);
-        let (l, i) = (q / LANES, q % LANES);
-        let (na, nb) = (sa.node[i], sb.node[l]);
-        let key = pair_key(na, nb);
-        if key == skip || (check && excl.binary_search(&key).is_ok()) {
-            continue;
-        }
+    (sa, sb, over)
+}
+
+impl TItem {
+    /// The child pair in lanes (`i`, `l`) of a [`block_step`], one traversal level deeper.
+    #[inline(always)]
+    pub(crate) fn child(sa: &Side, sb: &Side, i: usize, l: usize, depth: u32) -> TItem {
         let (al, bl) = ((sa.leaf >> i) & 1 != 0, (sb.leaf >> l) & 1 != 0);
         let kind = match (al, bl) {
             (false, false) => INNER,
@@ -386,22 +376,63 @@ fn expand_blocks(
             (false, true) => B_LEAF,
             (true, true) => LEAFS,
         };
-        let (ba, bb) = (sa.child[i], sb.child[l]);
-        if !al {
-            prefetch(&ctx.blocks_a[ba as usize]);
-        }
-        if !bl {
-            prefetch(&ctx.blocks_b[bb as usize]);
-        }
-        stack.push(TItem {
-            na,
-            nb,
-            ba,
-            bb,
+        TItem {
+            na: sa.node[i],
+            nb: sb.node[l],
+            ba: sa.child[i],
+            bb: sb.child[l],
             kind,
             depth,
             c: [sb.x[l], sb.y[l], sb.z[l]],
-        });
+        }
+    }
+
+    /// True for a pair of leaves.
+    #[inline(always)]
+    pub(crate) fn leaves(&self) -> bool {
+        self.kind == LEAFS
+    }
+
+    /// Prefetches the blocks of the pair's inner sides.
+    #[inline(always)]
+    pub(crate) fn prefetch(&self, ctx: &Ctx) {
+        if self.kind == INNER || self.kind == B_LEAF {
+            prefetch(&ctx.blocks_a[self.ba as usize]);
+        }
+        if self.kind == INNER || self.kind == A_LEAF {
+            prefetch(&ctx.blocks_b[self.bb as usize]);
+        }
+    }
+}
+
+/// [`expand_sim`] on blocks: a [`block_step`], overlapping pairs pushed in the same order (so
+/// that they pop in child order), with the same exclusions.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn expand_blocks(
+    ctx: &Ctx,
+    stack: &mut Vec<TItem>,
+    excl: &[u64],
+    split: u32,
+    skip: u64,
+    e: TItem,
+    min_sep: &mut f32,
+    visits: &mut u64,
+) {
+    let (sa, sb, mut over) = block_step(ctx, &e, min_sep, visits);
+    let depth = e.depth + 1;
+    let check = depth <= split && !excl.is_empty();
+    while over != 0 {
+        let q = 31 - over.leading_zeros() as usize;
+        over &= !(1 << q);
+        let (l, i) = (q / LANES, q % LANES);
+        let key = pair_key(sa.node[i], sb.node[l]);
+        if key == skip || (check && excl.binary_search(&key).is_ok()) {
+            continue;
+        }
+        let t = TItem::child(&sa, &sb, i, l, depth);
+        t.prefetch(ctx);
+        stack.push(t);
     }
 }
 
@@ -464,8 +495,66 @@ fn dfs_blocks_dispatch(
     dfs_blocks(ctx, stack, excl, split, skip, min_sep, visits)
 }
 
+/// Every overlapping leaf pair below the pairs on `stack` (all of them, no order), by
+/// blocked steps: `leaf(a, b, B's centre in A's frame)` for each; separated pairs lower
+/// `min_sep`. The enumeration of the penetration query.
+#[inline(always)]
+fn overlap_pairs<F: FnMut(u32, u32, [f32; 3])>(
+    ctx: &Ctx,
+    stack: &mut Vec<TItem>,
+    min_sep: &mut f32,
+    visits: &mut u64,
+    mut leaf: F,
+) {
+    while let Some(e) = stack.pop() {
+        if e.leaves() {
+            leaf(e.na, e.nb, e.c);
+            continue;
+        }
+        let (sa, sb, mut over) = block_step(ctx, &e, min_sep, visits);
+        while over != 0 {
+            let q = over.trailing_zeros() as usize;
+            over &= over - 1;
+            let t = TItem::child(&sa, &sb, q % LANES, q / LANES, 0);
+            if t.leaves() {
+                leaf(t.na, t.nb, t.c);
+            } else {
+                t.prefetch(ctx);
+                stack.push(t);
+            }
+        }
+    }
+}
+
+/// [`overlap_pairs`] compiled for AVX2 when the CPU has it (same results bit for bit).
+pub(crate) fn overlap_pairs_dispatch(
+    ctx: &Ctx,
+    stack: &mut Vec<TItem>,
+    min_sep: &mut f32,
+    visits: &mut u64,
+    leaf: &mut dyn FnMut(u32, u32, [f32; 3]),
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        #[target_feature(enable = "avx2")]
+        fn avx2(
+            ctx: &Ctx,
+            stack: &mut Vec<TItem>,
+            min_sep: &mut f32,
+            visits: &mut u64,
+            leaf: &mut dyn FnMut(u32, u32, [f32; 3]),
+        ) {
+            overlap_pairs(ctx, stack, min_sep, visits, leaf)
+        }
+        // SAFETY: the CPU has AVX2 (checked above).
+        unsafe { avx2(ctx, stack, min_sep, visits, leaf) };
+        return;
+    }
+    overlap_pairs(ctx, stack, min_sep, visits, leaf)
+}
+
 /// True when both trees have blocks (fan-out ≤ 4): the traversals then run on them.
-fn blocked(ctx: &Ctx) -> bool {
+pub(crate) fn blocked(ctx: &Ctx) -> bool {
     !ctx.blocks_a.is_empty() && !ctx.blocks_b.is_empty()
 }
 

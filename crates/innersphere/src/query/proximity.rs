@@ -430,7 +430,7 @@ fn depth_first_blocks(
                         mask |= (v as u32) << (i * LANES + l);
                     }
                 }
-                f.visits += 16;
+                f.visits += (ka.count * kb.count) as u64;
                 while mask != 0 {
                     let q = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -466,6 +466,9 @@ fn depth_first_blocks(
                     });
                 }
             }
+            // The leaf-side kinds are ≈ 3 % of the pops. Written with the traversals' `Side`
+            // (one code path for all three kinds) the search measured 25–40 % slower at p99,
+            // so the inner-pair step keeps reading the two blocks directly.
             A_LEAF => {
                 let kb = &bb[e.b as usize];
                 let (bx, by, bz) = block_in_a(ctx, kb);
@@ -484,7 +487,7 @@ fn depth_first_blocks(
                     }
                     mask |= (Prune::refine(d2[l], sr[l], t) as u32) << l;
                 }
-                f.visits += 4;
+                f.visits += kb.count as u64;
                 while mask != 0 {
                     let l = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -519,7 +522,7 @@ fn depth_first_blocks(
                     }
                     mask |= (Prune::refine(d2[i], sr[i], t) as u32) << i;
                 }
-                f.visits += 4;
+                f.visits += ka.count as u64;
                 while mask != 0 {
                     let i = mask.trailing_zeros() as usize;
                     mask &= mask - 1;

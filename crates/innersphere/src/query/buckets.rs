@@ -14,10 +14,12 @@ pub(crate) struct Sep {
 const NIL: u32 = u32::MAX;
 /// Entries per chunk (a chunk is 16·31 + 8 = 504 bytes).
 const CHUNK: usize = 31;
-/// Fine buckets per block (the fine level holds the current block).
-const FINE: i64 = 32;
-/// Coarse buckets (one block each).
-const RING: i64 = 1024;
+/// Buckets in the ring (a power of two; 128 KiB of chain heads). A single level on purpose:
+/// a two-level queue (32 fine buckets, coarse buckets of 32 each) moved a whole coarse bucket
+/// into the fine level when its block began, and on the jaw chew one coarse bucket held
+/// 15–22k of the front's ≈ 50k pairs: 0.6–0.9 ms in one frame, the worst penetration
+/// frames of the replay.
+const RING: i64 = 1 << 15;
 
 #[derive(Debug, Clone, Copy)]
 struct Chunk {
@@ -36,22 +38,23 @@ const EMPTY: Chunk = Chunk {
     next: NIL,
 };
 
-/// A two-level bucket queue by expiry. Fine buckets of width `width` hold the current block
-/// of `FINE` fine buckets; coarse buckets (one block each) hold the next `RING − 1` blocks
-/// and move into the fine level when their block begins; anything beyond sits in a far list,
-/// re-sorted when the coarse level has advanced by half a ring. Every bucket is a chain of
-/// chunks taken from one pool; no allocation once the pool has grown to the front's size.
+/// A bucket queue by expiry: a ring of `RING` buckets of width `width` holds the expiries
+/// from the current bucket on; anything beyond sits in a far list, re-sorted whenever the
+/// ring has advanced by half its length. Every bucket is a chain of chunks taken from one
+/// pool; no allocation once the pool has grown to the front's size. A bitmap of the
+/// non-empty buckets finds the next expiry without scanning empty ones.
 #[derive(Debug)]
 pub(crate) struct Buckets {
     pool: Vec<Chunk>,
     free: u32,
-    fine: Vec<u32>,
-    coarse: Vec<u32>,
+    ring: Vec<u32>,
+    /// Bit `k` set when bucket slot `k` may be non-empty.
+    used: Vec<u64>,
     far: u32,
     /// Smallest expiry in the far list (a far entry can be due as early as half a ring
     /// after it was pushed, before the far list is next re-sorted).
     far_min: f64,
-    /// Index (expiry / width) of the first fine bucket not yet drained.
+    /// Index (expiry / width) of the first bucket not yet drained.
     cur: i64,
     width: f64,
     pub len: usize,
@@ -61,10 +64,10 @@ impl Buckets {
     /// An empty queue with room for about `n` entries.
     pub(crate) fn with_capacity(n: usize) -> Self {
         Buckets {
-            pool: Vec::with_capacity(n / CHUNK + 2 * (FINE + RING) as usize),
+            pool: Vec::with_capacity(n / CHUNK + 64),
             free: NIL,
-            fine: vec![NIL; FINE as usize],
-            coarse: vec![NIL; RING as usize],
+            ring: vec![NIL; RING as usize],
+            used: vec![0; RING as usize / 64],
             far: NIL,
             far_min: f64::INFINITY,
             cur: 0,
@@ -77,8 +80,8 @@ impl Buckets {
     pub(crate) fn clear(&mut self, width: f64) {
         self.pool.clear();
         self.free = NIL;
-        self.fine.iter_mut().for_each(|h| *h = NIL);
-        self.coarse.iter_mut().for_each(|h| *h = NIL);
+        self.ring.iter_mut().for_each(|h| *h = NIL);
+        self.used.iter_mut().for_each(|w| *w = 0);
         self.far = NIL;
         self.far_min = f64::INFINITY;
         self.cur = 0;
@@ -89,6 +92,11 @@ impl Buckets {
     #[inline]
     fn bucket(&self, expiry: f64) -> i64 {
         (expiry / self.width).floor() as i64
+    }
+
+    #[inline]
+    fn slot(k: i64) -> usize {
+        (k & (RING - 1)) as usize
     }
 
     #[inline]
@@ -112,35 +120,29 @@ impl Buckets {
         self.free = c;
     }
 
-    /// The head of bucket `k`'s chain (the current bucket when `k` is already due).
-    #[inline]
-    fn head(&mut self, k: i64) -> &mut u32 {
-        let k = k.max(self.cur);
-        let block = self.cur.div_euclid(FINE);
-        let kb = k.div_euclid(FINE);
-        if kb == block {
-            &mut self.fine[k.rem_euclid(FINE) as usize]
-        } else if kb < block + RING {
-            &mut self.coarse[kb.rem_euclid(RING) as usize]
-        } else {
-            &mut self.far
-        }
-    }
-
-    /// Appends `sep` to the bucket of its expiry (without counting it).
+    /// Appends `sep` to the bucket of its expiry (the current one when already due), or to
+    /// the far list (without counting it).
     #[inline]
     fn link(&mut self, sep: Sep) {
-        let k = self.bucket(sep.expiry);
-        if k.div_euclid(FINE) >= self.cur.div_euclid(FINE) + RING {
+        let k = self.bucket(sep.expiry).max(self.cur);
+        let slot = if k - self.cur < RING {
+            let s = Self::slot(k);
+            self.used[s / 64] |= 1 << (s % 64);
+            Some(s)
+        } else {
             self.far_min = self.far_min.min(sep.expiry);
-        }
-        let h = *self.head(k);
-        let c = if h == NIL || self.pool[h as usize].len as usize == CHUNK {
-            let c = self.new_chunk(h);
-            *self.head(k) = c;
+            None
+        };
+        let head = slot.map_or(self.far, |s| self.ring[s]);
+        let c = if head == NIL || self.pool[head as usize].len as usize == CHUNK {
+            let c = self.new_chunk(head);
+            match slot {
+                Some(s) => self.ring[s] = c,
+                None => self.far = c,
+            }
             c
         } else {
-            h
+            head
         };
         let ch = &mut self.pool[c as usize];
         ch.items[ch.len as usize] = sep;
@@ -154,7 +156,7 @@ impl Buckets {
         self.link(sep);
     }
 
-    /// Re-links every entry of chain `c` (after the level it was in has advanced).
+    /// Re-links every entry of chain `c` (the far list, after the ring has advanced).
     fn relink_chain(&mut self, mut c: u32) {
         while c != NIL {
             let next = self.pool[c as usize].next;
@@ -171,46 +173,43 @@ impl Buckets {
     pub(crate) fn drain_expired(&mut self, moved: f64, out: &mut Vec<Sep>) {
         let last = self.bucket(moved);
         loop {
-            let i = self.cur.rem_euclid(FINE) as usize;
-            let mut c = std::mem::replace(&mut self.fine[i], NIL);
-            while c != NIL {
-                let next = self.pool[c as usize].next;
-                for j in 0..self.pool[c as usize].len as usize {
-                    let sep = self.pool[c as usize].items[j];
-                    if sep.expiry <= moved {
-                        out.push(sep);
-                        self.len -= 1;
-                    } else {
-                        // Not due yet (the last, partly due bucket).
-                        self.link(sep);
+            let s = Self::slot(self.cur);
+            if self.used[s / 64] & (1 << (s % 64)) != 0 {
+                self.used[s / 64] &= !(1 << (s % 64));
+                let mut c = std::mem::replace(&mut self.ring[s], NIL);
+                while c != NIL {
+                    let next = self.pool[c as usize].next;
+                    for j in 0..self.pool[c as usize].len as usize {
+                        let sep = self.pool[c as usize].items[j];
+                        if sep.expiry <= moved {
+                            out.push(sep);
+                            self.len -= 1;
+                        } else {
+                            // Not due yet (the last, partly due bucket).
+                            self.link(sep);
+                        }
                     }
+                    self.free_chunk(c);
+                    c = next;
                 }
-                self.free_chunk(c);
-                c = next;
             }
             if self.cur >= last {
                 break;
             }
             self.cur += 1;
-            if self.cur.rem_euclid(FINE) == 0 {
-                // A new block: its coarse bucket moves into the fine level.
-                let block = self.cur.div_euclid(FINE);
-                let c = std::mem::replace(&mut self.coarse[block.rem_euclid(RING) as usize], NIL);
-                self.relink_chain(c);
-                if block.rem_euclid(RING / 2) == 0 {
-                    let f = std::mem::replace(&mut self.far, NIL);
-                    self.far_min = f64::INFINITY;
-                    self.relink_chain(f);
-                }
+            if self.cur & (RING / 2 - 1) == 0 {
+                let f = std::mem::replace(&mut self.far, NIL);
+                self.far_min = f64::INFINITY;
+                self.relink_chain(f);
             }
         }
     }
 
-    /// A lower bound on every expiry in the queue: exact over the current fine bucket (which
+    /// A lower bound on every expiry in the queue: exact over the current bucket (which
     /// also holds entries pushed already due), bucket starts beyond it.
     pub(crate) fn min_bound(&self) -> f64 {
         let mut m = f64::INFINITY;
-        let mut c = self.fine[self.cur.rem_euclid(FINE) as usize];
+        let mut c = self.ring[Self::slot(self.cur)];
         while c != NIL {
             let ch = &self.pool[c as usize];
             for s in &ch.items[..ch.len as usize] {
@@ -218,15 +217,24 @@ impl Buckets {
             }
             c = ch.next;
         }
-        let block = self.cur.div_euclid(FINE);
-        for k in self.cur + 1..(block + 1) * FINE {
-            if self.fine[k.rem_euclid(FINE) as usize] != NIL {
-                return m.min(k as f64 * self.width);
+        // The first non-empty bucket after the current one, by the bitmap, in ring order.
+        let words = self.used.len();
+        let start = Self::slot(self.cur + 1);
+        let (w0, b0) = (start / 64, start % 64);
+        for step in 0..=words {
+            let w = (w0 + step) % words;
+            let mut bits = self.used[w];
+            if step == 0 {
+                bits &= !0u64 << b0;
+            } else if step == words {
+                bits &= !(!0u64 << b0);
             }
-        }
-        for kb in block + 1..block + RING {
-            if self.coarse[kb.rem_euclid(RING) as usize] != NIL {
-                return m.min((kb * FINE) as f64 * self.width);
+            if bits != 0 {
+                let slot = (w * 64 + bits.trailing_zeros() as usize) as i64;
+                let k = self.cur + 1 + ((slot - start as i64) & (RING - 1));
+                if k != self.cur + RING {
+                    return m.min(k as f64 * self.width);
+                }
             }
         }
         if self.far != NIL {
@@ -292,16 +300,16 @@ mod tests {
         let mut q = Buckets::with_capacity(16);
         q.clear(1.0);
         let mut out = Vec::new();
-        // Advance by 100 blocks, then push an entry just beyond the ring.
-        q.drain_expired((100 * FINE) as f64, &mut out);
-        let e = ((100 + RING) * FINE) as f64 + 0.5;
+        // Advance by 3200 buckets, then push an entry just beyond the ring.
+        q.drain_expired(3200.0, &mut out);
+        let e = (3200 + RING) as f64 + 0.5;
         q.push(Sep {
             expiry: e,
             a: 1,
             b: 2,
         });
-        for blocks in [200, 300, 400] {
-            q.drain_expired((blocks * FINE) as f64, &mut out);
+        for buckets in [6400, 9600, 12800] {
+            q.drain_expired(buckets as f64, &mut out);
             assert!(out.is_empty());
             assert!(q.min_bound() <= e, "{} > {e}", q.min_bound());
         }

@@ -36,6 +36,7 @@ fn main() {
         bbox_max: [0.0; 3],
         coverage: 0.0,
         mesh_closed: true,
+        built_by: None,
     };
     let (tree, stats) =
         innersphere::hierarchy::build(&spheres, &Default::default(), meta, &Silent).unwrap();

@@ -7,7 +7,7 @@ use crate::mesh::bvh::TriangleBvh;
 use crate::mesh::MeshReport;
 use crate::packing::{self, PackingOptions};
 use crate::progress::Progress;
-use crate::tree::{SphereTree, TreeMeta};
+use crate::tree::{BuildStamp, SphereTree, TreeMeta};
 use crate::{Error, Mesh, Result};
 use std::time::Instant;
 
@@ -225,6 +225,7 @@ pub fn build_tree(
         bbox_max: hi.to_array(),
         coverage,
         mesh_closed: closed,
+        built_by: Some(BuildStamp::current(opts.packing.refine_steps)),
     };
     let (tree, hstats) = hierarchy::build(&spheres, &opts.hierarchy, meta, progress)?;
     let t_hier = t3.elapsed().as_secs_f64();

@@ -46,6 +46,31 @@ fn generated_meshes_build_valid_deterministic_trees() {
 }
 
 #[test]
+fn built_trees_carry_a_stamp_and_unstamped_files_warn() {
+    let (tree, _) = build_tree(&shapes::icosphere(2), &opts(24), &Silent).unwrap();
+    let stamp = tree.meta.built_by.clone().expect("a built tree is stamped");
+    assert_eq!(stamp.revision, innersphere::tree::BUILD_REVISION);
+    assert_eq!(stamp.refine_steps, opts(24).packing.refine_steps);
+    assert_eq!(tree.staleness(), None);
+    let back = file::from_bytes(&file::to_bytes(&tree)).unwrap();
+    assert_eq!(back.meta.built_by, Some(stamp.clone()));
+    // A file written before the stamp existed (meta without `built_by`) still loads, with a
+    // warning; so does one from an older revision.
+    let mut old = tree.clone();
+    old.meta.built_by = None;
+    let bytes = file::to_bytes(&old);
+    assert!(!String::from_utf8_lossy(&bytes).contains("built_by"));
+    let back = file::from_bytes(&bytes).unwrap();
+    assert!(back.staleness().unwrap().contains("no build stamp"));
+    old.meta.built_by = Some(innersphere::tree::BuildStamp {
+        revision: 1,
+        ..stamp
+    });
+    let back = file::from_bytes(&file::to_bytes(&old)).unwrap();
+    assert!(back.staleness().unwrap().contains("revision 1"));
+}
+
+#[test]
 fn inward_facing_meshes_are_flipped_with_a_warning() {
     let mut mesh = shapes::icosphere(3);
     mesh.flip();

@@ -34,6 +34,7 @@ fn meta() -> TreeMeta {
         bbox_max: [0.0; 3],
         coverage: 0.0,
         mesh_closed: true,
+        built_by: None,
     }
 }
 

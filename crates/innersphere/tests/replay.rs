@@ -29,6 +29,7 @@ fn ball_tree() -> SphereTree {
         bbox_max: [1.0; 3],
         coverage: 1.0,
         mesh_closed: true,
+        built_by: None,
     };
     hierarchy::build(&spheres, &HierarchyOptions::default(), meta, &Silent)
         .unwrap()
@@ -85,4 +86,25 @@ fn replay_of_two_balls_matches_the_closed_form() {
     // balls, by at most twice the polyhedron's deviation from the sphere.
     assert!(acc.abs_err_max < 0.005, "{acc:?}");
     assert!(acc.abs_err_p50 <= acc.abs_err_p95 && acc.abs_err_p95 <= acc.abs_err_max);
+
+    // More passes time the same work (each from a fresh state): the same answers, every
+    // frame's time finite, and the accuracy unchanged.
+    let three = replay(
+        &a,
+        &b,
+        &motion,
+        Some((&exact, &exact)),
+        &ReplayOptions {
+            passes: 3,
+            ..Default::default()
+        },
+    );
+    assert_eq!((report.passes, three.passes), (1, 3));
+    for (r1, r3) in report.rows.iter().zip(&three.rows) {
+        assert_eq!((r1.distance, r1.contact), (r3.distance, r3.contact));
+        assert!(r3.us.iter().all(|t| t.is_finite() && *t >= 0.0), "{r3:?}");
+    }
+    let acc3 = three.accuracy.unwrap();
+    assert_eq!(acc3.abs_err_max, acc.abs_err_max);
+    assert!(acc3.exact_p50_us.is_finite());
 }

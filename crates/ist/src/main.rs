@@ -73,3 +73,11 @@ fn main() {
         }
     }
 }
+
+/// Prints the library's warning about a tree not built by the current builder
+/// ([`innersphere::SphereTree::staleness`]) to stderr; the command goes on.
+fn warn_if_stale(path: &std::path::Path, tree: &innersphere::SphereTree) {
+    if let Some(w) = tree.staleness() {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+}

@@ -73,6 +73,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         .with_context(|| format!("loading {}", args.a.display()))?;
     let b = innersphere::tree::file::load(&args.b)
         .with_context(|| format!("loading {}", args.b.display()))?;
+    crate::warn_if_stale(&args.a, &a);
+    crate::warn_if_stale(&args.b, &b);
     let pose_a = Pose::IDENTITY;
     let mut st = PairState::new(&a, &b);
     let t0 = std::time::Instant::now();

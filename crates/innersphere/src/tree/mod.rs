@@ -27,6 +27,39 @@ pub struct TreeMeta {
     /// True when the source mesh was closed (exact inside test), false when the generalized
     /// winding number decided inside/outside.
     pub mesh_closed: bool,
+    /// Which library built the tree, and how; `None` in files written before the stamp
+    /// existed (they still load: see [`SphereTree::staleness`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub built_by: Option<BuildStamp>,
+}
+
+/// Revision of the tree construction whose node spheres the queries' speed figures assume;
+/// raised whenever the builder changes the trees it makes (not their file layout). Revision 2:
+/// every node's sphere encloses the leaves below it (revision 1 enclosed the children's
+/// spheres: looser, and the jaw replay measured 3× slower on such trees).
+pub const BUILD_REVISION: u32 = 2;
+
+/// Who built a tree and how, kept in its file's meta block, so that a reader can tell a tree
+/// built by an older library (valid, but possibly slower to query) from a current one.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct BuildStamp {
+    /// Library name and version, e.g. `innersphere 0.1.0`.
+    pub library: String,
+    /// [`BUILD_REVISION`] of the builder.
+    pub revision: u32,
+    /// Off-grid refinement steps of the packing (`--refine-steps`).
+    pub refine_steps: u32,
+}
+
+impl BuildStamp {
+    /// The stamp of this library's builder.
+    pub fn current(refine_steps: u32) -> BuildStamp {
+        BuildStamp {
+            library: format!("innersphere {}", env!("CARGO_PKG_VERSION")),
+            revision: BUILD_REVISION,
+            refine_steps,
+        }
+    }
 }
 
 /// An Inner Sphere Tree in structure-of-arrays layout.
@@ -61,6 +94,33 @@ pub struct SphereTree {
 pub const NO_PARENT: u32 = u32::MAX;
 
 impl SphereTree {
+    /// A warning when this tree was not built by the current builder: no stamp (written
+    /// before stamps existed), an older [`BUILD_REVISION`] (valid, but node spheres that may
+    /// be looser, so queries may run slower than they would on a rebuilt tree), or a newer
+    /// one. `None` for a current tree. Queries on any valid tree are correct.
+    pub fn staleness(&self) -> Option<String> {
+        match &self.meta.built_by {
+            None => Some(
+                "the tree has no build stamp (written before innersphere stamped its trees); \
+                 if it predates build revision 2 its node spheres are looser and queries slower \
+                 (measured 3× on the jaws): rebuild it with `ist build` to be sure"
+                    .into(),
+            ),
+            Some(b) if b.revision < BUILD_REVISION => Some(format!(
+                "the tree was built by {} at build revision {}, this library builds revision \
+                 {BUILD_REVISION}: results are correct, but a rebuilt tree may query faster",
+                b.library, b.revision
+            )),
+            Some(b) if b.revision > BUILD_REVISION => Some(format!(
+                "the tree was built by {} at build revision {}, newer than this library's \
+                 {BUILD_REVISION}: it loads and validates, but the speed figures of this \
+                 version may not apply",
+                b.library, b.revision
+            )),
+            Some(_) => None,
+        }
+    }
+
     /// Number of nodes.
     #[inline]
     pub fn len(&self) -> usize {

@@ -34,6 +34,7 @@ pub fn analytic_tree(
         bbox_max: hi.to_array(),
         coverage: 0.0,
         mesh_closed: true,
+        built_by: None,
     };
     let opts = HierarchyOptions {
         fanout,

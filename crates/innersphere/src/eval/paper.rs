@@ -6,9 +6,9 @@
 //! distance. Writes one CSV per figure and a PNG chart of each.
 
 use super::plot::{line_chart, Chart, Series};
-use super::replay::{replay, Accuracy, ReplayOptions};
+use super::replay::{replay, time_exact, Accuracy, ReplayOptions};
 use crate::build::{build_tree, BuildOptions, Resolution};
-use crate::exact::{self, ExactMesh, ExactScratch};
+use crate::exact::{ExactMesh, ExactScratch};
 use crate::mesh::Mesh;
 use crate::motion::Motion;
 use crate::progress::Silent;
@@ -525,17 +525,8 @@ pub fn run(
         kinds.push((kind.into(), time_kind(&ta, &tb, motion, kind).us));
     }
     let mut scratch = ExactScratch::new();
-    // Timed like the trees' queries: two passes over the compared frames, each frame's
-    // faster pass kept.
-    let mut exact_us = vec![f64::INFINITY; motion.frames.len().div_ceil(opts.every.max(1))];
-    for _ in 0..2 {
-        let frames = motion.frames.iter().step_by(opts.every.max(1));
-        for (t, f) in exact_us.iter_mut().zip(frames) {
-            let t0 = Instant::now();
-            std::hint::black_box(exact::distance(&ea, &id, &eb, &f.pose, &mut scratch));
-            *t = t.min(t0.elapsed().as_secs_f64() * 1e6);
-        }
-    }
+    // Timed like the trees' queries: each frame's faster of two passes.
+    let exact_us = time_exact(&ea, &eb, motion, opts.every, 2, &mut scratch);
     kinds.push(("exact mesh distance".into(), exact_us.clone()));
     let mut ours = String::from("query,frames,p50_us,p99_us,max_us,mean_us,frames_over_1ms\n");
     for (name, v) in &kinds {

@@ -221,11 +221,9 @@ pub fn replay(
         }
         let mut scratch = ExactScratch::new();
         let mut acc = Accuracy::default();
-        let (mut abs, mut rel, mut times) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut abs, mut rel) = (Vec::new(), Vec::new());
         for (i, f) in motion.frames.iter().enumerate().step_by(opts.every.max(1)) {
-            let t0 = Instant::now();
             let e = exact::distance(ma, &id, mb, &f.pose, &mut scratch);
-            times.push(t0.elapsed().as_secs_f64() * 1e6);
             rows[i].exact_distance = e.distance;
             rows[i].exact_intersecting = e.intersecting;
             acc.frames += 1;
@@ -250,16 +248,7 @@ pub fn replay(
                 }
             }
         }
-        // Further passes time the exact distance the same way as the trees' queries: the
-        // whole sequence of compared frames again, each frame's fastest pass kept.
-        for _ in 1..opts.passes.max(1) {
-            let frames = motion.frames.iter().step_by(opts.every.max(1));
-            for (t, f) in times.iter_mut().zip(frames) {
-                let t0 = Instant::now();
-                std::hint::black_box(exact::distance(ma, &id, mb, &f.pose, &mut scratch));
-                *t = t.min(t0.elapsed().as_secs_f64() * 1e6);
-            }
-        }
+        let times = time_exact(ma, mb, motion, opts.every, opts.passes, &mut scratch);
         let (abs, rel, times) = (sorted(abs), sorted(rel), sorted(times));
         acc.abs_err_p50 = percentile(&abs, 0.5);
         acc.abs_err_p95 = percentile(&abs, 0.95);
@@ -278,6 +267,30 @@ pub fn replay(
         accuracy,
         rows,
     }
+}
+
+/// Times (µs) of the exact mesh distance (A at the identity) on every `every`-th frame of
+/// `motion`, each frame's fastest of `passes` passes over the whole sequence: the same rule
+/// as the trees' queries, so that the two are compared like for like.
+pub(crate) fn time_exact(
+    ma: &ExactMesh,
+    mb: &ExactMesh,
+    motion: &Motion,
+    every: usize,
+    passes: usize,
+    scratch: &mut ExactScratch,
+) -> Vec<f64> {
+    let id = Pose::IDENTITY;
+    let every = every.max(1);
+    let mut times = vec![f64::INFINITY; motion.frames.len().div_ceil(every)];
+    for _ in 0..passes.max(1) {
+        for (t, f) in times.iter_mut().zip(motion.frames.iter().step_by(every)) {
+            let t0 = Instant::now();
+            std::hint::black_box(exact::distance(ma, &id, mb, &f.pose, scratch));
+            *t = t.min(t0.elapsed().as_secs_f64() * 1e6);
+        }
+    }
+    times
 }
 
 /// One pass of `kind` over the motion from a fresh pair state: each frame's time (µs) lowers

@@ -16,6 +16,7 @@
 //! (rebuild cached trees), `QUERY_BENCH_PASSES` (timed passes over the motion, default 2),
 //! `QUERY_BENCH_ONLY` (comma-separated substrings of query names to run),
 //! `QUERY_BENCH_AGG=max` (per frame the worst instead of the best of the timed passes),
+//! `QUERY_BENCH_FRAMES=FILE` (also write every frame's time, visits and contact as CSV),
 //! `INNERSPHERE_DATA` (data folder). Skips with a message when the data is missing.
 
 use innersphere::build::{build_tree, BuildOptions, Resolution};
@@ -26,6 +27,7 @@ use innersphere::query::{
 };
 use innersphere::tree::file;
 use innersphere::SphereTree;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -342,6 +344,11 @@ fn main() {
         "", "", "", "µs", "µs", "µs", "µs"
     );
     let mut st = PairState::new(a, b);
+    let mut dump = std::env::var_os("QUERY_BENCH_FRAMES").map(|p| {
+        let mut w = std::io::BufWriter::new(std::fs::File::create(p).expect("QUERY_BENCH_FRAMES"));
+        writeln!(w, "query,frame,phase,ns,visits,contact").expect("write");
+        w
+    });
     for (name, mut q) in queries {
         if !only.is_empty() && !only.iter().any(|o| name.contains(o.as_str())) {
             continue;
@@ -372,6 +379,16 @@ fn main() {
                 )
             })
             .collect();
+        if let Some(w) = dump.as_mut() {
+            for f in 0..motion.len() {
+                writeln!(
+                    w,
+                    "\"{name}\",{f},{},{},{},{}",
+                    phases[f], times[f], visits[f], contact[f]
+                )
+                .expect("write");
+            }
+        }
         rows.push(("all".into(), (0..motion.len()).collect()));
         for (ph, frames) in rows {
             if frames.is_empty() {

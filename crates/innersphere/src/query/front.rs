@@ -27,6 +27,10 @@ use super::state::{expand_larger, Ctx, Item};
 use super::Pose;
 use glam::DVec3;
 
+/// How far ahead the re-test loops prefetch the nodes of the pairs they will test (the pairs
+/// lie scattered over both trees, so every test would otherwise wait for two cache misses).
+const AHEAD: usize = 8;
+
 /// An overlapping leaf pair with B's centre at the current pose.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Hit {
@@ -142,6 +146,9 @@ impl Front {
             // Hits: still overlapping, or separated from now on.
             let mut i = 0;
             while i < self.hits.len() {
+                if let Some(n) = self.hits.get(i + AHEAD) {
+                    ctx.prefetch_nodes(n.a, n.b);
+                }
                 let h = self.hits[i];
                 let c = ctx.xf(h.b);
                 let (ov, d) = ctx.test(h.a, h.b, c);
@@ -162,6 +169,9 @@ impl Front {
             self.due.clear();
             self.queue.drain_expired(self.moved, &mut self.due);
             for k in 0..self.due.len() {
+                if let Some(n) = self.due.get(k + AHEAD) {
+                    ctx.prefetch_nodes(n.a, n.b);
+                }
                 let e = self.due[k];
                 tests += self.refine(ctx, e.a, e.b, slack2);
             }

@@ -94,6 +94,16 @@ impl Ctx<'_> {
         prefetch(&self.b[self.b[ib as usize].first as usize]);
     }
 
+    /// Hints the memory system that nodes `ia` and `ib` themselves will be read soon (the
+    /// kinetic front re-tests pairs scattered over both trees).
+    #[inline(always)]
+    pub(crate) fn prefetch_nodes(&self, ia: u32, ib: u32) {
+        if let (Some(a), Some(b)) = (self.a.get(ia as usize), self.b.get(ib as usize)) {
+            prefetch(a);
+            prefetch(b);
+        }
+    }
+
     /// Test of node pair (`ia`, `ib`) with B's centre `cb`: (overlap, lower bound of the
     /// distance). Inner nodes get the pruning slack; leaf pairs are exact.
     #[inline(always)]

@@ -49,13 +49,15 @@ pub(crate) struct Buckets {
     free: Vec<u32>,
     /// Head chunk of every bucket's chain (`NIL` when empty).
     ring: Vec<u32>,
-    /// Entries in each bucket's head chunk (the chunks behind the head are full). Kept
+    /// Entries in each bucket's head chunk (the chunks behind the head are full; left stale
+    /// when the head is `NIL`, which every reader checks first). Kept
     /// beside the heads so that a push only writes to the chunk: reading the chunk's own
     /// count was a cache miss per push, a third of the front's time on the jaw chew.
     fill: Vec<u32>,
     /// Bit `k` set when bucket slot `k` may be non-empty.
     used: Vec<u64>,
     far: u32,
+    /// Entries in the far list's head chunk.
     far_fill: u32,
     /// Smallest expiry in the far list (a far entry can be due as early as half a ring
     /// after it was pushed, before the far list is next re-sorted).

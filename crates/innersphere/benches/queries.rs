@@ -318,9 +318,9 @@ fn main() {
             }),
         ),
         (
-            "penetration budget 20k",
+            "penetration budget 8k",
             Box::new(|p, st| {
-                let r = penetration_budgeted(a, &id, b, p, st, 20_000);
+                let r = penetration_budgeted(a, &id, b, p, st, 8_000);
                 (r.volume > 0.0, r.visits)
             }),
         ),

@@ -86,6 +86,15 @@ fn replay_of_two_balls_matches_the_closed_form() {
     // balls, by at most twice the polyhedron's deviation from the sphere.
     assert!(acc.abs_err_max < 0.005, "{acc:?}");
     assert!(acc.abs_err_p50 <= acc.abs_err_p95 && acc.abs_err_p95 <= acc.abs_err_max);
+    // The like-for-like speed comparison: our distance p99 over the compared frames (here
+    // all 20) is the distance query's own p99, and the speed-up is the ratio of the two p99s.
+    let dist = report
+        .kinds
+        .iter()
+        .find(|k| k.kind == QueryKind::Distance)
+        .unwrap();
+    assert_eq!(acc.distance_p99_us, dist.p99_us);
+    assert_eq!(acc.speedup_p99, acc.exact_p99_us / acc.distance_p99_us);
 
     // More passes time the same work (each from a fresh state): the same answers, every
     // frame's time finite, and the accuracy unchanged.

@@ -116,6 +116,12 @@ pub struct Accuracy {
     pub exact_p99_us: f64,
     /// See `exact_p50_us`.
     pub exact_max_us: f64,
+    /// Our exact proximity's 99th-percentile time over the same compared frames (µs; NaN
+    /// when the distance query was not timed), the like-for-like partner of `exact_p99_us`.
+    pub distance_p99_us: f64,
+    /// `exact_p99_us / distance_p99_us`: how many times faster our proximity is at p99 than
+    /// the exact mesh distance on the same frames.
+    pub speedup_p99: f64,
 }
 
 /// One frame's results (for `--csv`).
@@ -258,6 +264,23 @@ pub fn replay(
         acc.exact_p50_us = percentile(&times, 0.5);
         acc.exact_p99_us = percentile(&times, 0.99);
         acc.exact_max_us = times.last().copied().unwrap_or(f64::NAN);
+        acc.distance_p99_us = match opts
+            .kinds
+            .iter()
+            .take(4)
+            .position(|&k| k == QueryKind::Distance)
+        {
+            Some(slot) => {
+                let ours = rows
+                    .iter()
+                    .step_by(opts.every.max(1))
+                    .map(|r| r.us[slot])
+                    .collect();
+                percentile(&sorted(ours), 0.99)
+            }
+            None => f64::NAN,
+        };
+        acc.speedup_p99 = acc.exact_p99_us / acc.distance_p99_us;
         acc
     });
     ReplayReport {

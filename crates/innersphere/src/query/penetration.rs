@@ -393,6 +393,12 @@ pub struct BudgetedVolume {
 /// leaf volume below B's node)`, until `budget` node-pair tests are spent; returns the volume
 /// found so far and `found + Σ bounds of the unrefined pairs` as an upper bound. With an
 /// unlimited budget (`u64::MAX`) the volume is the exact one of [`penetration`].
+///
+/// Choosing the budget: a node-pair test costs up to about 75 ns here (a priority-queue
+/// pop per refinement and a lens bound per overlapping child; measured on the jaw trees on a
+/// 2-core cloud machine), so 8 000 visits keep a frame under about 0.6 ms and 20 000 do not
+/// fit a 1 ms haptic frame. For the fastest exact answer use [`penetration`] instead, whose
+/// kinetic front is several times cheaper per frame than any useful budget.
 pub fn penetration_budgeted(
     a: &SphereTree,
     pose_a: &Pose,

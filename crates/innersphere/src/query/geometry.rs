@@ -51,6 +51,12 @@ impl Rel32 {
         ]
     }
 
+    /// The row-major matrix and the translation.
+    #[inline(always)]
+    pub(crate) fn parts(&self) -> (&[f32; 9], &[f32; 3]) {
+        (&self.m, &self.t)
+    }
+
     /// Length of the translation.
     pub(crate) fn translation_len(&self) -> f32 {
         (self.t[0] * self.t[0] + self.t[1] * self.t[1] + self.t[2] * self.t[2]).sqrt()

@@ -3,7 +3,7 @@
 use super::geometry::{direction, leaf_pair};
 use super::heap::Entry;
 use super::info::{Block, TreeInfo, LANES};
-use super::state::{expand_larger, prefetch, Ctx, PairState};
+use super::state::{expand_larger, prefetch, prefetch_ptr, Ctx, PairState};
 use super::Pose;
 use crate::SphereTree;
 use glam::DVec3;
@@ -374,9 +374,10 @@ fn block_in_a(ctx: &Ctx, k: &Block) -> ([f32; LANES], [f32; LANES], [f32; LANES]
 /// both are tested 4×4 in one vectorised step from their [`Block`]s (two cache lines per
 /// node), a pair with a leaf side tests the leaf against the other's 4 children. Twice the
 /// sphere tests of splitting the larger node, but half the stack pops, and a pop is what
-/// costs (≈ 30 ns against ≈ 1 ns per lane test; measured in session 4).
+/// costs (≈ 30 ns against ≈ 1 ns per lane test; measured in session 4). `AVX`: the step in AVX2
+/// intrinsics (set only after the CPU was checked).
 #[inline(always)]
-fn depth_first_blocks(
+fn depth_first_blocks<const AVX: bool>(
     ctx: &Ctx,
     ia: &TreeInfo,
     ib: &TreeInfo,
@@ -400,68 +401,69 @@ fn depth_first_blocks(
             INNER => {
                 let ka = &ba[e.a as usize];
                 let kb = &bb[e.b as usize];
-                let (bx, by, bz) = block_in_a(ctx, kb);
-                let mut d2 = [[0.0f32; LANES]; LANES];
-                let mut sr = [[0.0f32; LANES]; LANES];
-                // The rounding slack for every pair but leaf pairs (+0 leaves those exact).
-                let mut b_slack = [ctx.slack; LANES];
-                for (l, v) in b_slack.iter_mut().enumerate() {
-                    if (kb.leaf >> l) & 1 != 0 {
-                        *v = 0.0;
-                    }
-                }
-                let mut mask = 0u32;
-                for i in 0..LANES {
-                    let rs = if (ka.leaf >> i) & 1 != 0 {
-                        b_slack
-                    } else {
-                        [ctx.slack; LANES]
-                    };
-                    let mut row = [false; LANES];
-                    for l in 0..LANES {
-                        let dx = ka.x[i] - bx[l];
-                        let dy = ka.y[i] - by[l];
-                        let dz = ka.z[i] - bz[l];
-                        d2[i][l] = dx * dx + dy * dy + dz * dz;
-                        sr[i][l] = (ka.r[i] + kb.r[l]) + rs[l];
-                        row[l] = Prune::refine(d2[i][l], sr[i][l], t);
-                    }
-                    for (l, &v) in row.iter().enumerate() {
-                        mask |= (v as u32) << (i * LANES + l);
-                    }
-                }
+                let mut d2 = [0.0f32; 16];
+                let mut sr = [0.0f32; 16];
+                let mut bxyz = [[0.0f32; LANES]; 3];
+                let ll = leaf_pairs_mask(ka.leaf, kb.leaf);
+                #[cfg(target_arch = "x86_64")]
+                let mut mask = if AVX {
+                    // SAFETY: `AVX` is only set by the dispatch after checking the CPU.
+                    unsafe { step_avx2(ctx, ka, kb, ll, t, &mut bxyz, &mut d2, &mut sr) }
+                } else {
+                    step_scalar(ctx, ka, kb, ll, t, &mut bxyz, &mut d2, &mut sr)
+                };
+                #[cfg(not(target_arch = "x86_64"))]
+                let mut mask = step_scalar(ctx, ka, kb, ll, t, &mut bxyz, &mut d2, &mut sr);
                 f.visits += (ka.count * kb.count) as u64;
-                while mask != 0 {
-                    let q = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
+                let mut lm = mask & ll;
+                if lm != 0 {
+                    let ub0 = f.ub;
+                    while lm != 0 {
+                        let q = lm.trailing_zeros() as usize;
+                        lm &= lm - 1;
+                        let (ca, cb) = (ka.child[q / LANES], kb.child[q % LANES]);
+                        leaf_pair_found(f, d2[q], sr[q], ca, cb);
+                    }
+                    if f.ub < ub0 {
+                        let t = p.thr(f.ub);
+                        let mut m = mask & !ll;
+                        while m != 0 {
+                            let q = m.trailing_zeros() as usize;
+                            m &= m - 1;
+                            if !Prune::refine(d2[q], sr[q], t) {
+                                mask &= !(1 << q);
+                            }
+                        }
+                    }
+                }
+                let mut im = mask & !ll;
+                while im != 0 {
+                    let q = im.trailing_zeros() as usize;
+                    im &= im - 1;
                     let (i, l) = (q / LANES, q % LANES);
-                    let (a_leaf, b_leaf) = ((ka.leaf >> i) & 1 != 0, (kb.leaf >> l) & 1 != 0);
+                    let a_leaf = (ka.leaf >> i) & 1;
+                    let b_leaf = (kb.leaf >> l) & 1;
                     let (ca, cb) = (ka.child[i], kb.child[l]);
-                    let (d2, s) = (d2[i][l], sr[i][l]);
-                    if a_leaf && b_leaf {
-                        leaf_pair_found(f, d2, s, ca, cb);
-                        continue;
-                    }
-                    if !Prune::refine(d2, s, p.thr(f.ub)) {
-                        continue;
-                    }
-                    let (kind, pp) = if a_leaf {
-                        prefetch(&bb[cb as usize]);
-                        (A_LEAF, [ka.x[i], ka.y[i], ka.z[i], ka.r[i]])
-                    } else if b_leaf {
-                        prefetch(&ba[ca as usize]);
-                        (B_LEAF, [bx[l], by[l], bz[l], kb.r[l]])
+                    // A leaf side travels inline in the entry; block sides are prefetched,
+                    // both lines (`kind` is `A_LEAF` / `B_LEAF` from the leaf bits).
+                    let pa = ba.as_ptr().wrapping_add(ca as usize);
+                    let pb = bb.as_ptr().wrapping_add(cb as usize);
+                    let pp = if a_leaf != 0 {
+                        prefetch_ptr(pb);
+                        [ka.x[i], ka.y[i], ka.z[i], ka.r[i]]
                     } else {
-                        prefetch(&ba[ca as usize]);
-                        prefetch(&bb[cb as usize]);
-                        (INNER, [0.0; 4])
+                        prefetch_ptr(pa);
+                        if b_leaf == 0 {
+                            prefetch_ptr(pb);
+                        }
+                        [bxyz[0][l], bxyz[1][l], bxyz[2][l], kb.r[l]]
                     };
                     stack.push(BlockEntry {
                         a: ca,
                         b: cb,
-                        kind,
-                        d2,
-                        s,
+                        kind: a_leaf | (b_leaf << 1),
+                        d2: d2[q],
+                        s: sr[q],
                         p: pp,
                     });
                 }
@@ -544,6 +546,129 @@ fn depth_first_blocks(
     }
 }
 
+/// Bit `4i + l` set when child `i` of A's block and child `l` of B's are both leaves.
+#[inline(always)]
+fn leaf_pairs_mask(a: u32, b: u32) -> u32 {
+    let mut rows = 0u32;
+    for i in 0..LANES {
+        rows |= (((a >> i) & 1) * 0xF) << (i * LANES);
+    }
+    let cols = (b & 0xF) * 0x1111;
+    rows & cols
+}
+
+/// The 4×4 step, portable: B's children into A's frame (`bxyz`), every child pair's squared
+/// centre distance and radius sum (+ the rounding slack unless both are leaves, `ll`), and
+/// the mask of pairs to refine under threshold `t` (bit `4i + l`).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn step_scalar(
+    ctx: &Ctx,
+    ka: &Block,
+    kb: &Block,
+    ll: u32,
+    t: f32,
+    bxyz: &mut [[f32; LANES]; 3],
+    d2: &mut [f32; 16],
+    sr: &mut [f32; 16],
+) -> u32 {
+    let (bx, by, bz) = block_in_a(ctx, kb);
+    *bxyz = [bx, by, bz];
+    let mut mask = 0u32;
+    for i in 0..LANES {
+        for l in 0..LANES {
+            let q = i * LANES + l;
+            let dx = ka.x[i] - bx[l];
+            let dy = ka.y[i] - by[l];
+            let dz = ka.z[i] - bz[l];
+            d2[q] = dx * dx + dy * dy + dz * dz;
+            let rs = if (ll >> q) & 1 != 0 { 0.0 } else { ctx.slack };
+            sr[q] = (ka.r[i] + kb.r[l]) + rs;
+            mask |= (Prune::refine(d2[q], sr[q], t) as u32) << q;
+        }
+    }
+    mask
+}
+
+/// [`step_scalar`] in AVX2 intrinsics (two 8-lane vectors for the 16 pairs; the same
+/// operations in the same order, no FMA, so the results are bit for bit the portable ones).
+#[cfg(target_arch = "x86_64")]
+#[allow(clippy::too_many_arguments)]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn step_avx2(
+    ctx: &Ctx,
+    ka: &Block,
+    kb: &Block,
+    ll: u32,
+    t: f32,
+    bxyz: &mut [[f32; LANES]; 3],
+    d2: &mut [f32; 16],
+    sr: &mut [f32; 16],
+) -> u32 {
+    use std::arch::x86_64::*;
+    let m = &ctx.rel32;
+    let (m, tr) = m.parts();
+    let (x, y, z) = (
+        _mm_loadu_ps(kb.x.as_ptr()),
+        _mm_loadu_ps(kb.y.as_ptr()),
+        _mm_loadu_ps(kb.z.as_ptr()),
+    );
+    let row = |k: usize, t: f32| {
+        _mm_add_ps(
+            _mm_add_ps(
+                _mm_add_ps(
+                    _mm_mul_ps(_mm_set1_ps(m[k]), x),
+                    _mm_mul_ps(_mm_set1_ps(m[k + 1]), y),
+                ),
+                _mm_mul_ps(_mm_set1_ps(m[k + 2]), z),
+            ),
+            _mm_set1_ps(t),
+        )
+    };
+    let (bx, by, bz) = (row(0, tr[0]), row(3, tr[1]), row(6, tr[2]));
+    _mm_storeu_ps(bxyz[0].as_mut_ptr(), bx);
+    _mm_storeu_ps(bxyz[1].as_mut_ptr(), by);
+    _mm_storeu_ps(bxyz[2].as_mut_ptr(), bz);
+    let dup = |v: __m128| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(v), v);
+    let (bx8, by8, bz8) = (dup(bx), dup(by), dup(bz));
+    let rb8 = dup(_mm_loadu_ps(kb.r.as_ptr()));
+    let lo = _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1);
+    let hi = _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3);
+    let ax = _mm256_castps128_ps256(_mm_loadu_ps(ka.x.as_ptr()));
+    let ay = _mm256_castps128_ps256(_mm_loadu_ps(ka.y.as_ptr()));
+    let az = _mm256_castps128_ps256(_mm_loadu_ps(ka.z.as_ptr()));
+    let ar = _mm256_castps128_ps256(_mm_loadu_ps(ka.r.as_ptr()));
+    let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    let slack = _mm256_set1_ps(ctx.slack);
+    let tt = _mm256_set1_ps(t);
+    let zero = _mm256_setzero_ps();
+    let margin = _mm256_set1_ps(MARGIN);
+    let mut mask = 0u32;
+    for (h, idx) in [lo, hi].into_iter().enumerate() {
+        let dx = _mm256_sub_ps(_mm256_permutevar8x32_ps(ax, idx), bx8);
+        let dy = _mm256_sub_ps(_mm256_permutevar8x32_ps(ay, idx), by8);
+        let dz = _mm256_sub_ps(_mm256_permutevar8x32_ps(az, idx), bz8);
+        let dd = _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+            _mm256_mul_ps(dz, dz),
+        );
+        let llv = _mm256_set1_epi32(((ll >> (8 * h)) & 0xFF) as i32);
+        let is_ll = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(llv, bits), bits));
+        let rs = _mm256_andnot_ps(is_ll, slack);
+        let s = _mm256_add_ps(_mm256_add_ps(_mm256_permutevar8x32_ps(ar, idx), rb8), rs);
+        let l = _mm256_add_ps(tt, s);
+        let ok = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GT_OQ>(l, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(dd, _mm256_mul_ps(_mm256_mul_ps(l, l), margin)),
+        );
+        mask |= (_mm256_movemask_ps(ok) as u32) << (8 * h);
+        _mm256_storeu_ps(d2.as_mut_ptr().add(8 * h), dd);
+        _mm256_storeu_ps(sr.as_mut_ptr().add(8 * h), s);
+    }
+    mask
+}
+
 /// [`depth_first_blocks`] compiled for AVX2 when the CPU has it (8-wide lanes; no FMA, so
 /// every result is bit for bit the same as the baseline build's).
 fn depth_first_blocks_dispatch(
@@ -567,13 +692,13 @@ fn depth_first_blocks_dispatch(
             p: Prune,
             f: &mut Found,
         ) {
-            depth_first_blocks(ctx, ia, ib, root, stack, p, f)
+            depth_first_blocks::<true>(ctx, ia, ib, root, stack, p, f)
         }
         // SAFETY: the CPU has AVX2 (checked above).
         unsafe { avx2(ctx, ia, ib, root, stack, p, f) };
         return;
     }
-    depth_first_blocks(ctx, ia, ib, root, stack, p, f)
+    depth_first_blocks::<false>(ctx, ia, ib, root, stack, p, f)
 }
 
 /// The 4×4 search's first pair: the two roots.
@@ -596,5 +721,82 @@ fn root_entry(ctx: &Ctx, c0: [f32; 3]) -> BlockEntry {
         d2,
         s,
         p,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::query::geometry::Rel32;
+    use glam::DQuat;
+    use proptest::prelude::*;
+
+    fn block(v: &[f32], leaf: u32, count: u32) -> Block {
+        let mut k = Block {
+            x: [0.0; LANES],
+            y: [0.0; LANES],
+            z: [0.0; LANES],
+            r: [f32::NEG_INFINITY; LANES],
+            child: [0; LANES],
+            node: [0; LANES],
+            leaf: leaf & ((1 << count) - 1),
+            count,
+        };
+        for l in 0..count as usize {
+            (k.x[l], k.y[l], k.z[l], k.r[l]) =
+                (v[4 * l], v[4 * l + 1], v[4 * l + 2], v[4 * l + 3].abs());
+        }
+        k
+    }
+
+    proptest! {
+        /// The AVX2 4×4 step gives bit for bit the portable step's distances, radius sums,
+        /// transformed centres and refine mask (the dispatch may pick either).
+        #[test]
+        fn avx2_step_equals_portable(
+            va in prop::collection::vec(-40.0f32..40.0, 16),
+            vb in prop::collection::vec(-40.0f32..40.0, 16),
+            (la, lb, na, nb) in (0u32..16, 0u32..16, 1u32..=4, 1u32..=4),
+            q in prop::array::uniform4(-1.0f64..1.0),
+            tr in prop::array::uniform3(-20.0f64..20.0),
+            t in -5.0f32..30.0,
+        ) {
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                let (ka, kb) = (block(&va, la, na), block(&vb, lb, nb));
+                let rot = DQuat::from_xyzw(q[0], q[1], q[2], q[3] + 1.5).normalize();
+                let rel = Pose::new(DVec3::from_array(tr), rot).unwrap();
+                let rel32 = Rel32::new(&rel);
+                let ctx = Ctx {
+                    a: &[],
+                    b: &[],
+                    blocks_a: &[],
+                    blocks_b: &[],
+                    block_of_a: &[],
+                    block_of_b: &[],
+                    pose_a: Pose::IDENTITY,
+                    rel,
+                    rel32,
+                    slack: 1e-4,
+                };
+                let ll = leaf_pairs_mask(ka.leaf, kb.leaf);
+                let (mut x1, mut d1, mut s1) = ([[0.0; LANES]; 3], [0.0; 16], [0.0; 16]);
+                let (mut x2, mut d2, mut s2) = ([[0.0; LANES]; 3], [0.0; 16], [0.0; 16]);
+                let m1 = step_scalar(&ctx, &ka, &kb, ll, t, &mut x1, &mut d1, &mut s1);
+                // SAFETY: the CPU has AVX2 (checked above).
+                let m2 = unsafe { step_avx2(&ctx, &ka, &kb, ll, t, &mut x2, &mut d2, &mut s2) };
+                prop_assert_eq!(m1, m2);
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                prop_assert_eq!(bits(&d1), bits(&d2));
+                prop_assert_eq!(bits(&s1), bits(&s2));
+                prop_assert_eq!(bits(x1.as_flattened()), bits(x2.as_flattened()));
+                // Unused lanes never refine.
+                for q in 0..16 {
+                    if q / LANES >= na as usize || q % LANES >= nb as usize {
+                        prop_assert_eq!((m1 >> q) & 1, 0);
+                    }
+                }
+            }
+        }
     }
 }

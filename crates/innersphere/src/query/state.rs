@@ -120,18 +120,31 @@ impl Ctx<'_> {
     }
 }
 
-/// Hints the memory system that the cache line holding `r` will be read soon (a hint without
+/// Hints the memory system that the cache lines holding `r` will be read soon (a hint without
 /// architectural effect; nothing on other targets).
 #[inline(always)]
 pub(crate) fn prefetch<T>(r: &T) {
+    prefetch_ptr(r as *const T);
+}
+
+/// [`prefetch`] of every cache line of the `T` at `p`, which need not be valid (a prefetch
+/// never faults and reads nothing architecturally), so that a caller can prefetch without a
+/// branch. A [`Block`](super::info::Block) is two lines, and its second (what to descend to)
+/// is read at once when the block is tested.
+#[inline(always)]
+pub(crate) fn prefetch_ptr<T>(p: *const T) {
     #[cfg(target_arch = "x86_64")]
-    // SAFETY: prefetching a valid reference's address has no architectural effect.
+    // SAFETY: a prefetch has no architectural effect, whatever the address.
     unsafe {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        _mm_prefetch::<_MM_HINT_T0>(r as *const T as *const i8);
+        let mut off = 0;
+        while off < std::mem::size_of::<T>() {
+            _mm_prefetch::<_MM_HINT_T0>((p as *const i8).wrapping_add(off));
+            off += 64;
+        }
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = r;
+    let _ = p;
 }
 
 /// Per-pair state: what temporal coherence needs (last contact pairs, last separation bound

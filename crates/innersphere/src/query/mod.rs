@@ -38,6 +38,7 @@ mod front;
 mod geometry;
 mod heap;
 mod info;
+mod lanes;
 mod parse;
 mod penetration;
 pub mod pose;

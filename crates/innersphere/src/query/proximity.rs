@@ -3,6 +3,7 @@
 use super::geometry::{direction, leaf_pair};
 use super::heap::Entry;
 use super::info::{Block, TreeInfo, LANES};
+use super::lanes;
 use super::state::{expand_larger, prefetch, prefetch_ptr, Ctx, PairState};
 use super::Pose;
 use crate::SphereTree;
@@ -404,7 +405,7 @@ fn depth_first_blocks<const AVX: bool>(
                 let mut d2 = [0.0f32; 16];
                 let mut sr = [0.0f32; 16];
                 let mut bxyz = [[0.0f32; LANES]; 3];
-                let ll = leaf_pairs_mask(ka.leaf, kb.leaf);
+                let ll = lanes::leaf_pairs_mask(ka.leaf, kb.leaf);
                 #[cfg(target_arch = "x86_64")]
                 let mut mask = if AVX {
                     // SAFETY: `AVX` is only set by the dispatch after checking the CPU.
@@ -546,17 +547,6 @@ fn depth_first_blocks<const AVX: bool>(
     }
 }
 
-/// Bit `4i + l` set when child `i` of A's block and child `l` of B's are both leaves.
-#[inline(always)]
-fn leaf_pairs_mask(a: u32, b: u32) -> u32 {
-    let mut rows = 0u32;
-    for i in 0..LANES {
-        rows |= (((a >> i) & 1) * 0xF) << (i * LANES);
-    }
-    let cols = (b & 0xF) * 0x1111;
-    rows & cols
-}
-
 /// The 4×4 step, portable: B's children into A's frame (`bxyz`), every child pair's squared
 /// centre distance and radius sum (+ the rounding slack unless both are leaves, `ll`), and
 /// the mask of pairs to refine under threshold `t` (bit `4i + l`).
@@ -574,18 +564,11 @@ fn step_scalar(
 ) -> u32 {
     let (bx, by, bz) = block_in_a(ctx, kb);
     *bxyz = [bx, by, bz];
+    let cols = [&bxyz[0], &bxyz[1], &bxyz[2], &kb.r];
+    lanes::pairs([&ka.x, &ka.y, &ka.z, &ka.r], cols, ll, ctx.slack, d2, sr);
     let mut mask = 0u32;
-    for i in 0..LANES {
-        for l in 0..LANES {
-            let q = i * LANES + l;
-            let dx = ka.x[i] - bx[l];
-            let dy = ka.y[i] - by[l];
-            let dz = ka.z[i] - bz[l];
-            d2[q] = dx * dx + dy * dy + dz * dz;
-            let rs = if (ll >> q) & 1 != 0 { 0.0 } else { ctx.slack };
-            sr[q] = (ka.r[i] + kb.r[l]) + rs;
-            mask |= (Prune::refine(d2[q], sr[q], t) as u32) << q;
-        }
+    for q in 0..16 {
+        mask |= (Prune::refine(d2[q], sr[q], t) as u32) << q;
     }
     mask
 }
@@ -630,34 +613,18 @@ unsafe fn step_avx2(
     _mm_storeu_ps(bxyz[0].as_mut_ptr(), bx);
     _mm_storeu_ps(bxyz[1].as_mut_ptr(), by);
     _mm_storeu_ps(bxyz[2].as_mut_ptr(), bz);
-    let dup = |v: __m128| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(v), v);
-    let (bx8, by8, bz8) = (dup(bx), dup(by), dup(bz));
-    let rb8 = dup(_mm_loadu_ps(kb.r.as_ptr()));
-    let lo = _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1);
-    let hi = _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3);
-    let ax = _mm256_castps128_ps256(_mm_loadu_ps(ka.x.as_ptr()));
-    let ay = _mm256_castps128_ps256(_mm_loadu_ps(ka.y.as_ptr()));
-    let az = _mm256_castps128_ps256(_mm_loadu_ps(ka.z.as_ptr()));
-    let ar = _mm256_castps128_ps256(_mm_loadu_ps(ka.r.as_ptr()));
-    let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-    let slack = _mm256_set1_ps(ctx.slack);
-    let tt = _mm256_set1_ps(t);
+    let t = _mm256_set1_ps(t);
     let zero = _mm256_setzero_ps();
     let margin = _mm256_set1_ps(MARGIN);
+    let halves = lanes::pairs_avx2(
+        [&ka.x, &ka.y, &ka.z, &ka.r],
+        [&bxyz[0], &bxyz[1], &bxyz[2], &kb.r],
+        ll,
+        ctx.slack,
+    );
     let mut mask = 0u32;
-    for (h, idx) in [lo, hi].into_iter().enumerate() {
-        let dx = _mm256_sub_ps(_mm256_permutevar8x32_ps(ax, idx), bx8);
-        let dy = _mm256_sub_ps(_mm256_permutevar8x32_ps(ay, idx), by8);
-        let dz = _mm256_sub_ps(_mm256_permutevar8x32_ps(az, idx), bz8);
-        let dd = _mm256_add_ps(
-            _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
-            _mm256_mul_ps(dz, dz),
-        );
-        let llv = _mm256_set1_epi32(((ll >> (8 * h)) & 0xFF) as i32);
-        let is_ll = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(llv, bits), bits));
-        let rs = _mm256_andnot_ps(is_ll, slack);
-        let s = _mm256_add_ps(_mm256_add_ps(_mm256_permutevar8x32_ps(ar, idx), rb8), rs);
-        let l = _mm256_add_ps(tt, s);
+    for (h, (dd, s)) in halves.into_iter().enumerate() {
+        let l = _mm256_add_ps(t, s);
         let ok = _mm256_and_ps(
             _mm256_cmp_ps::<_CMP_GT_OQ>(l, zero),
             _mm256_cmp_ps::<_CMP_LT_OQ>(dd, _mm256_mul_ps(_mm256_mul_ps(l, l), margin)),
@@ -779,7 +746,7 @@ mod tests {
                     rel32,
                     slack: 1e-4,
                 };
-                let ll = leaf_pairs_mask(ka.leaf, kb.leaf);
+                let ll = lanes::leaf_pairs_mask(ka.leaf, kb.leaf);
                 let (mut x1, mut d1, mut s1) = ([[0.0; LANES]; 3], [0.0; 16], [0.0; 16]);
                 let (mut x2, mut d2, mut s2) = ([[0.0; LANES]; 3], [0.0; 16], [0.0; 16]);
                 let m1 = step_scalar(&ctx, &ka, &kb, ll, t, &mut x1, &mut d1, &mut s1);

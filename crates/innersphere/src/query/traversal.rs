@@ -21,6 +21,7 @@
 
 use super::geometry::{make_contact, Contact};
 use super::info::{Block, Node, TreeInfo, LANES};
+use super::lanes;
 use super::state::{pair_key, prefetch, safe_separation, Ctx, Item, PairState, Scratch};
 use super::Pose;
 use crate::tree::NO_PARENT;
@@ -322,47 +323,101 @@ pub(crate) fn block_step(
     } else {
         Side::b_block(ctx, &ctx.blocks_b[e.bb as usize])
     };
-    let mut b_slack = [ctx.slack; LANES];
-    for (l, v) in b_slack.iter_mut().enumerate() {
-        if (sb.leaf >> l) & 1 != 0 {
-            *v = 0.0;
-        }
-    }
     let m = *min_sep;
-    let (mut over, mut near) = (0u32, 0u32);
-    let mut d2 = [[0.0f32; LANES]; LANES];
-    let mut sr = [[0.0f32; LANES]; LANES];
-    for i in 0..LANES {
-        let rs = if (sa.leaf >> i) & 1 != 0 {
-            b_slack
-        } else {
-            [ctx.slack; LANES]
-        };
-        for l in 0..LANES {
-            let dx = sa.x[i] - sb.x[l];
-            let dy = sa.y[i] - sb.y[l];
-            let dz = sa.z[i] - sb.z[l];
-            let q = dx * dx + dy * dy + dz * dz;
-            let s = (sa.r[i] + sb.r[l]) + rs[l];
-            d2[i][l] = q;
-            sr[i][l] = s;
-            let valid = (i < sa.count as usize) & (l < sb.count as usize);
-            let ov = q < s * s;
-            over |= ((valid & ov) as u32) << (l * LANES + i);
-            near |= ((valid & !ov & (q < (s + m) * (s + m))) as u32) << (l * LANES + i);
-        }
-    }
+    let mut d2 = [0.0f32; 16];
+    let mut sr = [0.0f32; 16];
+    // Bit `l·4 + i` of the masks: B's lane `l` (rows) against A's lane `i` (columns).
+    let ll = lanes::leaf_pairs_mask(sb.leaf, sa.leaf);
+    let valid = lanes::valid_mask(sb.count, sa.count);
+    #[cfg(target_arch = "x86_64")]
+    let (over, mut near) = if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above; the check is a cached load).
+        unsafe { overlap_masks_avx2(&sb, &sa, ll, valid, ctx.slack, m, &mut d2, &mut sr) }
+    } else {
+        overlap_masks(&sb, &sa, ll, valid, ctx.slack, m, &mut d2, &mut sr)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let (over, mut near) = overlap_masks(&sb, &sa, ll, valid, ctx.slack, m, &mut d2, &mut sr);
     *visits += (sa.count * sb.count) as u64;
     while near != 0 {
         let q = near.trailing_zeros() as usize;
         near &= near - 1;
-        let (l, i) = (q / LANES, q % LANES);
-        let lb = d2[i][l].sqrt() - sr[i][l];
+        let lb = d2[q].sqrt() - sr[q];
         if lb < *min_sep {
             *min_sep = lb;
         }
     }
     (sa, sb, over)
+}
+
+/// The masks of a [`block_step`], portable: for rows `r` (B's lanes) against columns `c` (A's
+/// lanes), bit `4·row + col` of `over` when the spheres overlap, of `near` when they do not
+/// but come within `m`; `valid` masks unused lanes, `ll` marks leaf pairs (no rounding slack).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn overlap_masks(
+    r: &Side,
+    c: &Side,
+    ll: u32,
+    valid: u32,
+    slack: f32,
+    m: f32,
+    d2: &mut [f32; 16],
+    sr: &mut [f32; 16],
+) -> (u32, u32) {
+    lanes::pairs(
+        [&r.x, &r.y, &r.z, &r.r],
+        [&c.x, &c.y, &c.z, &c.r],
+        ll,
+        slack,
+        d2,
+        sr,
+    );
+    let (mut over, mut near) = (0u32, 0u32);
+    for q in 0..16 {
+        let (d, s) = (d2[q], sr[q]);
+        let ov = d < s * s;
+        over |= (ov as u32) << q;
+        near |= ((!ov & (d < (s + m) * (s + m))) as u32) << q;
+    }
+    (over & valid, near & valid)
+}
+
+/// [`overlap_masks`] in AVX2 intrinsics, bit for bit the same (no FMA; the lane formulas are
+/// [`lanes::pairs_avx2`]'s).
+#[cfg(target_arch = "x86_64")]
+#[allow(clippy::too_many_arguments)]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn overlap_masks_avx2(
+    r: &Side,
+    c: &Side,
+    ll: u32,
+    valid: u32,
+    slack: f32,
+    m: f32,
+    d2: &mut [f32; 16],
+    sr: &mut [f32; 16],
+) -> (u32, u32) {
+    use std::arch::x86_64::*;
+    let [(dlo, slo), (dhi, shi)] = lanes::pairs_avx2(
+        [&r.x, &r.y, &r.z, &r.r],
+        [&c.x, &c.y, &c.z, &c.r],
+        ll,
+        slack,
+    );
+    let mm = _mm256_set1_ps(m);
+    let (mut over, mut near) = (0u32, 0u32);
+    for (h, (d, s)) in [(dlo, slo), (dhi, shi)].into_iter().enumerate() {
+        let ov = _mm256_cmp_ps::<_CMP_LT_OQ>(d, _mm256_mul_ps(s, s));
+        let sm = _mm256_add_ps(s, mm);
+        let nr = _mm256_andnot_ps(ov, _mm256_cmp_ps::<_CMP_LT_OQ>(d, _mm256_mul_ps(sm, sm)));
+        over |= (_mm256_movemask_ps(ov) as u32) << (8 * h);
+        near |= (_mm256_movemask_ps(nr) as u32) << (8 * h);
+        _mm256_storeu_ps(d2.as_mut_ptr().add(8 * h), d);
+        _mm256_storeu_ps(sr.as_mut_ptr().add(8 * h), s);
+    }
+    (over & valid, near & valid)
 }
 
 impl TItem {
@@ -1009,6 +1064,57 @@ fn multipoint_search(
                 break;
             }
             leave_below(ctx, s, split);
+        }
+    }
+}
+
+#[cfg(test)]
+mod lane_tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn side(v: &[f32], leaf: u32, count: u32) -> Side {
+        let mut s = Side {
+            x: [0.0; LANES],
+            y: [0.0; LANES],
+            z: [0.0; LANES],
+            r: [f32::NEG_INFINITY; LANES],
+            leaf: leaf & ((1 << count) - 1),
+            count,
+            node: [0; LANES],
+            child: [0; LANES],
+        };
+        for l in 0..count as usize {
+            (s.x[l], s.y[l], s.z[l], s.r[l]) =
+                (v[4 * l], v[4 * l + 1], v[4 * l + 2], v[4 * l + 3].abs());
+        }
+        s
+    }
+
+    proptest! {
+        /// The AVX2 masks of the overlap traversals' step equal the portable ones bit for bit.
+        #[test]
+        fn avx2_overlap_masks_equal_portable(
+            vr in prop::collection::vec(-20.0f32..20.0, 16),
+            vc in prop::collection::vec(-20.0f32..20.0, 16),
+            (lr, lc, nr, nc) in (0u32..16, 0u32..16, 1u32..=4, 1u32..=4),
+            m in prop_oneof![Just(f32::INFINITY), 0.0f32..10.0],
+        ) {
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                let (r, c) = (side(&vr, lr, nr), side(&vc, lc, nc));
+                let ll = lanes::leaf_pairs_mask(r.leaf, c.leaf);
+                let valid = lanes::valid_mask(r.count, c.count);
+                let (mut d1, mut s1, mut d2, mut s2) = ([0.0; 16], [0.0; 16], [0.0; 16], [0.0; 16]);
+                let m1 = overlap_masks(&r, &c, ll, valid, 1e-4, m, &mut d1, &mut s1);
+                // SAFETY: the CPU has AVX2 (checked above).
+                let m2 = unsafe { overlap_masks_avx2(&r, &c, ll, valid, 1e-4, m, &mut d2, &mut s2) };
+                prop_assert_eq!(m1, m2);
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                prop_assert_eq!(bits(&d1), bits(&d2));
+                prop_assert_eq!(bits(&s1), bits(&s2));
+                prop_assert_eq!(m1.0 & !valid, 0);
+            }
         }
     }
 }

@@ -53,6 +53,36 @@ pub(crate) struct Block {
     pub count: u32,
 }
 
+impl Block {
+    /// A block with no children: every lane unused (radius −∞, never refined).
+    pub(crate) const EMPTY: Block = Block {
+        x: [0.0; LANES],
+        y: [0.0; LANES],
+        z: [0.0; LANES],
+        r: [f32::NEG_INFINITY; LANES],
+        child: [0; LANES],
+        node: [0; LANES],
+        leaf: 0,
+        count: 0,
+    };
+
+    /// Test block of `count` children with spheres `v[4k..4k + 4]` (radius `|v[4k + 3]|`) and
+    /// leaf bits `leaf`.
+    #[cfg(test)]
+    pub(crate) fn from_spheres(v: &[f32], leaf: u32, count: u32) -> Block {
+        let mut k = Block {
+            leaf: leaf & ((1 << count) - 1),
+            count,
+            ..Block::EMPTY
+        };
+        for l in 0..count as usize {
+            (k.x[l], k.y[l], k.z[l], k.r[l]) =
+                (v[4 * l], v[4 * l + 1], v[4 * l + 2], v[4 * l + 3].abs());
+        }
+        k
+    }
+}
+
 /// Query-side facts about one tree, computed once ([`TreeInfo::new`], O(nodes)) and shared
 /// by every [`PairState`](super::PairState) that involves the tree.
 #[derive(Debug, Clone)]
@@ -134,14 +164,8 @@ impl TreeInfo {
             let mut blocks = Vec::with_capacity(next as usize);
             for i in (0..n).filter(|&i| !tree.is_leaf(i)) {
                 let mut b = Block {
-                    x: [0.0; LANES],
-                    y: [0.0; LANES],
-                    z: [0.0; LANES],
-                    r: [f32::NEG_INFINITY; LANES],
-                    child: [0; LANES],
-                    node: [0; LANES],
-                    leaf: 0,
                     count: tree.child_count[i] as u32,
+                    ..Block::EMPTY
                 };
                 for (k, ch) in tree.children(i).enumerate() {
                     b.x[k] = tree.x[ch];

@@ -4,7 +4,7 @@ use super::geometry::{direction, leaf_pair};
 use super::heap::Entry;
 use super::info::{Block, TreeInfo, LANES};
 use super::lanes;
-use super::state::{expand_larger, prefetch, prefetch_ptr, Ctx, PairState};
+use super::state::{expand_larger, prefetch, Ctx, PairState};
 use super::Pose;
 use crate::SphereTree;
 use glam::DVec3;
@@ -445,17 +445,15 @@ fn depth_first_blocks<const AVX: bool>(
                     let a_leaf = (ka.leaf >> i) & 1;
                     let b_leaf = (kb.leaf >> l) & 1;
                     let (ca, cb) = (ka.child[i], kb.child[l]);
-                    // A leaf side travels inline in the entry; block sides are prefetched,
-                    // both lines (`kind` is `A_LEAF` / `B_LEAF` from the leaf bits).
-                    let pa = ba.as_ptr().wrapping_add(ca as usize);
-                    let pb = bb.as_ptr().wrapping_add(cb as usize);
+                    // A leaf side travels inline in the entry; block sides are prefetched
+                    // (`kind` is `A_LEAF` / `B_LEAF` from the leaf bits).
                     let pp = if a_leaf != 0 {
-                        prefetch_ptr(pb);
+                        prefetch(&bb[cb as usize]);
                         [ka.x[i], ka.y[i], ka.z[i], ka.r[i]]
                     } else {
-                        prefetch_ptr(pa);
+                        prefetch(&ba[ca as usize]);
                         if b_leaf == 0 {
-                            prefetch_ptr(pb);
+                            prefetch(&bb[cb as usize]);
                         }
                         [bxyz[0][l], bxyz[1][l], bxyz[2][l], kb.r[l]]
                     };
@@ -590,8 +588,7 @@ unsafe fn step_avx2(
     sr: &mut [f32; 16],
 ) -> u32 {
     use std::arch::x86_64::*;
-    let m = &ctx.rel32;
-    let (m, tr) = m.parts();
+    let (m, tr) = ctx.rel32.parts();
     let (x, y, z) = (
         _mm_loadu_ps(kb.x.as_ptr()),
         _mm_loadu_ps(kb.y.as_ptr()),
@@ -698,24 +695,6 @@ mod tests {
     use glam::DQuat;
     use proptest::prelude::*;
 
-    fn block(v: &[f32], leaf: u32, count: u32) -> Block {
-        let mut k = Block {
-            x: [0.0; LANES],
-            y: [0.0; LANES],
-            z: [0.0; LANES],
-            r: [f32::NEG_INFINITY; LANES],
-            child: [0; LANES],
-            node: [0; LANES],
-            leaf: leaf & ((1 << count) - 1),
-            count,
-        };
-        for l in 0..count as usize {
-            (k.x[l], k.y[l], k.z[l], k.r[l]) =
-                (v[4 * l], v[4 * l + 1], v[4 * l + 2], v[4 * l + 3].abs());
-        }
-        k
-    }
-
     proptest! {
         /// The AVX2 4×4 step gives bit for bit the portable step's distances, radius sums,
         /// transformed centres and refine mask (the dispatch may pick either).
@@ -730,7 +709,7 @@ mod tests {
         ) {
             #[cfg(target_arch = "x86_64")]
             if std::arch::is_x86_feature_detected!("avx2") {
-                let (ka, kb) = (block(&va, la, na), block(&vb, lb, nb));
+                let (ka, kb) = (Block::from_spheres(&va, la, na), Block::from_spheres(&vb, lb, nb));
                 let rot = DQuat::from_xyzw(q[0], q[1], q[2], q[3] + 1.5).normalize();
                 let rel = Pose::new(DVec3::from_array(tr), rot).unwrap();
                 let rel32 = Rel32::new(&rel);

@@ -120,31 +120,24 @@ impl Ctx<'_> {
     }
 }
 
-/// Hints the memory system that the cache lines holding `r` will be read soon (a hint without
-/// architectural effect; nothing on other targets).
+/// Hints the memory system that every cache line of `r` will be read soon (a hint without
+/// architectural effect; nothing on other targets). A [`Block`](super::info::Block) is two
+/// lines, and its second (what to descend to) is read as soon as the block is tested.
 #[inline(always)]
 pub(crate) fn prefetch<T>(r: &T) {
-    prefetch_ptr(r as *const T);
-}
-
-/// [`prefetch`] of every cache line of the `T` at `p`, which need not be valid (a prefetch
-/// never faults and reads nothing architecturally), so that a caller can prefetch without a
-/// branch. A [`Block`](super::info::Block) is two lines, and its second (what to descend to)
-/// is read at once when the block is tested.
-#[inline(always)]
-pub(crate) fn prefetch_ptr<T>(p: *const T) {
     #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch has no architectural effect, whatever the address.
+    // SAFETY: prefetching the lines of a valid reference has no architectural effect.
     unsafe {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let p = r as *const T as *const i8;
         let mut off = 0;
         while off < std::mem::size_of::<T>() {
-            _mm_prefetch::<_MM_HINT_T0>((p as *const i8).wrapping_add(off));
+            _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off));
             off += 64;
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = p;
+    let _ = r;
 }
 
 /// Per-pair state: what temporal coherence needs (last contact pairs, last separation bound

@@ -1074,21 +1074,7 @@ mod lane_tests {
     use proptest::prelude::*;
 
     fn side(v: &[f32], leaf: u32, count: u32) -> Side {
-        let mut s = Side {
-            x: [0.0; LANES],
-            y: [0.0; LANES],
-            z: [0.0; LANES],
-            r: [f32::NEG_INFINITY; LANES],
-            leaf: leaf & ((1 << count) - 1),
-            count,
-            node: [0; LANES],
-            child: [0; LANES],
-        };
-        for l in 0..count as usize {
-            (s.x[l], s.y[l], s.z[l], s.r[l]) =
-                (v[4 * l], v[4 * l + 1], v[4 * l + 2], v[4 * l + 3].abs());
-        }
-        s
+        Side::a_block(&Block::from_spheres(v, leaf, count))
     }
 
     proptest! {

@@ -1,5 +1,6 @@
 //! The per-pair state: temporal coherence and all scratch memory of the queries.
 
+use super::block_front::BlockFront;
 use super::front::Front;
 use super::geometry::{pruning_slack, Contact, Rel32};
 use super::heap::{Entry, PairHeap};
@@ -59,6 +60,8 @@ pub(crate) struct Scratch {
     pub separation: Option<SeparationRecord>,
     /// The kinetic front of the tracked queries.
     pub front: Front,
+    /// The block front of first contact ([`contact`](super::contact) on fan-outs ≤ 4).
+    pub bfront: BlockFront,
 }
 
 /// Everything a query needs about the pair for one call: the packed nodes, the poses, the
@@ -191,6 +194,7 @@ impl PairState {
                 bt_pair: None,
                 separation: None,
                 front: Front::with_capacity(heap_cap),
+                bfront: BlockFront::with_capacity(heap_cap / 4),
             },
             ia: a,
             ib: b,
@@ -215,11 +219,18 @@ impl PairState {
         self.s.mp_prev.clear();
         self.s.separation = None;
         self.s.front.reset();
+        self.s.bfront.reset();
     }
 
     /// Size of the kinetic front: (separated node pairs on it, overlapping leaf pairs).
     pub fn front_size(&self) -> (usize, usize) {
         self.s.front.size()
+    }
+
+    /// Size of the block front of [`contact`](super::contact): (live entries, allocated
+    /// slots, overlapping leaf pairs).
+    pub fn block_front_size(&self) -> (usize, usize, usize) {
+        self.s.bfront.size()
     }
 
     /// The last separation bound recorded by a query, if any.

@@ -211,14 +211,14 @@ pub(crate) struct TItem {
     pub nb: u32,
     ba: u32,
     bb: u32,
-    kind: u32,
+    pub(crate) kind: u32,
     depth: u32,
     pub c: [f32; 3],
 }
 
 const INNER: u32 = 0;
 const A_LEAF: u32 = 1;
-const B_LEAF: u32 = 2;
+pub(crate) const B_LEAF: u32 = 2;
 const LEAFS: u32 = 3;
 
 impl TItem {
@@ -247,14 +247,14 @@ impl TItem {
 /// One side of a blocked step, lane by lane (centres in A's frame): a node's children from
 /// its block, or a leaf standing for itself in lane 0.
 pub(crate) struct Side {
-    x: [f32; LANES],
-    y: [f32; LANES],
-    z: [f32; LANES],
-    r: [f32; LANES],
-    leaf: u32,
-    count: u32,
-    node: [u32; LANES],
-    child: [u32; LANES],
+    pub(crate) x: [f32; LANES],
+    pub(crate) y: [f32; LANES],
+    pub(crate) z: [f32; LANES],
+    pub(crate) r: [f32; LANES],
+    pub(crate) leaf: u32,
+    pub(crate) count: u32,
+    pub(crate) node: [u32; LANES],
+    pub(crate) child: [u32; LANES],
 }
 
 impl Side {
@@ -312,17 +312,7 @@ pub(crate) fn block_step(
     min_sep: &mut f32,
     visits: &mut u64,
 ) -> (Side, Side, u32) {
-    let sa = if e.kind == A_LEAF {
-        let n = &ctx.a[e.na as usize];
-        Side::leaf([n.x, n.y, n.z], n.r, e.na)
-    } else {
-        Side::a_block(&ctx.blocks_a[e.ba as usize])
-    };
-    let sb = if e.kind == B_LEAF {
-        Side::leaf(e.c, ctx.b[e.nb as usize].r, e.nb)
-    } else {
-        Side::b_block(ctx, &ctx.blocks_b[e.bb as usize])
-    };
+    let (sa, sb) = sides(ctx, e);
     let m = *min_sep;
     let mut d2 = [0.0f32; 16];
     let mut sr = [0.0f32; 16];
@@ -348,6 +338,118 @@ pub(crate) fn block_step(
         }
     }
     (sa, sb, over)
+}
+
+/// Both sides of a blocked step of pair `e`: A's children from its block (or A's leaf), and
+/// B's children moved into A's frame (or B's leaf at its centre `e.c`).
+#[inline(always)]
+pub(crate) fn sides(ctx: &Ctx, e: &TItem) -> (Side, Side) {
+    let sa = if e.kind == A_LEAF {
+        let n = &ctx.a[e.na as usize];
+        Side::leaf([n.x, n.y, n.z], n.r, e.na)
+    } else {
+        Side::a_block(&ctx.blocks_a[e.ba as usize])
+    };
+    let sb = if e.kind == B_LEAF {
+        Side::leaf(e.c, ctx.b[e.nb as usize].r, e.nb)
+    } else {
+        Side::b_block(ctx, &ctx.blocks_b[e.bb as usize])
+    };
+    (sa, sb)
+}
+
+/// A [`block_step`] for the kinetic block front: both sides, the overlap mask, the mask of
+/// leaf pairs, and how far the step is from changing its outcome: the smallest `|√d2 − sr|`
+/// (a separation, or a leaf pair's overlap depth; the pruning slack is in `sr` for inner
+/// pairs) over all pairs except the overlapping inner ones (+∞ when there are none).
+#[inline(always)]
+pub(crate) fn block_gaps(ctx: &Ctx, e: &TItem, visits: &mut u64) -> (Side, Side, u32, u32, f32) {
+    let (sa, sb) = sides(ctx, e);
+    let ll = lanes::leaf_pairs_mask(sb.leaf, sa.leaf);
+    let valid = lanes::valid_mask(sb.count, sa.count);
+    #[cfg(target_arch = "x86_64")]
+    let (over, m) = if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above; the check is a cached load).
+        unsafe { overlap_gap_avx2(&sb, &sa, ll, valid, ctx.slack) }
+    } else {
+        overlap_gap(&sb, &sa, ll, valid, ctx.slack)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let (over, m) = overlap_gap(&sb, &sa, ll, valid, ctx.slack);
+    *visits += (sa.count * sb.count) as u64;
+    (sa, sb, over, ll & valid, m)
+}
+
+/// The overlap mask of rows `r` against columns `c` (bit `4·row + col`, unused lanes
+/// masked by `valid`) and the smallest `|√d2 − sr|` over the pairs that are not overlapping
+/// inner pairs (`ll` marks leaf pairs; unused lanes have radius −∞ and so never count),
+/// portable: the twin of [`overlap_gap_avx2`].
+#[inline(always)]
+fn overlap_gap(r: &Side, c: &Side, ll: u32, valid: u32, slack: f32) -> (u32, f32) {
+    let (mut d2, mut sr) = ([0.0f32; 16], [0.0f32; 16]);
+    lanes::pairs(
+        [&r.x, &r.y, &r.z, &r.r],
+        [&c.x, &c.y, &c.z, &c.r],
+        ll,
+        slack,
+        &mut d2,
+        &mut sr,
+    );
+    let (mut over, mut m) = (0u32, f32::INFINITY);
+    for q in 0..16 {
+        let (d, s) = (d2[q], sr[q]);
+        let ov = d < s * s;
+        over |= (ov as u32) << q;
+        let inner = ov && (ll >> q) & 1 == 0;
+        let g = (d.sqrt() - s).abs();
+        if !inner && g < m {
+            m = g;
+        }
+    }
+    (over & valid, m)
+}
+
+/// [`overlap_gap`] in AVX2 intrinsics, bit for bit the same (the square root is correctly
+/// rounded in both).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn overlap_gap_avx2(r: &Side, c: &Side, ll: u32, valid: u32, slack: f32) -> (u32, f32) {
+    use std::arch::x86_64::*;
+    let [(dlo, slo), (dhi, shi)] = lanes::pairs_avx2(
+        [&r.x, &r.y, &r.z, &r.r],
+        [&c.x, &c.y, &c.z, &c.r],
+        ll,
+        slack,
+    );
+    let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    let inf = _mm256_set1_ps(f32::INFINITY);
+    let sign = _mm256_set1_ps(-0.0);
+    let mut over = 0u32;
+    let mut best = inf;
+    for (h, (d, s)) in [(dlo, slo), (dhi, shi)].into_iter().enumerate() {
+        let ov = _mm256_cmp_ps::<_CMP_LT_OQ>(d, _mm256_mul_ps(s, s));
+        over |= (_mm256_movemask_ps(ov) as u32) << (8 * h);
+        let llv = _mm256_set1_epi32(((ll >> (8 * h)) & 0xFF) as i32);
+        let is_ll = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(llv, bits), bits));
+        let inner = _mm256_andnot_ps(is_ll, ov);
+        let g = _mm256_andnot_ps(sign, _mm256_sub_ps(_mm256_sqrt_ps(d), s));
+        // Where `g` is not below `best` (or the lane is an inner overlap), `best` stays.
+        best = _mm256_blendv_ps(
+            best,
+            g,
+            _mm256_andnot_ps(inner, _mm256_cmp_ps::<_CMP_LT_OQ>(g, best)),
+        );
+    }
+    let mut v = [0.0f32; 8];
+    _mm256_storeu_ps(v.as_mut_ptr(), best);
+    let mut m = f32::INFINITY;
+    for x in v {
+        if x < m {
+            m = x;
+        }
+    }
+    (over & valid, m)
 }
 
 /// The masks of a [`block_step`], portable: for rows `r` (B's lanes) against columns `c` (A's
@@ -440,6 +542,12 @@ impl TItem {
             depth,
             c: [sb.x[l], sb.y[l], sb.z[l]],
         }
+    }
+
+    /// Depth of the pair in its traversal.
+    #[inline(always)]
+    pub(crate) fn depth(&self) -> u32 {
+        self.depth
     }
 
     /// True for a pair of leaves.
@@ -864,12 +972,17 @@ pub fn backtracking(
     finish(&ctx, s, found, min_sep, visits)
 }
 
-/// First contact from the kinetic front (ours, beyond the paper): the same contact answer as
-/// [`distance_traversal`] and [`backtracking`], but each frame re-tests only the separated
-/// node pairs whose margin the relative motion since their last test could have used up,
-/// and last frame's overlapping leaf pairs (see the module documentation). The first frame,
-/// and a frame after a jump, builds the front by a full traversal. The front subsumes the
-/// safe-motion skip, so `opts` changes nothing.
+/// First contact from a kinetic front (ours, beyond the paper): the same contact answer as
+/// [`distance_traversal`] and [`backtracking`] on every frame, at the cost of what the motion
+/// changed.
+///
+/// On trees of fan-out ≤ 4 (the default): while in contact, last frame's contact pair is
+/// tested, then backtracking climbs from it (as [`backtracking`]); while separated, the
+/// block front re-runs only the 4×4 steps of the overlap traversal whose outcome the motion
+/// since could have changed (the front's clock runs through the contact frames, so it stays
+/// valid while it waits). Other fan-outs use the pair-by-pair front of the tracked queries.
+/// The first frame, and a frame after a jump, builds the front by a full traversal. The
+/// front subsumes the safe-motion skip, so `opts` changes nothing.
 pub fn contact(
     a: &SphereTree,
     pose_a: &Pose,
@@ -880,6 +993,57 @@ pub fn contact(
 ) -> ContactQuery {
     let _ = opts;
     let (ctx, s, _, ib) = st.begin(a, pose_a, b, pose_b);
+    if blocked(&ctx) {
+        s.bfront.advance(&ctx, ib);
+        let prev = s.bfront.hit();
+        let mut visits = 0;
+        let found = match prev {
+            Some((la, lb, _)) => {
+                // Last frame's contact: its leaf pair, then backtracking from it (cheap while
+                // contact persists); the front waits, its clock running.
+                visits += 1;
+                match s.bfront.quick(&ctx) {
+                    Some(h) => Some(h),
+                    None => {
+                        let mut min_sep = f32::INFINITY;
+                        match climb(&ctx, s, la, lb, 0, &mut min_sep, &mut visits) {
+                            Some(e) => Some((e.a, e.b, e.c)),
+                            None => {
+                                // Separated everywhere (the climb reached the roots): the
+                                // front catches up on the next frame.
+                                s.bfront.set_answer(None);
+                                return ContactQuery {
+                                    contact: None,
+                                    distance: min_sep.max(0.0) as f64,
+                                    visits,
+                                    skipped: false,
+                                };
+                            }
+                        }
+                    }
+                }
+            }
+            None => {
+                visits += s.bfront.catch_up(&ctx);
+                s.bfront.hit()
+            }
+        };
+        s.bfront.set_answer(found);
+        return match found {
+            Some((la, lb, c)) => ContactQuery {
+                contact: Some(make_contact(ctx.a, la, ctx.b, lb, c, &ctx.pose_a)),
+                distance: 0.0,
+                visits,
+                skipped: false,
+            },
+            None => ContactQuery {
+                contact: None,
+                distance: s.bfront.margin().max(0.0),
+                visits,
+                skipped: false,
+            },
+        };
+    }
     let visits = s.front.update(&ctx, ib);
     match s.front.hits.first() {
         Some(h) => ContactQuery {
@@ -1100,6 +1264,35 @@ mod lane_tests {
                 prop_assert_eq!(bits(&d1), bits(&d2));
                 prop_assert_eq!(bits(&s1), bits(&s2));
                 prop_assert_eq!(m1.0 & !valid, 0);
+            }
+        }
+
+        /// The AVX2 gap of the block front's step equals the portable one bit for bit.
+        #[test]
+        fn avx2_overlap_gap_equals_portable(
+            vr in prop::collection::vec(-20.0f32..20.0, 16),
+            vc in prop::collection::vec(-20.0f32..20.0, 16),
+            (lr, lc, nr, nc) in (0u32..16, 0u32..16, 1u32..=4, 1u32..=4),
+        ) {
+            let (r, c) = (side(&vr, lr, nr), side(&vc, lc, nc));
+            let ll = lanes::leaf_pairs_mask(r.leaf, c.leaf);
+            let valid = lanes::valid_mask(r.count, c.count);
+            let (o1, g1) = overlap_gap(&r, &c, ll, valid, 1e-4);
+            // The gap by its definition: over the used pairs that are not inner overlaps.
+            let (mut d2, mut sr) = ([0.0; 16], [0.0; 16]);
+            let (o0, _) = overlap_masks(&r, &c, ll, valid, 1e-4, 0.0, &mut d2, &mut sr);
+            prop_assert_eq!(o0, o1);
+            let want = (0..16)
+                .filter(|&q| (valid >> q) & 1 != 0 && !((o0 >> q) & 1 != 0 && (ll >> q) & 1 == 0))
+                .map(|q| (d2[q].sqrt() - sr[q]).abs())
+                .fold(f32::INFINITY, f32::min);
+            prop_assert_eq!(g1.to_bits(), want.to_bits());
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has AVX2 (checked above).
+                let (o2, g2) = unsafe { overlap_gap_avx2(&r, &c, ll, valid, 1e-4) };
+                prop_assert_eq!(o1, o2);
+                prop_assert_eq!(g1.to_bits(), g2.to_bits());
             }
         }
     }

@@ -19,8 +19,12 @@
 //! Why blocks and not single pairs ([`front`](super::front)): re-testing one expired pair at
 //! a time cost a cache miss per pair and a bucket-queue push per re-test (≈ 40 ns per test
 //! on the jaw chew); an entry here is one 4×4 step on two blocks, the expiries sit in one
-//! flat array scanned once per frame, and nothing is queued. On the jaw chew the steps a
-//! frame re-runs are about a third of a full traversal's at the 99th percentile.
+//! flat array scanned once per frame, and nothing is queued. Measured on the jaw chew
+//! (BENCHMARKS.md, "Session 10"): on the fast frames a few microns from contact it re-runs
+//! 400–500 steps where a traversal needs ≈ 1,750, but its steps come in slot order rather
+//! than depth first and cost 3–4× a traversal's; and keeping every hit up to date through a
+//! deep contact costs far more than backtracking. So [`contact`](super::contact) answers
+//! from last frame's contact while in contact and lets the front wait (its clock runs on).
 
 use super::front::motion_bound;
 use super::info::{TreeInfo, LANES};

@@ -993,68 +993,46 @@ pub fn contact(
 ) -> ContactQuery {
     let _ = opts;
     let (ctx, s, _, ib) = st.begin(a, pose_a, b, pose_b);
-    if blocked(&ctx) {
+    let mut visits = 0;
+    let distance;
+    let found = if blocked(&ctx) {
         s.bfront.advance(&ctx, ib);
-        let prev = s.bfront.hit();
-        let mut visits = 0;
-        let found = match prev {
+        let found = match s.bfront.hit() {
+            // Last frame's contact: its leaf pair, then backtracking from it (cheap while
+            // contact persists); the front waits, its clock running, and catches up on the
+            // next frame without contact.
             Some((la, lb, _)) => {
-                // Last frame's contact: its leaf pair, then backtracking from it (cheap while
-                // contact persists); the front waits, its clock running.
                 visits += 1;
-                match s.bfront.quick(&ctx) {
-                    Some(h) => Some(h),
-                    None => {
-                        let mut min_sep = f32::INFINITY;
-                        match climb(&ctx, s, la, lb, 0, &mut min_sep, &mut visits) {
-                            Some(e) => Some((e.a, e.b, e.c)),
-                            None => {
-                                // Separated everywhere (the climb reached the roots): the
-                                // front catches up on the next frame.
-                                s.bfront.set_answer(None);
-                                return ContactQuery {
-                                    contact: None,
-                                    distance: min_sep.max(0.0) as f64,
-                                    visits,
-                                    skipped: false,
-                                };
-                            }
-                        }
-                    }
-                }
+                let mut min_sep = f32::INFINITY;
+                let found = s.bfront.quick(&ctx).or_else(|| {
+                    climb(&ctx, s, la, lb, 0, &mut min_sep, &mut visits).map(|e| (e.a, e.b, e.c))
+                });
+                distance = min_sep.max(0.0) as f64;
+                found
             }
             None => {
                 visits += s.bfront.catch_up(&ctx);
+                distance = s.bfront.margin().max(0.0);
                 s.bfront.hit()
             }
         };
         s.bfront.set_answer(found);
-        return match found {
-            Some((la, lb, c)) => ContactQuery {
-                contact: Some(make_contact(ctx.a, la, ctx.b, lb, c, &ctx.pose_a)),
-                distance: 0.0,
-                visits,
-                skipped: false,
-            },
-            None => ContactQuery {
-                contact: None,
-                distance: s.bfront.margin().max(0.0),
-                visits,
-                skipped: false,
-            },
-        };
-    }
-    let visits = s.front.update(&ctx, ib);
-    match s.front.hits.first() {
-        Some(h) => ContactQuery {
-            contact: Some(make_contact(ctx.a, h.a, ctx.b, h.b, h.c, &ctx.pose_a)),
+        found
+    } else {
+        visits += s.front.update(&ctx, ib);
+        distance = s.front.margin().max(0.0);
+        s.front.hits.first().map(|h| (h.a, h.b, h.c))
+    };
+    match found {
+        Some((la, lb, c)) => ContactQuery {
+            contact: Some(make_contact(ctx.a, la, ctx.b, lb, c, &ctx.pose_a)),
             distance: 0.0,
             visits,
             skipped: false,
         },
         None => ContactQuery {
             contact: None,
-            distance: s.front.margin().max(0.0),
+            distance,
             visits,
             skipped: false,
         },

@@ -642,7 +642,9 @@ mod tests {
             prop_assert!((d.sqrt() - fd.sqrt()).abs() <= 1e-12, "tridist {} features {}", d.sqrt(), fd.sqrt());
             prop_assert!(((p - q).length_squared() - d).abs() <= 1e-12);
             let on = |x: DVec3, t: &[DVec3; 3]| (x - closest_point_on_triangle(x, t[0], t[1], t[2])).length();
-            prop_assert!(on(p, &a) < 1e-12 && on(q, &b) < 1e-12);
+            // The points lie on their triangles up to rounding: the projection onto a thin
+            // triangle's plane loses a few thousand ulps (4.6e-12 seen on unit-sized ones).
+            prop_assert!(on(p, &a) < 1e-10 && on(q, &b) < 1e-10, "{} {}", on(p, &a), on(q, &b));
         }
     }
 

@@ -6,25 +6,30 @@
 //! against all children of the other, one vectorised [`block_step`](super::traversal)) were
 //! tested at some pose. Each child pair is then either separated, an overlapping leaf pair (a
 //! *hit*), or an overlapping inner pair with an entry of its own. The entry stays valid while
-//! the relative motion since its step is below the smallest |separation| or overlap depth of
-//! its separated children and hits (less twice the f32 rounding slack): every point of B moves
-//! by at most `|Δc| + θ·ρ` per frame (see [`motion_bound`]), and these bounds add up. So each
-//! entry gets an expiry, a frame adds its motion bound and re-runs only the expired steps:
-//! children that now overlap get entries (a depth-first expansion at the current pose),
-//! entries of children that separated are dropped with everything below them (the front
-//! coarsens where contact ends). The hits are then exactly the overlapping leaf pairs of a
-//! full traversal, so the contact answer equals [`distance_traversal`](super::distance_traversal)'s
-//! on every frame.
+//! its B node has moved less than the smallest |separation| or overlap depth of its separated
+//! children and hits (less twice the f32 rounding slack). Two bounds decide that: every point
+//! of B moves by at most `|Δc| + θ·ρ` per frame (see [`motion_bound`]), and these add up to a
+//! cumulative clock that gives each entry an expiry (one flat array, scanned 8 at a time);
+//! an expired entry is then checked against its own node's displacement since its step
+//! (centre displacement plus radius × 2 sin(θ/2), from a ring of the last frames' poses),
+//! which on the jaw chew spares a sixth of the steps. Only entries that fail both are
+//! re-run, shallow first: children that now overlap get entries (a depth-first expansion at
+//! the current pose), entries of children that separated are dropped with everything below
+//! them (the front coarsens where contact ends). After a complete update the hits are exactly
+//! the overlapping leaf pairs of a full traversal, so the contact answer equals
+//! [`distance_traversal`](super::distance_traversal)'s on every frame; an update may also
+//! stop at the first hit, the unfinished steps staying due.
 //!
 //! Why blocks and not single pairs ([`front`](super::front)): re-testing one expired pair at
 //! a time cost a cache miss per pair and a bucket-queue push per re-test (≈ 40 ns per test
-//! on the jaw chew); an entry here is one 4×4 step on two blocks, the expiries sit in one
-//! flat array scanned once per frame, and nothing is queued. Measured on the jaw chew
-//! (BENCHMARKS.md, "Session 10"): on the fast frames a few microns from contact it re-runs
-//! 400–500 steps where a traversal needs ≈ 1,750, but its steps come in slot order rather
-//! than depth first and cost 3–4× a traversal's; and keeping every hit up to date through a
-//! deep contact costs far more than backtracking. So [`contact`](super::contact) answers
-//! from last frame's contact while in contact and lets the front wait (its clock runs on).
+//! on the jaw chew); an entry here is one 4×4 step on two blocks, and nothing is queued.
+//! Measured on the jaw chew (BENCHMARKS.md, "Session 11"): on the fast frames a few microns
+//! from contact it re-runs 300–500 steps where a traversal needs ≈ 1,750, but a step costs
+//! ≈ 100 ns against a traversal's ≈ 37 ns; with warm caches (a warming pass costs ≈ 5 ns per
+//! entry) the 4×4 test itself is a third of that, the motion check and the bookkeeping the
+//! rest. Keeping every hit up to date through a deep contact costs far more than
+//! backtracking, so [`contact`](super::contact) answers from recent contact pairs while in
+//! contact and lets the front wait (its clock runs on).
 
 use super::front::motion_bound;
 use super::info::{TreeInfo, LANES};
@@ -37,10 +42,55 @@ const NONE: u32 = u32::MAX;
 /// How many expired entries ahead the re-run loop prefetches the blocks of.
 const AHEAD: usize = 4;
 
+/// How many frames of relative poses the front keeps for its per-entry motion check (an
+/// entry not stepped for longer is simply stepped).
+const POSES: usize = 1024;
+
+/// A frame's relative pose of B in A's frame, as the motion check uses it.
+#[derive(Debug, Clone, Copy, Default)]
+struct Frame {
+    /// Row-major rotation matrix, translation, and the rotation as a quaternion.
+    m: [f64; 9],
+    t: [f64; 3],
+    q: glam::DQuat,
+}
+
+impl Frame {
+    fn of(p: &Pose) -> Frame {
+        let r = glam::DMat3::from_quat(p.rotation)
+            .transpose()
+            .to_cols_array();
+        Frame {
+            m: r,
+            t: p.translation.to_array(),
+            q: p.rotation,
+        }
+    }
+
+    /// An upper bound on how far any point of the sphere `s` (in B's frame) moves from pose
+    /// `then` to this one: its centre's displacement plus the radius times ‖R − R'‖₂ =
+    /// 2 sin(θ/2) (θ the angle of the rotation between them), rounded up.
+    #[inline(always)]
+    fn displacement(&self, then: &Frame, s: [f32; 4]) -> f64 {
+        let p = [s[0] as f64, s[1] as f64, s[2] as f64];
+        let mut d2 = 0.0;
+        for i in 0..3 {
+            let d = (self.m[3 * i] - then.m[3 * i]) * p[0]
+                + (self.m[3 * i + 1] - then.m[3 * i + 1]) * p[1]
+                + (self.m[3 * i + 2] - then.m[3 * i + 2]) * p[2]
+                + (self.t[i] - then.t[i]);
+            d2 += d * d;
+        }
+        let dq = self.q * then.q.conjugate();
+        let chord = 2.0 * glam::DVec3::new(dq.x, dq.y, dq.z).length();
+        (d2.sqrt() + chord * s[3] as f64) * (1.0 + 1e-9) + 1e-9
+    }
+}
+
 /// One overlapping node pair of the front and what its step found.
 #[derive(Debug, Clone, Copy)]
 struct Entry {
-    /// The pair (B's centre in `item.c` is refreshed when B's side is a leaf).
+    /// The pair (`item.c` is recomputed from `bsph` when B's side is a leaf).
     item: TItem,
     /// First child entry, and the next entry with the same parent.
     kid: u32,
@@ -61,7 +111,22 @@ pub(crate) struct BlockFront {
     /// Per entry: the cumulative motion at which its step must be re-run (+∞ for free slots).
     expiry: Vec<f64>,
     free: Vec<u32>,
+    /// Per entry: its traversal depth (the key the expired steps are ordered by).
+    depth: Vec<u8>,
+    /// Per entry: B's node (centre in B's frame, radius), for the motion check and for B's
+    /// leaf centre without reading the node again.
+    bsph: Vec<[f32; 4]>,
+    /// Per entry: the frame of its last step, and how far B's node could move from its pose
+    /// then before the step's outcome could change (the step's gap less the slack).
+    since: Vec<u32>,
+    gap: Vec<f64>,
+    /// The relative poses of the last [`POSES`] frames (ring, by frame number).
+    poses: Vec<Frame>,
+    /// The current frame number.
+    frame: u32,
     due: Vec<u32>,
+    /// The expired entries sorted by depth.
+    order: Vec<u32>,
     work: Vec<u32>,
     kill: Vec<u32>,
     /// Entry of the root pair (`NONE` while the root spheres are apart).
@@ -79,7 +144,14 @@ pub(crate) struct BlockFront {
     margin: f64,
     /// The contact answered last (A's leaf, B's leaf, B's centre in A's frame), if any.
     answer: Option<(u32, u32, [f32; 3])>,
+    /// The last few distinct contact leaf pairs (A's, B's), newest first.
+    recent: [(u32, u32); RECENT],
+    /// An overlapping leaf pair found by a step of the current update.
+    found: Option<(u32, u32, [f32; 3])>,
 }
+
+/// How many recent contact leaf pairs [`BlockFront::recall`] tests.
+const RECENT: usize = 4;
 
 impl BlockFront {
     pub(crate) fn with_capacity(n: usize) -> BlockFront {
@@ -87,7 +159,14 @@ impl BlockFront {
             ent: Vec::with_capacity(n),
             expiry: Vec::with_capacity(n),
             free: Vec::with_capacity(n),
+            depth: Vec::with_capacity(n),
+            bsph: Vec::with_capacity(n),
+            since: Vec::with_capacity(n),
+            gap: Vec::with_capacity(n),
+            poses: vec![Frame::default(); POSES],
+            frame: 0,
             due: Vec::with_capacity(n),
+            order: Vec::with_capacity(n),
             work: Vec::with_capacity(256),
             kill: Vec::with_capacity(256),
             root: NONE,
@@ -98,6 +177,8 @@ impl BlockFront {
             witness: NONE,
             margin: 0.0,
             answer: None,
+            recent: [(NONE, NONE); RECENT],
+            found: None,
         }
     }
 
@@ -105,6 +186,7 @@ impl BlockFront {
     pub(crate) fn reset(&mut self) {
         self.last = None;
         self.answer = None;
+        self.recent = [(NONE, NONE); RECENT];
     }
 
     /// (live entries, slots, overlapping leaf pairs).
@@ -136,39 +218,78 @@ impl BlockFront {
             self.moved += delta;
         }
         self.last = Some(ctx.rel);
+        self.frame = self.frame.wrapping_add(1);
+        self.poses[self.frame as usize % POSES] = Frame::of(&ctx.rel);
     }
 
-    /// The last answer's leaf pair, if it still overlaps at the pose of `ctx` (one leaf
-    /// test; the answer is then refreshed).
-    pub(crate) fn quick(&mut self, ctx: &Ctx) -> Option<(u32, u32, [f32; 3])> {
-        let (la, lb, _) = self.answer?;
-        let c = ctx.xf(lb);
-        self.answer = ctx.test(la, lb, c).0.then_some((la, lb, c));
-        self.answer
+    /// Whether the last answer was a contact.
+    pub(crate) fn in_contact(&self) -> bool {
+        self.answer.is_some()
     }
 
-    /// Sets the answer (a contact found by other means, or none).
+    /// The first of the recent contact leaf pairs (only the newest unless `all`) that
+    /// overlaps at the pose of `ctx`, one leaf test each (counted in `tests`): contact
+    /// mostly persists, or comes back, where it was.
+    pub(crate) fn recall(
+        &mut self,
+        ctx: &Ctx,
+        all: bool,
+        tests: &mut u64,
+    ) -> Option<(u32, u32, [f32; 3])> {
+        let n = if all { RECENT } else { 1 };
+        for k in 0..n {
+            let (la, lb) = self.recent[k];
+            if la == NONE {
+                break;
+            }
+            let c = ctx.xf(lb);
+            *tests += 1;
+            if ctx.test(la, lb, c).0 {
+                return Some((la, lb, c));
+            }
+        }
+        None
+    }
+
+    /// The newest recent contact leaf pair (only meaningful after a contact).
+    pub(crate) fn newest(&self) -> (u32, u32) {
+        self.recent[0]
+    }
+
+    /// Sets this frame's answer (and remembers a contact among the recent ones).
     pub(crate) fn set_answer(&mut self, answer: Option<(u32, u32, [f32; 3])>) {
         self.answer = answer;
+        if let Some((la, lb, _)) = answer {
+            let k = self
+                .recent
+                .iter()
+                .position(|&p| p == (la, lb))
+                .unwrap_or(RECENT - 1);
+            self.recent.copy_within(0..k, 1);
+            self.recent[0] = (la, lb);
+        }
     }
 
-    /// Re-runs every expired step at the pose of `ctx` (after [`BlockFront::advance`]); the
-    /// hits are then exactly the overlapping leaf pairs. Returns the node-pair tests spent.
-    pub(crate) fn catch_up(&mut self, ctx: &Ctx) -> u64 {
+    /// Re-runs the expired steps at the pose of `ctx` (after [`BlockFront::advance`]),
+    /// shallow first, and stops early at the first overlapping leaf pair when
+    /// `stop_at_hit` (unfinished steps stay expired for the next update); then
+    /// [`BlockFront::hit`] is the contact answer. Returns the node-pair tests spent.
+    pub(crate) fn catch_up(&mut self, ctx: &Ctx, stop_at_hit: bool) -> u64 {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             #[target_feature(enable = "avx2")]
-            fn avx2(f: &mut BlockFront, ctx: &Ctx) -> u64 {
-                f.catch_up_impl(ctx)
+            fn avx2(f: &mut BlockFront, ctx: &Ctx, stop: bool) -> u64 {
+                f.catch_up_impl(ctx, stop)
             }
             // SAFETY: the CPU has AVX2 (checked above).
-            return unsafe { avx2(self, ctx) };
+            return unsafe { avx2(self, ctx, stop_at_hit) };
         }
-        self.catch_up_impl(ctx)
+        self.catch_up_impl(ctx, stop_at_hit)
     }
 
     #[inline(always)]
-    fn catch_up_impl(&mut self, ctx: &Ctx) -> u64 {
+    fn catch_up_impl(&mut self, ctx: &Ctx, stop_at_hit: bool) -> u64 {
+        self.found = None;
         let slack2 = 2.0 * ctx.slack as f64;
         let moved = self.moved;
         let mut tests = 0;
@@ -178,9 +299,11 @@ impl BlockFront {
             let (ov, d) = ctx.test(0, 0, c0);
             tests += 1;
             if ov && self.root == NONE {
-                self.root = self.alloc(TItem::new(ctx, 0, 0, c0, 0), NONE, 0);
+                let r = &ctx.b[0];
+                let s = [r.x, r.y, r.z, r.r];
+                self.root = self.alloc(TItem::new(ctx, 0, 0, c0, 0), s, NONE, 0);
                 self.work.push(self.root);
-                tests += self.drain(ctx, slack2);
+                tests += self.drain(ctx, slack2, stop_at_hit);
             } else if !ov && self.root != NONE {
                 self.drop_subtree(self.root);
                 self.root = NONE;
@@ -192,33 +315,52 @@ impl BlockFront {
         due_entries(&self.expiry, moved, &mut self.due);
         // Shallow pairs first: a pair that separated drops its subtree, whose expired
         // entries then need no step.
-        let ent = &self.ent;
-        self.due
-            .sort_unstable_by_key(|&e| ent[e as usize].item.depth());
-        for k in 0..self.due.len() {
-            if let Some(&n) = self.due.get(k + AHEAD) {
+        by_depth(&self.due, &self.depth, &mut self.order);
+        for k in 0..self.order.len() {
+            if stop_at_hit && self.found.is_some() {
+                break;
+            }
+            if let Some(&n) = self.order.get(k + AHEAD) {
                 self.ent[n as usize].item.prefetch(ctx);
             }
-            let e = self.due[k];
-            if self.ent[e as usize].live && self.expiry[e as usize] <= moved {
+            let e = self.order[k];
+            if self.ent[e as usize].live
+                && self.expiry[e as usize] <= moved
+                && !self.recheck(e as usize)
+            {
                 tests += self.step(ctx, e, slack2);
-                tests += self.drain(ctx, slack2);
+                tests += self.drain(ctx, slack2, stop_at_hit);
             }
         }
-        let margin = if self.hits == 0 {
-            min_expiry(&self.expiry).min(self.root_expiry)
+        // Entries left on the work stack (an early stop) keep their expiry of −∞. An update
+        // stops early only at a hit, so without one it was complete: the hits are then
+        // exactly the overlapping leaf pairs, and the margin is valid when there are none.
+        self.work.clear();
+        self.margin = if self.hits == 0 {
+            min_expiry(&self.expiry).min(self.root_expiry) - moved
         } else {
             f64::NEG_INFINITY
         };
-        self.margin = margin - moved;
-        self.answer = self.find_hit(ctx);
+        if self.found.is_none() {
+            self.found = self.find_hit(ctx);
+        }
         tests
+    }
+
+    /// The answer of the last update: an overlapping leaf pair (A's leaf, B's leaf, B's
+    /// centre in A's frame) found by a step or else any of the front's, or none.
+    pub(crate) fn hit(&self) -> Option<(u32, u32, [f32; 3])> {
+        self.found
     }
 
     /// Empties the front (the next root test rebuilds it).
     fn clear(&mut self) {
         self.ent.clear();
         self.expiry.clear();
+        self.depth.clear();
+        self.bsph.clear();
+        self.since.clear();
+        self.gap.clear();
         self.free.clear();
         self.root = NONE;
         self.root_expiry = f64::NEG_INFINITY;
@@ -227,19 +369,45 @@ impl BlockFront {
         self.witness = NONE;
     }
 
-    /// Steps the fresh entries on the work stack (and the ones they create).
+    /// Steps the fresh entries on the work stack (and the ones they create), depth first;
+    /// stops at the first hit when `stop_at_hit` (the rest keep their expiry of −∞).
     #[inline(always)]
-    fn drain(&mut self, ctx: &Ctx, slack2: f64) -> u64 {
+    fn drain(&mut self, ctx: &Ctx, slack2: f64, stop_at_hit: bool) -> u64 {
         let mut tests = 0;
         while let Some(e) = self.work.pop() {
             tests += self.step(ctx, e, slack2);
+            if stop_at_hit && self.found.is_some() {
+                break;
+            }
         }
         tests
     }
 
-    /// A new entry for `item`, child `lane` of entry `parent` (linked into its kid list).
+    /// Whether entry `e`, expired by the cumulative motion bound, is still valid by its own
+    /// B node's displacement since its step; if so its expiry moves to where the cumulative
+    /// bound could first reach the remaining gap. The cumulative bound adds up every frame's
+    /// worst case over all of B, where a deep node's own displacement since its step is often
+    /// half of it (measured on the jaw chew: a third fewer steps).
     #[inline(always)]
-    fn alloc(&mut self, item: TItem, parent: u32, lane: u8) -> u32 {
+    fn recheck(&mut self, e: usize) -> bool {
+        let since = self.since[e];
+        if self.frame.wrapping_sub(since) >= POSES as u32 {
+            return false;
+        }
+        let now = &self.poses[self.frame as usize % POSES];
+        let d = now.displacement(&self.poses[since as usize % POSES], self.bsph[e]);
+        if d < self.gap[e] {
+            self.expiry[e] = self.moved + (self.gap[e] - d);
+            true
+        } else {
+            false
+        }
+    }
+
+    /// A new entry for `item` (B's node `bsph` in B's frame), child `lane` of entry `parent`
+    /// (linked into its kid list).
+    #[inline(always)]
+    fn alloc(&mut self, item: TItem, bsph: [f32; 4], parent: u32, lane: u8) -> u32 {
         let sib = if parent == NONE {
             NONE
         } else {
@@ -254,15 +422,24 @@ impl BlockFront {
             lane,
             live: true,
         };
+        let d = item.depth().min(u8::MAX as u32) as u8;
         let i = match self.free.pop() {
             Some(i) => {
                 self.ent[i as usize] = e;
                 self.expiry[i as usize] = f64::NEG_INFINITY;
+                self.depth[i as usize] = d;
+                self.bsph[i as usize] = bsph;
+                self.since[i as usize] = self.frame;
+                self.gap[i as usize] = f64::NEG_INFINITY;
                 i
             }
             None => {
                 self.ent.push(e);
                 self.expiry.push(f64::NEG_INFINITY);
+                self.depth.push(d);
+                self.bsph.push(bsph);
+                self.since.push(self.frame);
+                self.gap.push(f64::NEG_INFINITY);
                 (self.ent.len() - 1) as u32
             }
         };
@@ -315,8 +492,9 @@ impl BlockFront {
     #[inline(always)]
     fn step(&mut self, ctx: &Ctx, e: u32, slack2: f64) -> u64 {
         let mut item = self.ent[e as usize].item;
+        let own = self.bsph[e as usize];
         if item.kind == B_LEAF {
-            item.c = ctx.xf(item.nb);
+            item.c = ctx.rel32.apply(own[0], own[1], own[2]);
         }
         let mut tests = 0;
         let (sa, sb, over, ll, m) = block_gaps(ctx, &item, &mut tests);
@@ -334,26 +512,35 @@ impl BlockFront {
         while fresh != 0 {
             let q = fresh.trailing_zeros() as usize;
             fresh &= fresh - 1;
-            let child = TItem::child(&sa, &sb, q % LANES, q / LANES, item.depth() + 1);
+            let l = q / LANES;
+            let child = TItem::child(&sa, &sb, q % LANES, l, item.depth() + 1);
+            // B's node in B's frame: this entry's own when B's side is a leaf, else from the
+            // block just read.
+            let bs = if item.kind == B_LEAF {
+                own
+            } else {
+                let k = &ctx.blocks_b[item.bb as usize];
+                [k.x[l], k.y[l], k.z[l], k.r[l]]
+            };
             child.prefetch(ctx);
-            let c = self.alloc(child, e, q as u8);
+            let c = self.alloc(child, bs, e, q as u8);
             self.work.push(c);
         }
         let en = &mut self.ent[e as usize];
-        en.item = item;
         en.expanded = inner as u16;
         en.hits = hits;
         self.expiry[e as usize] = self.moved + m as f64 - slack2;
+        self.since[e as usize] = self.frame;
+        self.gap[e as usize] = m as f64 - slack2;
         if hits != 0 {
             self.witness = e;
+            if self.found.is_none() {
+                let q = hits.trailing_zeros() as usize;
+                let l = q / LANES;
+                self.found = Some((sa.node[q % LANES], sb.node[l], [sb.x[l], sb.y[l], sb.z[l]]));
+            }
         }
         tests
-    }
-
-    /// The answer of the last update: an overlapping leaf pair (A's leaf, B's leaf, B's
-    /// centre in A's frame), or none.
-    pub(crate) fn hit(&self) -> Option<(u32, u32, [f32; 3])> {
-        self.answer
     }
 
     /// An overlapping leaf pair of the front, when there is one.
@@ -373,7 +560,8 @@ impl BlockFront {
         let en = &self.ent[w as usize];
         let mut item = en.item;
         if item.kind == B_LEAF {
-            item.c = ctx.xf(item.nb);
+            let s = self.bsph[w as usize];
+            item.c = ctx.rel32.apply(s[0], s[1], s[2]);
         }
         let (sa, sb) = sides(ctx, &item);
         let q = en.hits.trailing_zeros() as usize;
@@ -409,6 +597,26 @@ fn due_entries(expiry: &[f64], moved: f64, due: &mut Vec<u32>) {
     }
 }
 
+/// `due` sorted by `depth` into `order` (a counting sort: the keys are small and dense,
+/// where a comparison sort through the entries cost as much as a fifth of the steps).
+#[inline(always)]
+fn by_depth(due: &[u32], depth: &[u8], order: &mut Vec<u32>) {
+    let mut start = [0u32; 257];
+    for &e in due {
+        start[depth[e as usize] as usize + 1] += 1;
+    }
+    for d in 0..256 {
+        start[d + 1] += start[d];
+    }
+    order.clear();
+    order.resize(due.len(), 0);
+    for &e in due {
+        let d = depth[e as usize] as usize;
+        order[start[d] as usize] = e;
+        start[d] += 1;
+    }
+}
+
 /// The smallest expiry (+∞ for none), with independent per-lane minima so that the scan
 /// vectorises (a single running minimum is one long dependency chain).
 #[inline(always)]
@@ -425,4 +633,42 @@ fn min_expiry(expiry: &[f64]) -> f64 {
         .iter()
         .fold(f64::INFINITY, |m, &e| m.min(e));
     acc.iter().fold(m, |m, &e| m.min(e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{DQuat, DVec3};
+    use proptest::prelude::*;
+
+    fn pose(q: [f64; 4], t: [f64; 3]) -> Pose {
+        let q = DQuat::from_xyzw(q[0], q[1], q[2], q[3] + 1e-3).normalize();
+        Pose::new(DVec3::from_array(t), q).unwrap()
+    }
+
+    proptest! {
+        /// The motion check's bound holds for every point of the sphere (its centre's
+        /// displacement alone does not: the radius term is needed), and it is not loose by
+        /// more than the radius term.
+        #[test]
+        fn displacement_bounds_every_point_of_the_sphere(
+            q0 in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+            q1 in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+            t0 in [-50.0..50.0f64, -50.0..50.0f64, -50.0..50.0f64],
+            t1 in [-50.0..50.0f64, -50.0..50.0f64, -50.0..50.0f64],
+            s in [-30.0..30.0f32, -30.0..30.0f32, -30.0..30.0f32, 0.0..10.0f32],
+            u in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+        ) {
+            let (p0, p1) = (pose(q0, t0), pose(q1, t1));
+            let (f0, f1) = (Frame::of(&p0), Frame::of(&p1));
+            let bound = f1.displacement(&f0, s);
+            let c = DVec3::new(s[0] as f64, s[1] as f64, s[2] as f64);
+            let u = DVec3::from_array(u);
+            let x = c + u.normalize_or_zero() * s[3] as f64;
+            let moved = (p1.transform_point(x) - p0.transform_point(x)).length();
+            prop_assert!(moved <= bound, "{} > {}", moved, bound);
+            let centre = (p1.transform_point(c) - p0.transform_point(c)).length();
+            prop_assert!(bound <= centre + 2.0 * s[3] as f64 + 1e-6);
+        }
+    }
 }

@@ -209,8 +209,8 @@ fn dfs_sim(
 pub(crate) struct TItem {
     pub na: u32,
     pub nb: u32,
-    ba: u32,
-    bb: u32,
+    pub(crate) ba: u32,
+    pub(crate) bb: u32,
     pub(crate) kind: u32,
     depth: u32,
     pub c: [f32; 3],
@@ -976,11 +976,11 @@ pub fn backtracking(
 /// [`distance_traversal`] and [`backtracking`] on every frame, at the cost of what the motion
 /// changed.
 ///
-/// On trees of fan-out ≤ 4 (the default): while in contact, last frame's contact pair is
-/// tested, then backtracking climbs from it (as [`backtracking`]); while separated, the
-/// block front re-runs only the 4×4 steps of the overlap traversal whose outcome the motion
-/// since could have changed (the front's clock runs through the contact frames, so it stays
-/// valid while it waits). Other fan-outs use the pair-by-pair front of the tracked queries.
+/// On trees of fan-out ≤ 4 (the default): the block front re-runs only the 4×4 steps of
+/// the overlap traversal whose outcome the motion since could have changed, shallow first,
+/// up to the first overlapping leaf pair. While in contact, the last few contact leaf pairs
+/// are tested first; when one still overlaps it is the answer, and the front only catches
+/// up a few steps (the rest stay due, so the frame that ends the contact has little left). Other fan-outs use the pair-by-pair front of the tracked queries.
 /// The first frame, and a frame after a jump, builds the front by a full traversal. The
 /// front subsumes the safe-motion skip, so `opts` changes nothing.
 pub fn contact(
@@ -996,27 +996,36 @@ pub fn contact(
     let mut visits = 0;
     let distance;
     let found = if blocked(&ctx) {
-        s.bfront.advance(&ctx, ib);
-        let found = match s.bfront.hit() {
-            // Last frame's contact: its leaf pair, then backtracking from it (cheap while
-            // contact persists); the front waits, its clock running, and catches up on the
-            // next frame without contact.
-            Some((la, lb, _)) => {
-                visits += 1;
-                let mut min_sep = f32::INFINITY;
-                let found = s.bfront.quick(&ctx).or_else(|| {
-                    climb(&ctx, s, la, lb, 0, &mut min_sep, &mut visits).map(|e| (e.a, e.b, e.c))
-                });
-                distance = min_sep.max(0.0) as f64;
-                found
+        let f = &mut s.bfront;
+        f.advance(&ctx, ib);
+        // Contact mostly persists, or comes back, where it was: a leaf test or a few decide
+        // most frames in contact. Then the front catches up a little (its steps stay due
+        // until run, so the frame that ends the contact finds little left to do); without
+        // such a contact it catches up fully, or up to the first overlapping leaf pair.
+        let was = f.in_contact();
+        let mut min_sep = f32::INFINITY;
+        let found = match f.recall(&ctx, was, &mut visits) {
+            Some(hit) => Some(hit),
+            None if was => {
+                // Backtracking from last frame's contact pair (the front waits, its clock
+                // running, and catches up on the next frame without contact).
+                let (la, lb) = f.newest();
+                let e = climb(&ctx, s, la, lb, 0, &mut min_sep, &mut visits);
+                e.map(|e| (e.a, e.b, e.c))
             }
             None => {
-                visits += s.bfront.catch_up(&ctx);
-                distance = s.bfront.margin().max(0.0);
-                s.bfront.hit()
+                visits += f.catch_up(&ctx, true);
+                min_sep = f.margin().max(0.0) as f32;
+                f.hit()
             }
         };
-        s.bfront.set_answer(found);
+        let f = &mut s.bfront;
+        distance = if found.is_none() {
+            min_sep.max(0.0) as f64
+        } else {
+            0.0
+        };
+        f.set_answer(found);
         found
     } else {
         visits += s.front.update(&ctx, ib);

@@ -976,11 +976,13 @@ pub fn backtracking(
 /// [`distance_traversal`] and [`backtracking`] on every frame, at the cost of what the motion
 /// changed.
 ///
-/// On trees of fan-out ≤ 4 (the default): the block front re-runs only the 4×4 steps of
-/// the overlap traversal whose outcome the motion since could have changed, shallow first,
-/// up to the first overlapping leaf pair. While in contact, the last few contact leaf pairs
-/// are tested first; when one still overlaps it is the answer, and the front only catches
-/// up a few steps (the rest stay due, so the frame that ends the contact has little left). Other fan-outs use the pair-by-pair front of the tracked queries.
+/// On trees of fan-out ≤ 4 (the default): the newest contact leaf pair (after a contact
+/// frame, the last four) is tested first; if none overlaps, after a contact frame
+/// backtracking climbs from the newest (as [`backtracking`]), else the block front re-runs
+/// the 4×4 steps of the overlap traversal whose outcome the motion since could have
+/// changed, shallow first, up to the first overlapping leaf pair (the front's clock runs
+/// through the contact frames, so it stays valid while it waits). Other fan-outs use the
+/// pair-by-pair front of the tracked queries.
 /// The first frame, and a frame after a jump, builds the front by a full traversal. The
 /// front subsumes the safe-motion skip, so `opts` changes nothing.
 pub fn contact(
@@ -999,33 +1001,25 @@ pub fn contact(
         let f = &mut s.bfront;
         f.advance(&ctx, ib);
         // Contact mostly persists, or comes back, where it was: a leaf test or a few decide
-        // most frames in contact. Then the front catches up a little (its steps stay due
-        // until run, so the frame that ends the contact finds little left to do); without
-        // such a contact it catches up fully, or up to the first overlapping leaf pair.
+        // most frames in contact.
         let was = f.in_contact();
-        let mut min_sep = f32::INFINITY;
-        let found = match f.recall(&ctx, was, &mut visits) {
-            Some(hit) => Some(hit),
+        let (found, bound) = match f.recall(&ctx, was, &mut visits) {
+            Some(hit) => (Some(hit), 0.0),
             None if was => {
                 // Backtracking from last frame's contact pair (the front waits, its clock
                 // running, and catches up on the next frame without contact).
                 let (la, lb) = f.newest();
+                let mut min_sep = f32::INFINITY;
                 let e = climb(&ctx, s, la, lb, 0, &mut min_sep, &mut visits);
-                e.map(|e| (e.a, e.b, e.c))
+                (e.map(|e| (e.a, e.b, e.c)), min_sep as f64)
             }
             None => {
-                visits += f.catch_up(&ctx, true);
-                min_sep = f.margin().max(0.0) as f32;
-                f.hit()
+                visits += f.catch_up(&ctx);
+                (f.hit(), f.margin())
             }
         };
-        let f = &mut s.bfront;
-        distance = if found.is_none() {
-            min_sep.max(0.0) as f64
-        } else {
-            0.0
-        };
-        f.set_answer(found);
+        distance = if found.is_none() { bound.max(0.0) } else { 0.0 };
+        s.bfront.set_answer(found);
         found
     } else {
         visits += s.front.update(&ctx, ib);

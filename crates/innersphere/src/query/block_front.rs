@@ -7,12 +7,9 @@
 //! tested at some pose. Each child pair is then either separated, an overlapping leaf pair (a
 //! *hit*), or an overlapping inner pair with an entry of its own. The entry stays valid while
 //! its B node has moved less than the smallest |separation| or overlap depth of its separated
-//! children and hits (less twice the f32 rounding slack). Two bounds decide that: every point
-//! of B moves by at most `|Δc| + θ·ρ` per frame (see [`motion_bound`]), and these add up to a
-//! cumulative clock that gives each entry an expiry (one flat array, scanned 8 at a time);
-//! an expired entry is then checked against its own node's displacement since its step
-//! (centre displacement plus radius × 2 sin(θ/2), from a ring of the last frames' poses),
-//! which on the jaw chew spares a sixth of the steps. Only entries that fail both are
+//! children and hits (less twice the f32 rounding slack). Every point of B moves by at most
+//! `|Δc| + θ·ρ` per frame (see [`motion_bound`]); these add up to a cumulative clock that
+//! gives each entry an expiry (one flat array, scanned 8 at a time). Expired entries are
 //! re-run, shallow first: children that now overlap get entries (a depth-first expansion at
 //! the current pose), entries of children that separated are dropped with everything below
 //! them (the front coarsens where contact ends). After a complete update the hits are exactly
@@ -23,13 +20,15 @@
 //! Why blocks and not single pairs ([`front`](super::front)): re-testing one expired pair at
 //! a time cost a cache miss per pair and a bucket-queue push per re-test (≈ 40 ns per test
 //! on the jaw chew); an entry here is one 4×4 step on two blocks, and nothing is queued.
-//! Measured on the jaw chew (BENCHMARKS.md, "Session 11"): on the fast frames a few microns
-//! from contact it re-runs 300–500 steps where a traversal needs ≈ 1,750, but a step costs
-//! ≈ 100 ns against a traversal's ≈ 37 ns; with warm caches (a warming pass costs ≈ 5 ns per
-//! entry) the 4×4 test itself is a third of that, the motion check and the bookkeeping the
-//! rest. Keeping every hit up to date through a deep contact costs far more than
-//! backtracking, so [`contact`](super::contact) answers from recent contact pairs while in
-//! contact and lets the front wait (its clock runs on).
+//! Measured on the jaw chew (BENCHMARKS.md, "Session 12"): on the frames a few microns from
+//! contact it re-runs 250–400 steps where a traversal needs ≈ 1,750, each ≈ 1.1–1.7× a
+//! traversal step (re-stepping a whole front at one pose, warm: ≈ 1.1×). A per-entry motion
+//! check (the B node's own displacement since its step, from a ring of recent poses) spared a
+//! sixth of the steps but cost more time than it saved (removed in session 12). Keeping every
+//! hit up to date through a deep contact costs far more than backtracking, and so does a
+//! budget of steps per contact frame (the backlog outgrows it), so [`contact`](super::contact)
+//! answers from recent contact pairs while in contact and lets the front wait (its clock runs
+//! on).
 
 use super::front::motion_bound;
 use super::info::{TreeInfo, LANES};
@@ -42,56 +41,15 @@ const NONE: u32 = u32::MAX;
 /// How many expired entries ahead the re-run loop prefetches the blocks of.
 const AHEAD: usize = 4;
 
-/// How many frames of relative poses the front keeps for its per-entry motion check (an
-/// entry not stepped for longer is simply stepped).
-const POSES: usize = 1024;
-
-/// A frame's relative pose of B in A's frame, as the motion check uses it.
-#[derive(Debug, Clone, Copy, Default)]
-struct Frame {
-    /// Row-major rotation matrix, translation, and the rotation as a quaternion.
-    m: [f64; 9],
-    t: [f64; 3],
-    q: glam::DQuat,
-}
-
-impl Frame {
-    fn of(p: &Pose) -> Frame {
-        let r = glam::DMat3::from_quat(p.rotation)
-            .transpose()
-            .to_cols_array();
-        Frame {
-            m: r,
-            t: p.translation.to_array(),
-            q: p.rotation,
-        }
-    }
-
-    /// An upper bound on how far any point of the sphere `s` (in B's frame) moves from pose
-    /// `then` to this one: its centre's displacement plus the radius times ‖R − R'‖₂ =
-    /// 2 sin(θ/2) (θ the angle of the rotation between them), rounded up.
-    #[inline(always)]
-    fn displacement(&self, then: &Frame, s: [f32; 4]) -> f64 {
-        let p = [s[0] as f64, s[1] as f64, s[2] as f64];
-        let mut d2 = 0.0;
-        for i in 0..3 {
-            let d = (self.m[3 * i] - then.m[3 * i]) * p[0]
-                + (self.m[3 * i + 1] - then.m[3 * i + 1]) * p[1]
-                + (self.m[3 * i + 2] - then.m[3 * i + 2]) * p[2]
-                + (self.t[i] - then.t[i]);
-            d2 += d * d;
-        }
-        let dq = self.q * then.q.conjugate();
-        let chord = 2.0 * glam::DVec3::new(dq.x, dq.y, dq.z).length();
-        (d2.sqrt() + chord * s[3] as f64) * (1.0 + 1e-9) + 1e-9
-    }
-}
-
-/// One overlapping node pair of the front and what its step found.
+/// One overlapping node pair of the front and what its step found: one cache line, all
+/// that a step reads of its entry.
 #[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
 struct Entry {
     /// The pair (`item.c` is recomputed from `bsph` when B's side is a leaf).
     item: TItem,
+    /// B's node (centre in B's frame, radius): B's leaf centre without reading the node.
+    bsph: [f32; 4],
     /// First child entry, and the next entry with the same parent.
     kid: u32,
     sib: u32,
@@ -113,17 +71,6 @@ pub(crate) struct BlockFront {
     free: Vec<u32>,
     /// Per entry: its traversal depth (the key the expired steps are ordered by).
     depth: Vec<u8>,
-    /// Per entry: B's node (centre in B's frame, radius), for the motion check and for B's
-    /// leaf centre without reading the node again.
-    bsph: Vec<[f32; 4]>,
-    /// Per entry: the frame of its last step, and how far B's node could move from its pose
-    /// then before the step's outcome could change (the step's gap less the slack).
-    since: Vec<u32>,
-    gap: Vec<f64>,
-    /// The relative poses of the last [`POSES`] frames (ring, by frame number).
-    poses: Vec<Frame>,
-    /// The current frame number.
-    frame: u32,
     due: Vec<u32>,
     /// The expired entries sorted by depth.
     order: Vec<u32>,
@@ -160,11 +107,6 @@ impl BlockFront {
             expiry: Vec::with_capacity(n),
             free: Vec::with_capacity(n),
             depth: Vec::with_capacity(n),
-            bsph: Vec::with_capacity(n),
-            since: Vec::with_capacity(n),
-            gap: Vec::with_capacity(n),
-            poses: vec![Frame::default(); POSES],
-            frame: 0,
             due: Vec::with_capacity(n),
             order: Vec::with_capacity(n),
             work: Vec::with_capacity(256),
@@ -218,8 +160,6 @@ impl BlockFront {
             self.moved += delta;
         }
         self.last = Some(ctx.rel);
-        self.frame = self.frame.wrapping_add(1);
-        self.poses[self.frame as usize % POSES] = Frame::of(&ctx.rel);
     }
 
     /// Whether the last answer was a contact.
@@ -324,10 +264,7 @@ impl BlockFront {
                 self.ent[n as usize].item.prefetch(ctx);
             }
             let e = self.order[k];
-            if self.ent[e as usize].live
-                && self.expiry[e as usize] <= moved
-                && !self.recheck(e as usize)
-            {
+            if self.ent[e as usize].live && self.expiry[e as usize] <= moved {
                 tests += self.step(ctx, e, slack2);
                 tests += self.drain(ctx, slack2);
             }
@@ -358,9 +295,6 @@ impl BlockFront {
         self.ent.clear();
         self.expiry.clear();
         self.depth.clear();
-        self.bsph.clear();
-        self.since.clear();
-        self.gap.clear();
         self.free.clear();
         self.root = NONE;
         self.root_expiry = f64::NEG_INFINITY;
@@ -383,27 +317,6 @@ impl BlockFront {
         tests
     }
 
-    /// Whether entry `e`, expired by the cumulative motion bound, is still valid by its own
-    /// B node's displacement since its step; if so its expiry moves to where the cumulative
-    /// bound could first reach the remaining gap. The cumulative bound adds up every frame's
-    /// worst case over all of B, where a deep node's own displacement since its step is often
-    /// half of it (measured on the jaw chew: a sixth fewer steps).
-    #[inline(always)]
-    fn recheck(&mut self, e: usize) -> bool {
-        let since = self.since[e];
-        if self.frame.wrapping_sub(since) >= POSES as u32 {
-            return false;
-        }
-        let now = &self.poses[self.frame as usize % POSES];
-        let d = now.displacement(&self.poses[since as usize % POSES], self.bsph[e]);
-        if d < self.gap[e] {
-            self.expiry[e] = self.moved + (self.gap[e] - d);
-            true
-        } else {
-            false
-        }
-    }
-
     /// A new entry for `item` (B's node `bsph` in B's frame), child `lane` of entry `parent`
     /// (linked into its kid list).
     #[inline(always)]
@@ -415,6 +328,7 @@ impl BlockFront {
         };
         let e = Entry {
             item,
+            bsph,
             kid: NONE,
             sib,
             expanded: 0,
@@ -428,18 +342,12 @@ impl BlockFront {
                 self.ent[i as usize] = e;
                 self.expiry[i as usize] = f64::NEG_INFINITY;
                 self.depth[i as usize] = d;
-                self.bsph[i as usize] = bsph;
-                self.since[i as usize] = self.frame;
-                self.gap[i as usize] = f64::NEG_INFINITY;
                 i
             }
             None => {
                 self.ent.push(e);
                 self.expiry.push(f64::NEG_INFINITY);
                 self.depth.push(d);
-                self.bsph.push(bsph);
-                self.since.push(self.frame);
-                self.gap.push(f64::NEG_INFINITY);
                 (self.ent.len() - 1) as u32
             }
         };
@@ -492,7 +400,7 @@ impl BlockFront {
     #[inline(always)]
     fn step(&mut self, ctx: &Ctx, e: u32, slack2: f64) -> u64 {
         let mut item = self.ent[e as usize].item;
-        let own = self.bsph[e as usize];
+        let own = self.ent[e as usize].bsph;
         if item.kind == B_LEAF {
             item.c = ctx.rel32.apply(own[0], own[1], own[2]);
         }
@@ -530,8 +438,6 @@ impl BlockFront {
         en.expanded = inner as u16;
         en.hits = hits;
         self.expiry[e as usize] = self.moved + m as f64 - slack2;
-        self.since[e as usize] = self.frame;
-        self.gap[e as usize] = m as f64 - slack2;
         if hits != 0 {
             self.witness = e;
             if self.found.is_none() {
@@ -560,7 +466,7 @@ impl BlockFront {
         let en = &self.ent[w as usize];
         let mut item = en.item;
         if item.kind == B_LEAF {
-            let s = self.bsph[w as usize];
+            let s = en.bsph;
             item.c = ctx.rel32.apply(s[0], s[1], s[2]);
         }
         let (sa, sb) = sides(ctx, &item);
@@ -633,42 +539,4 @@ fn min_expiry(expiry: &[f64]) -> f64 {
         .iter()
         .fold(f64::INFINITY, |m, &e| m.min(e));
     acc.iter().fold(m, |m, &e| m.min(e))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use glam::{DQuat, DVec3};
-    use proptest::prelude::*;
-
-    fn pose(q: [f64; 4], t: [f64; 3]) -> Pose {
-        let q = DQuat::from_xyzw(q[0], q[1], q[2], q[3] + 1e-3).normalize();
-        Pose::new(DVec3::from_array(t), q).unwrap()
-    }
-
-    proptest! {
-        /// The motion check's bound holds for every point of the sphere (its centre's
-        /// displacement alone does not: the radius term is needed), and it is not loose by
-        /// more than the radius term.
-        #[test]
-        fn displacement_bounds_every_point_of_the_sphere(
-            q0 in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
-            q1 in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
-            t0 in [-50.0..50.0f64, -50.0..50.0f64, -50.0..50.0f64],
-            t1 in [-50.0..50.0f64, -50.0..50.0f64, -50.0..50.0f64],
-            s in [-30.0..30.0f32, -30.0..30.0f32, -30.0..30.0f32, 0.0..10.0f32],
-            u in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
-        ) {
-            let (p0, p1) = (pose(q0, t0), pose(q1, t1));
-            let (f0, f1) = (Frame::of(&p0), Frame::of(&p1));
-            let bound = f1.displacement(&f0, s);
-            let c = DVec3::new(s[0] as f64, s[1] as f64, s[2] as f64);
-            let u = DVec3::from_array(u);
-            let x = c + u.normalize_or_zero() * s[3] as f64;
-            let moved = (p1.transform_point(x) - p0.transform_point(x)).length();
-            prop_assert!(moved <= bound, "{} > {}", moved, bound);
-            let centre = (p1.transform_point(c) - p0.transform_point(c)).length();
-            prop_assert!(bound <= centre + 2.0 * s[3] as f64 + 1e-6);
-        }
-    }
 }

@@ -21,7 +21,7 @@
 //! a time cost a cache miss per pair and a bucket-queue push per re-test (≈ 40 ns per test
 //! on the jaw chew); an entry here is one 4×4 step on two blocks, and nothing is queued.
 //! Measured on the jaw chew (BENCHMARKS.md, "Session 12"): on the frames a few microns from
-//! contact it re-runs 250–400 steps where a traversal needs ≈ 1,750, each ≈ 1.1–1.7× a
+//! contact it re-runs 250–400 steps where a traversal needs ≈ 1,750, each ≈ 1.5–2× a
 //! traversal step (re-stepping a whole front at one pose, warm: ≈ 1.1×). A per-entry motion
 //! check (the B node's own displacement since its step, from a ring of recent poses) spared a
 //! sixth of the steps but cost more time than it saved (removed in session 12). Keeping every
@@ -46,10 +46,10 @@ const AHEAD: usize = 4;
 #[derive(Debug, Clone, Copy)]
 #[repr(C, align(64))]
 struct Entry {
-    /// The pair (`item.c` is recomputed from `bsph` when B's side is a leaf).
+    /// The pair (`item.c` is recomputed from `bc` when B's side is a leaf).
     item: TItem,
-    /// B's node (centre in B's frame, radius): B's leaf centre without reading the node.
-    bsph: [f32; 4],
+    /// B's node centre in B's frame: B's leaf centre without reading the node.
+    bc: [f32; 3],
     /// First child entry, and the next entry with the same parent.
     kid: u32,
     sib: u32,
@@ -240,7 +240,7 @@ impl BlockFront {
             tests += 1;
             if ov && self.root == NONE {
                 let r = &ctx.b[0];
-                let s = [r.x, r.y, r.z, r.r];
+                let s = [r.x, r.y, r.z];
                 self.root = self.alloc(TItem::new(ctx, 0, 0, c0, 0), s, NONE, 0);
                 self.work.push(self.root);
                 tests += self.drain(ctx, slack2);
@@ -317,10 +317,10 @@ impl BlockFront {
         tests
     }
 
-    /// A new entry for `item` (B's node `bsph` in B's frame), child `lane` of entry `parent`
+    /// A new entry for `item` (B's node centre `bc` in B's frame), child `lane` of entry `parent`
     /// (linked into its kid list).
     #[inline(always)]
-    fn alloc(&mut self, item: TItem, bsph: [f32; 4], parent: u32, lane: u8) -> u32 {
+    fn alloc(&mut self, item: TItem, bc: [f32; 3], parent: u32, lane: u8) -> u32 {
         let sib = if parent == NONE {
             NONE
         } else {
@@ -328,7 +328,7 @@ impl BlockFront {
         };
         let e = Entry {
             item,
-            bsph,
+            bc,
             kid: NONE,
             sib,
             expanded: 0,
@@ -400,7 +400,7 @@ impl BlockFront {
     #[inline(always)]
     fn step(&mut self, ctx: &Ctx, e: u32, slack2: f64) -> u64 {
         let mut item = self.ent[e as usize].item;
-        let own = self.ent[e as usize].bsph;
+        let own = self.ent[e as usize].bc;
         if item.kind == B_LEAF {
             item.c = ctx.rel32.apply(own[0], own[1], own[2]);
         }
@@ -422,13 +422,13 @@ impl BlockFront {
             fresh &= fresh - 1;
             let l = q / LANES;
             let child = TItem::child(&sa, &sb, q % LANES, l, item.depth() + 1);
-            // B's node in B's frame: this entry's own when B's side is a leaf, else from the
-            // block just read.
+            // B's node centre in B's frame: this entry's own when B's side is a leaf, else
+            // from the block just read.
             let bs = if item.kind == B_LEAF {
                 own
             } else {
                 let k = &ctx.blocks_b[item.bb as usize];
-                [k.x[l], k.y[l], k.z[l], k.r[l]]
+                [k.x[l], k.y[l], k.z[l]]
             };
             child.prefetch(ctx);
             let c = self.alloc(child, bs, e, q as u8);
@@ -466,7 +466,7 @@ impl BlockFront {
         let en = &self.ent[w as usize];
         let mut item = en.item;
         if item.kind == B_LEAF {
-            let s = en.bsph;
+            let s = en.bc;
             item.c = ctx.rel32.apply(s[0], s[1], s[2]);
         }
         let (sa, sb) = sides(ctx, &item);

@@ -10,7 +10,8 @@
 //! children and hits (less twice the f32 rounding slack). Every point of B moves by at most
 //! `|Δc| + θ·ρ` per frame (see [`motion_bound`]); these add up to a cumulative clock that
 //! gives each entry an expiry (one flat array, scanned 8 at a time). Expired entries are
-//! re-run, shallow first: children that now overlap get entries (a depth-first expansion at
+//! re-run, shallow first (or deepest first, to find a contact fast after a contact frame):
+//! children that now overlap get entries (a depth-first expansion at
 //! the current pose), entries of children that separated are dropped with everything below
 //! them (the front coarsens where contact ends). After a complete update the hits are exactly
 //! the overlapping leaf pairs of a full traversal, so the contact answer equals
@@ -28,7 +29,9 @@
 //! hit up to date through a deep contact costs far more than backtracking, and so does a
 //! budget of steps per contact frame (the backlog outgrows it), so [`contact`](super::contact)
 //! answers from recent contact pairs while in contact and lets the front wait (its clock runs
-//! on).
+//! on). When they no longer overlap, the front catches up deepest first (session 13: against
+//! a climb from the newest pair, which needed a second slow frame when the contact had ended,
+//! the frames over 20 µs at the p99 fell by about a third in the same process).
 
 use super::front::motion_bound;
 use super::info::{TreeInfo, LANES};
@@ -37,6 +40,10 @@ use super::traversal::{block_gaps, sides, TItem, B_LEAF};
 use super::Pose;
 
 const NONE: u32 = u32::MAX;
+
+/// Depth keys of the expired-step order: traversal depths from `DEPTHS − 1` on share the
+/// last key (the order only decides how much work an update does, never its result).
+const DEPTHS: usize = 64;
 
 /// How many expired entries ahead the re-run loop prefetches the blocks of.
 const AHEAD: usize = 4;
@@ -191,11 +198,6 @@ impl BlockFront {
         None
     }
 
-    /// The newest recent contact leaf pair (only meaningful after a contact).
-    pub(crate) fn newest(&self) -> (u32, u32) {
-        self.recent[0]
-    }
-
     /// Sets this frame's answer (and remembers a contact among the recent ones).
     pub(crate) fn set_answer(&mut self, answer: Option<(u32, u32, [f32; 3])>) {
         self.touching = answer.is_some();
@@ -211,24 +213,27 @@ impl BlockFront {
     }
 
     /// Re-runs the expired steps at the pose of `ctx` (after [`BlockFront::advance`]),
-    /// shallow first, up to the first overlapping leaf pair (unfinished steps stay expired
-    /// for the next update); then [`BlockFront::hit`] is the contact answer. Returns the
-    /// node-pair tests spent.
-    pub(crate) fn catch_up(&mut self, ctx: &Ctx) -> u64 {
+    /// shallow first (`deepest_first`: deepest first), up to the first overlapping leaf pair
+    /// (unfinished steps stay expired for the next update); then [`BlockFront::hit`] is the
+    /// contact answer. Any order gives the same answer: a step tests the spheres at the
+    /// current pose, and a complete update leaves every live entry valid (a deep entry
+    /// stepped before its ancestor separated is dropped with it). Returns the node-pair tests
+    /// spent.
+    pub(crate) fn catch_up(&mut self, ctx: &Ctx, deepest_first: bool) -> u64 {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             #[target_feature(enable = "avx2")]
-            fn avx2(f: &mut BlockFront, ctx: &Ctx) -> u64 {
-                f.catch_up_impl(ctx)
+            fn avx2(f: &mut BlockFront, ctx: &Ctx, deepest_first: bool) -> u64 {
+                f.catch_up_impl(ctx, deepest_first)
             }
             // SAFETY: the CPU has AVX2 (checked above).
-            return unsafe { avx2(self, ctx) };
+            return unsafe { avx2(self, ctx, deepest_first) };
         }
-        self.catch_up_impl(ctx)
+        self.catch_up_impl(ctx, deepest_first)
     }
 
     #[inline(always)]
-    fn catch_up_impl(&mut self, ctx: &Ctx) -> u64 {
+    fn catch_up_impl(&mut self, ctx: &Ctx, deepest_first: bool) -> u64 {
         self.found = None;
         let slack2 = 2.0 * ctx.slack as f64;
         let moved = self.moved;
@@ -250,20 +255,23 @@ impl BlockFront {
             }
             self.root_expiry = moved + d.abs() as f64 - slack2;
         }
-        // Expired steps.
+        // Expired steps, by depth: shallow pairs first to bring the front up to date (a pair
+        // that separated drops its subtree, whose expired entries then need no step), the
+        // deepest first to find a contact (they lie next to the last frame's overlaps).
         self.due.clear();
         due_entries(&self.expiry, moved, &mut self.due);
-        // Shallow pairs first: a pair that separated drops its subtree, whose expired
-        // entries then need no step.
         by_depth(&self.due, &self.depth, &mut self.order);
-        for k in 0..self.order.len() {
+        let len = self.order.len();
+        let at = |k: usize| if deepest_first { len - 1 - k } else { k };
+        for k in 0..len {
             if self.found.is_some() {
                 break;
             }
-            if let Some(&n) = self.order.get(k + AHEAD) {
+            if k + AHEAD < len {
+                let n = self.order[at(k + AHEAD)];
                 self.ent[n as usize].item.prefetch(ctx);
             }
-            let e = self.order[k];
+            let e = self.order[at(k)];
             if self.ent[e as usize].live && self.expiry[e as usize] <= moved {
                 tests += self.step(ctx, e, slack2);
                 tests += self.drain(ctx, slack2);
@@ -336,7 +344,7 @@ impl BlockFront {
             lane,
             live: true,
         };
-        let d = item.depth().min(u8::MAX as u32) as u8;
+        let d = item.depth().min(DEPTHS as u32 - 1) as u8;
         let i = match self.free.pop() {
             Some(i) => {
                 self.ent[i as usize] = e;
@@ -483,6 +491,19 @@ const CHUNK: usize = 8;
 /// one branch each: the scan runs over every slot every frame, and nearly all are not due.
 #[inline(always)]
 fn due_entries(expiry: &[f64], moved: f64, due: &mut Vec<u32>) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        unsafe { due_entries_avx2(expiry, moved, due) };
+        return;
+    }
+    due_entries_portable(expiry, moved, due)
+}
+
+/// [`due_entries`] without intrinsics (the compiler's code for it took ≈ 1.3× the time of
+/// [`due_entries_avx2`] over the jaw chew).
+#[inline(always)]
+fn due_entries_portable(expiry: &[f64], moved: f64, due: &mut Vec<u32>) {
     let mut chunks = expiry.chunks_exact(CHUNK);
     let mut base = 0u32;
     for c in &mut chunks {
@@ -503,15 +524,45 @@ fn due_entries(expiry: &[f64], moved: f64, due: &mut Vec<u32>) {
     }
 }
 
+/// [`due_entries`] in AVX2 intrinsics: four comparisons and one mask per instruction (the
+/// same indices in the same order as [`due_entries_portable`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn due_entries_avx2(expiry: &[f64], moved: f64, due: &mut Vec<u32>) {
+    use std::arch::x86_64::*;
+    let m = _mm256_set1_pd(moved);
+    let n = expiry.len() / CHUNK * CHUNK;
+    let p = expiry.as_ptr();
+    let mut i = 0;
+    while i < n {
+        // SAFETY: `i + 8 ≤ n ≤ expiry.len()`.
+        let (a, b) = unsafe { (_mm256_loadu_pd(p.add(i)), _mm256_loadu_pd(p.add(i + 4))) };
+        let a = _mm256_cmp_pd::<_CMP_LE_OQ>(a, m);
+        let b = _mm256_cmp_pd::<_CMP_LE_OQ>(b, m);
+        let mut bits = (_mm256_movemask_pd(a) | (_mm256_movemask_pd(b) << 4)) as u32;
+        while bits != 0 {
+            due.push(i as u32 + bits.trailing_zeros());
+            bits &= bits - 1;
+        }
+        i += CHUNK;
+    }
+    for (k, &e) in expiry[n..].iter().enumerate() {
+        if e <= moved {
+            due.push((n + k) as u32);
+        }
+    }
+}
+
 /// `due` sorted by `depth` into `order` (a counting sort: the keys are small and dense,
 /// where a comparison sort through the entries cost as much as a fifth of the steps).
 #[inline(always)]
 fn by_depth(due: &[u32], depth: &[u8], order: &mut Vec<u32>) {
-    let mut start = [0u32; 257];
+    let mut start = [0u32; DEPTHS + 1];
     for &e in due {
         start[depth[e as usize] as usize + 1] += 1;
     }
-    for d in 0..256 {
+    for d in 0..DEPTHS {
         start[d + 1] += start[d];
     }
     order.clear();
@@ -539,4 +590,53 @@ fn min_expiry(expiry: &[f64]) -> f64 {
         .iter()
         .fold(f64::INFINITY, |m, &e| m.min(e));
     acc.iter().fold(m, |m, &e| m.min(e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The AVX2 scan finds the same due entries in the same order as the portable one,
+        /// infinities and NaN included (a NaN expiry is never due).
+        #[test]
+        fn due_scan_avx2_equals_portable(
+            v in prop::collection::vec(prop_oneof![
+                -10.0f64..10.0,
+                Just(f64::INFINITY),
+                Just(f64::NEG_INFINITY),
+                Just(f64::NAN),
+            ], 0..100),
+            moved in -10.0f64..10.0,
+        ) {
+            let mut p = Vec::new();
+            due_entries_portable(&v, moved, &mut p);
+            let want: Vec<u32> = (0..v.len() as u32).filter(|&i| v[i as usize] <= moved).collect();
+            prop_assert_eq!(&p, &want);
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                let mut a = Vec::new();
+                // SAFETY: the CPU has AVX2 (checked just above).
+                unsafe { due_entries_avx2(&v, moved, &mut a) };
+                prop_assert_eq!(&a, &want);
+            }
+        }
+
+        /// The depth order is a stable sort of the due entries by their (capped) depth.
+        #[test]
+        fn by_depth_is_a_stable_sort(
+            depth in prop::collection::vec(0u8..DEPTHS as u8, 1..60),
+            pick in prop::collection::vec(any::<prop::sample::Index>(), 0..60),
+        ) {
+            let mut due: Vec<u32> = pick.iter().map(|i| i.index(depth.len()) as u32).collect();
+            due.sort_unstable();
+            due.dedup();
+            let mut order = Vec::new();
+            by_depth(&due, &depth, &mut order);
+            let mut want = due.clone();
+            want.sort_by_key(|&e| depth[e as usize]);
+            prop_assert_eq!(order, want);
+        }
+    }
 }

@@ -977,12 +977,13 @@ pub fn backtracking(
 /// changed.
 ///
 /// On trees of fan-out ≤ 4 (the default): the newest contact leaf pair (after a contact
-/// frame, the last four) is tested first; if none overlaps, after a contact frame
-/// backtracking climbs from the newest (as [`backtracking`]), else the block front re-runs
-/// the 4×4 steps of the overlap traversal whose outcome the motion since could have
-/// changed, shallow first, up to the first overlapping leaf pair (the front's clock runs
-/// through the contact frames, so it stays valid while it waits). Other fan-outs use the
-/// pair-by-pair front of the tracked queries.
+/// frame, the last four) is tested first; if none overlaps, the block front re-runs the 4×4
+/// steps of the overlap traversal whose outcome the motion since could have changed, up to
+/// the first overlapping leaf pair: shallow first after a frame without contact, deepest
+/// first after a contact frame (the deepest expired steps lie next to the overlaps that just
+/// ended; when none is left, the front has proved the separation in the same frame). The
+/// front's clock runs through the contact frames that the recent pairs answer, so it stays
+/// valid while it waits. Other fan-outs use the pair-by-pair front of the tracked queries.
 /// The first frame, and a frame after a jump, builds the front by a full traversal. The
 /// front subsumes the safe-motion skip, so `opts` changes nothing.
 pub fn contact(
@@ -1005,16 +1006,11 @@ pub fn contact(
         let was = f.in_contact();
         let (found, bound) = match f.recall(&ctx, was, &mut visits) {
             Some(hit) => (Some(hit), 0.0),
-            None if was => {
-                // Backtracking from last frame's contact pair (the front waits, its clock
-                // running, and catches up on the next frame without contact).
-                let (la, lb) = f.newest();
-                let mut min_sep = f32::INFINITY;
-                let e = climb(&ctx, s, la, lb, 0, &mut min_sep, &mut visits);
-                (e.map(|e| (e.a, e.b, e.c)), min_sep as f64)
-            }
             None => {
-                visits += f.catch_up(&ctx);
+                // After a contact frame the deepest expired steps first; a climb from the
+                // newest pair (as `backtracking`) cost a second slow frame when the contact
+                // had ended: the front's catch-up on the next one.
+                visits += f.catch_up(&ctx, was);
                 (f.hit(), f.margin())
             }
         };

@@ -17,7 +17,7 @@
 //! | the paper's distance traversal (III-A) | [`distance_traversal`] | contact yes/no, a contact, a separation bound |
 //! | the paper's backtracking traversal (III-B, Alg. 1–2) | [`backtracking`] | same, restarting from last frame's contact |
 //! | the paper's multipoint traversal (III-C) | [`multipoint`] | up to `k` contacts, one per split-depth node |
-//! | first contact from a kinetic front (ours) | [`contact`] | same answer: backtracking while in contact, else re-running only the steps the motion could change |
+//! | first contact from a kinetic front (ours) | [`contact`] | same answer: the recent contact pairs while they overlap, else re-running only the steps the motion could change |
 //! | penetration volume, force, torque, patches | [`penetration`] | exact volume of the intersection of the sphere unions |
 //! | time-critical penetration volume | [`penetration_budgeted`] | volume found so far and an upper bound |
 //!

@@ -1004,18 +1004,16 @@ pub fn contact(
         // Contact mostly persists, or comes back, where it was: a leaf test or a few decide
         // most frames in contact.
         let was = f.in_contact();
-        let (found, bound) = match f.recall(&ctx, was, &mut visits) {
-            Some(hit) => (Some(hit), 0.0),
-            None => {
-                // After a contact frame the deepest expired steps first; a climb from the
-                // newest pair (as `backtracking`) cost a second slow frame when the contact
-                // had ended: the front's catch-up on the next one.
-                visits += f.catch_up(&ctx, was);
-                (f.hit(), f.margin())
-            }
-        };
-        distance = if found.is_none() { bound.max(0.0) } else { 0.0 };
-        s.bfront.set_answer(found);
+        let found = f.recall(&ctx, was, &mut visits).or_else(|| {
+            // After a contact frame the deepest expired steps first; a climb from the newest
+            // pair (as `backtracking`) cost a second slow frame when the contact had ended:
+            // the front's catch-up on the next one.
+            visits += f.catch_up(&ctx, was);
+            f.hit()
+        });
+        // Without a contact the front is complete, so its margin bounds the separation.
+        distance = f.margin().max(0.0);
+        f.set_answer(found);
         found
     } else {
         visits += s.front.update(&ctx, ib);

@@ -9,11 +9,13 @@
 //! its B node has moved less than the smallest |separation| or overlap depth of its separated
 //! children and hits (less twice the f32 rounding slack). Every point of B moves by at most
 //! `|Δc| + θ·ρ` per frame (see [`motion_bound`]); these add up to a cumulative clock that
-//! gives each entry an expiry (one flat array, scanned 8 at a time). Expired entries are
-//! re-run, shallow first (or deepest first, to find a contact fast after a contact frame):
-//! children that now overlap get entries (a depth-first expansion at
-//! the current pose), entries of children that separated are dropped with everything below
-//! them (the front coarsens where contact ends). After a complete update the hits are exactly
+//! gives each entry an expiry (one flat array, scanned 8 at a time, branch-free). Slots come
+//! in chunks of 8 of one traversal depth, so the scan, chunk by chunk in depth order, yields
+//! the expired entries shallow first without a sort (or, read backwards, deepest first, to
+//! find a contact fast after a contact frame). Expired entries are re-run: children that now
+//! overlap get entries (a depth-first expansion at the current pose), entries of children
+//! that separated are dropped with everything below them (the front coarsens where contact
+//! ends). After a complete update the hits are exactly
 //! the overlapping leaf pairs of a full traversal, so the contact answer equals
 //! [`distance_traversal`](super::distance_traversal)'s on every frame; an update may also
 //! stop at the first hit, the unfinished steps staying due.
@@ -26,12 +28,15 @@
 //! traversal step (re-stepping a whole front at one pose, warm: ≈ 1.1×). A per-entry motion
 //! check (the B node's own displacement since its step, from a ring of recent poses) spared a
 //! sixth of the steps but cost more time than it saved (removed in session 12). Keeping every
-//! hit up to date through a deep contact costs far more than backtracking, and so does a
-//! budget of steps per contact frame (the backlog outgrows it), so [`contact`](super::contact)
-//! answers from recent contact pairs while in contact and lets the front wait (its clock runs
-//! on). When they no longer overlap, the front catches up deepest first (session 13: against
-//! a climb from the newest pair, which needed a second slow frame when the contact had ended,
-//! the frames over 20 µs at the p99 fell by about a third in the same process).
+//! hit up to date through a deep contact costs far more than backtracking, so
+//! [`contact`](super::contact) answers from recent contact pairs while in contact, and the
+//! front only [tends](BlockFront::tend) its backlog there, a fixed number of steps a frame
+//! (session 14: with the scan branch-free and no sort, the backlog of a deep contact costs
+//! ≈ 0.5 µs a frame to scan, where the scan and sort of sessions 11–13 made a budget cost
+//! more than it saved). When the recent pairs no longer overlap, the front catches up
+//! deepest first (session 13: against a climb from the newest pair, which needed a second
+//! slow frame when the contact had ended, the frames over 20 µs at the p99 fell by about a
+//! third in the same process).
 
 use super::front::motion_bound;
 use super::info::{TreeInfo, LANES};
@@ -75,12 +80,18 @@ pub(crate) struct BlockFront {
     ent: Vec<Entry>,
     /// Per entry: the cumulative motion at which its step must be re-run (+∞ for free slots).
     expiry: Vec<f64>,
-    free: Vec<u32>,
-    /// Per entry: its traversal depth (the key the expired steps are ordered by).
-    depth: Vec<u8>,
+    /// Slots come in chunks of [`CHUNK`], each for entries of one depth key: per chunk, its key.
+    chunk_depth: Vec<u8>,
+    /// The chunks ordered by depth key (rebuilt when a chunk is added), so that the expiry
+    /// scan yields the expired entries shallow first without a sort.
+    chunks: Vec<u32>,
+    chunks_stale: bool,
+    /// Per depth key: the first free slot (free slots link through their `kid`).
+    free_head: [u32; DEPTHS],
+    /// Free slots.
+    nfree: usize,
+    /// The expired entries, by depth.
     due: Vec<u32>,
-    /// The expired entries sorted by depth.
-    order: Vec<u32>,
     work: Vec<u32>,
     kill: Vec<u32>,
     /// Entry of the root pair (`NONE` while the root spheres are apart).
@@ -112,10 +123,12 @@ impl BlockFront {
         BlockFront {
             ent: Vec::with_capacity(n),
             expiry: Vec::with_capacity(n),
-            free: Vec::with_capacity(n),
-            depth: Vec::with_capacity(n),
+            chunk_depth: Vec::with_capacity(n / CHUNK),
+            chunks: Vec::with_capacity(n / CHUNK),
+            chunks_stale: false,
+            free_head: [NONE; DEPTHS],
+            nfree: 0,
             due: Vec::with_capacity(n),
-            order: Vec::with_capacity(n),
             work: Vec::with_capacity(256),
             kill: Vec::with_capacity(256),
             root: NONE,
@@ -140,7 +153,7 @@ impl BlockFront {
 
     /// (live entries, slots, overlapping leaf pairs).
     pub(crate) fn size(&self) -> (usize, usize, usize) {
-        (self.ent.len() - self.free.len(), self.ent.len(), self.hits)
+        (self.ent.len() - self.nfree, self.ent.len(), self.hits)
     }
 
     /// A lower bound on the separation of the sphere sets at the last update when there are
@@ -160,7 +173,7 @@ impl BlockFront {
         let small = ctx.a[0].r.min(ctx.b[0].r) as f64;
         // A rebuild costs one step per overlapping node pair now, and the per-frame scan of
         // the expiries is as long as the slots.
-        let sparse = self.ent.len() > 4 * (self.ent.len() - self.free.len()) + 1024;
+        let sparse = self.ent.len() > 4 * (self.ent.len() - self.nfree) + 1024;
         if delta.is_nan() || delta > 0.25 * small || sparse {
             self.clear();
         } else {
@@ -220,24 +233,43 @@ impl BlockFront {
     /// stepped before its ancestor separated is dropped with it). Returns the node-pair tests
     /// spent.
     pub(crate) fn catch_up(&mut self, ctx: &Ctx, deepest_first: bool) -> u64 {
+        self.run(ctx, deepest_first, true, usize::MAX)
+    }
+
+    /// Re-runs at most `budget` expired steps (fresh entries' included) at the pose of
+    /// `ctx`, shallow first, without stopping at overlapping leaf pairs: keeps the front
+    /// close to current while [`contact`](super::contact) answers from the recent contact
+    /// pairs, so that the catch-up where contact ends finds a smaller backlog. Leaves no
+    /// answer ([`BlockFront::hit`] is none, the margin unknown). Returns the node-pair tests
+    /// spent.
+    pub(crate) fn tend(&mut self, ctx: &Ctx, budget: usize) -> u64 {
+        let tests = self.run(ctx, false, false, budget);
+        self.found = None;
+        tests
+    }
+
+    /// [`BlockFront::catch_up`] and [`BlockFront::tend`], compiled for AVX2 where the CPU
+    /// has it (the expiry scan and the 4×4 steps are vectorised).
+    fn run(&mut self, ctx: &Ctx, deepest_first: bool, stop: bool, budget: usize) -> u64 {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             #[target_feature(enable = "avx2")]
-            fn avx2(f: &mut BlockFront, ctx: &Ctx, deepest_first: bool) -> u64 {
-                f.catch_up_impl(ctx, deepest_first)
+            fn avx2(f: &mut BlockFront, ctx: &Ctx, deep: bool, stop: bool, budget: usize) -> u64 {
+                f.run_impl(ctx, deep, stop, budget)
             }
             // SAFETY: the CPU has AVX2 (checked above).
-            return unsafe { avx2(self, ctx, deepest_first) };
+            return unsafe { avx2(self, ctx, deepest_first, stop, budget) };
         }
-        self.catch_up_impl(ctx, deepest_first)
+        self.run_impl(ctx, deepest_first, stop, budget)
     }
 
     #[inline(always)]
-    fn catch_up_impl(&mut self, ctx: &Ctx, deepest_first: bool) -> u64 {
+    fn run_impl(&mut self, ctx: &Ctx, deepest_first: bool, stop: bool, budget: usize) -> u64 {
         self.found = None;
         let slack2 = 2.0 * ctx.slack as f64;
         let moved = self.moved;
         let mut tests = 0;
+        let mut left = budget;
         // The root pair, a child of no step.
         if self.root_expiry <= moved {
             let c0 = ctx.xf(0);
@@ -248,7 +280,7 @@ impl BlockFront {
                 let s = [r.x, r.y, r.z];
                 self.root = self.alloc(TItem::new(ctx, 0, 0, c0, 0), s, NONE, 0);
                 self.work.push(self.root);
-                tests += self.drain(ctx, slack2);
+                tests += self.drain(ctx, slack2, stop, &mut left);
             } else if !ov && self.root != NONE {
                 self.drop_subtree(self.root);
                 self.root = NONE;
@@ -258,35 +290,38 @@ impl BlockFront {
         // Expired steps, by depth: shallow pairs first to bring the front up to date (a pair
         // that separated drops its subtree, whose expired entries then need no step), the
         // deepest first to find a contact (they lie next to the last frame's overlaps).
-        self.due.clear();
-        due_entries(&self.expiry, moved, &mut self.due);
-        by_depth(&self.due, &self.depth, &mut self.order);
-        let len = self.order.len();
+        if self.chunks_stale {
+            order_chunks(&self.chunk_depth, &mut self.chunks);
+            self.chunks_stale = false;
+        }
+        due_entries(&self.expiry, &self.chunks, moved, &mut self.due);
+        let len = self.due.len();
         let at = |k: usize| if deepest_first { len - 1 - k } else { k };
-        for k in 0..len {
-            if self.found.is_some() {
-                break;
-            }
+        let mut k = 0;
+        while k < len && left > 0 && !(stop && self.found.is_some()) {
             if k + AHEAD < len {
-                let n = self.order[at(k + AHEAD)];
+                let n = self.due[at(k + AHEAD)];
                 self.ent[n as usize].item.prefetch(ctx);
             }
-            let e = self.order[at(k)];
+            let e = self.due[at(k)];
             if self.ent[e as usize].live && self.expiry[e as usize] <= moved {
                 tests += self.step(ctx, e, slack2);
-                tests += self.drain(ctx, slack2);
+                left -= 1;
+                tests += self.drain(ctx, slack2, stop, &mut left);
             }
+            k += 1;
         }
-        // Entries left on the work stack (an early stop) keep their expiry of −∞. An update
-        // stops early only at a hit, so without one it was complete: the hits are then
-        // exactly the overlapping leaf pairs, and the margin is valid when there are none.
+        // Entries left on the work stack (an early stop) keep their expiry of −∞. Without
+        // an early stop the update was complete: the hits are then exactly the overlapping
+        // leaf pairs, and the margin is valid when there are none.
+        let complete = k == len && self.work.is_empty();
         self.work.clear();
-        self.margin = if self.hits == 0 {
+        self.margin = if complete && self.hits == 0 {
             min_expiry(&self.expiry).min(self.root_expiry) - moved
         } else {
             f64::NEG_INFINITY
         };
-        if self.found.is_none() {
+        if self.found.is_none() && stop {
             self.found = self.find_hit(ctx);
         }
         tests
@@ -302,8 +337,11 @@ impl BlockFront {
     fn clear(&mut self) {
         self.ent.clear();
         self.expiry.clear();
-        self.depth.clear();
-        self.free.clear();
+        self.chunk_depth.clear();
+        self.chunks.clear();
+        self.chunks_stale = false;
+        self.free_head = [NONE; DEPTHS];
+        self.nfree = 0;
         self.root = NONE;
         self.root_expiry = f64::NEG_INFINITY;
         self.moved = 0.0;
@@ -311,16 +349,16 @@ impl BlockFront {
         self.witness = NONE;
     }
 
-    /// Steps the fresh entries on the work stack (and the ones they create), depth first;
-    /// stops at the first hit (the rest keep their expiry of −∞).
+    /// Steps the fresh entries on the work stack (and the ones they create), depth first,
+    /// while steps are `left`; with `stop`, stops at the first hit (the rest keep their
+    /// expiry of −∞).
     #[inline(always)]
-    fn drain(&mut self, ctx: &Ctx, slack2: f64) -> u64 {
+    fn drain(&mut self, ctx: &Ctx, slack2: f64, stop: bool, left: &mut usize) -> u64 {
         let mut tests = 0;
-        while let Some(e) = self.work.pop() {
+        while *left > 0 && !(stop && self.found.is_some()) {
+            let Some(e) = self.work.pop() else { break };
             tests += self.step(ctx, e, slack2);
-            if self.found.is_some() {
-                break;
-            }
+            *left -= 1;
         }
         tests
     }
@@ -344,21 +382,15 @@ impl BlockFront {
             lane,
             live: true,
         };
-        let d = item.depth().min(DEPTHS as u32 - 1) as u8;
-        let i = match self.free.pop() {
-            Some(i) => {
-                self.ent[i as usize] = e;
-                self.expiry[i as usize] = f64::NEG_INFINITY;
-                self.depth[i as usize] = d;
-                i
-            }
-            None => {
-                self.ent.push(e);
-                self.expiry.push(f64::NEG_INFINITY);
-                self.depth.push(d);
-                (self.ent.len() - 1) as u32
-            }
-        };
+        let d = item.depth().min(DEPTHS as u32 - 1) as usize;
+        if self.free_head[d] == NONE {
+            self.add_chunk(d);
+        }
+        let i = self.free_head[d];
+        self.free_head[d] = self.ent[i as usize].kid;
+        self.nfree -= 1;
+        self.ent[i as usize] = e;
+        self.expiry[i as usize] = f64::NEG_INFINITY;
         if parent != NONE {
             self.ent[parent as usize].kid = i;
         }
@@ -377,10 +409,45 @@ impl BlockFront {
                 self.kill.push(k);
                 k = self.ent[k as usize].sib;
             }
-            self.ent[x as usize].live = false;
-            self.expiry[x as usize] = f64::INFINITY;
-            self.free.push(x);
+            self.free(x);
         }
+    }
+
+    /// Returns slot `x` to the free list of its chunk's depth key.
+    #[inline(always)]
+    fn free(&mut self, x: u32) {
+        let d = self.chunk_depth[x as usize / CHUNK] as usize;
+        let en = &mut self.ent[x as usize];
+        en.live = false;
+        en.kid = self.free_head[d];
+        self.free_head[d] = x;
+        self.expiry[x as usize] = f64::INFINITY;
+        self.nfree += 1;
+    }
+
+    /// A chunk of [`CHUNK`] free slots for depth key `d`.
+    #[cold]
+    fn add_chunk(&mut self, d: usize) {
+        let base = self.ent.len();
+        let dead = Entry {
+            item: TItem::default(),
+            bc: [0.0; 3],
+            kid: NONE,
+            sib: NONE,
+            expanded: 0,
+            hits: 0,
+            lane: 0,
+            live: false,
+        };
+        self.ent.resize(base + CHUNK, dead);
+        self.expiry.resize(base + CHUNK, f64::INFINITY);
+        self.chunk_depth.push(d as u8);
+        self.chunks_stale = true;
+        for x in (base..base + CHUNK).rev() {
+            self.ent[x].kid = self.free_head[d];
+            self.free_head[d] = x as u32;
+        }
+        self.nfree += CHUNK;
     }
 
     /// Unlinks and drops the child entry of `e` at `lane`.
@@ -484,93 +551,105 @@ impl BlockFront {
     }
 }
 
-/// Width of the chunks the expiry scans read (a vector's worth of comparisons per branch).
+/// Slots per chunk: one depth key per chunk, and a vector's worth of expiries per branch of
+/// the scan.
 const CHUNK: usize = 8;
 
-/// Appends to `due` the index of every expiry ≤ `moved` (in index order). Reads chunks with
-/// one branch each: the scan runs over every slot every frame, and nearly all are not due.
+/// Sets `due` to the slots of `chunks` (in that order, each chunk's in slot order) whose
+/// expiry is ≤ `moved`. Runs over every slot every frame, and nearly all are not due.
 #[inline(always)]
-fn due_entries(expiry: &[f64], moved: f64, due: &mut Vec<u32>) {
+fn due_entries(expiry: &[f64], chunks: &[u32], moved: f64, due: &mut Vec<u32>) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
-        unsafe { due_entries_avx2(expiry, moved, due) };
+        unsafe { due_entries_avx2(expiry, chunks, moved, due) };
         return;
     }
-    due_entries_portable(expiry, moved, due)
+    due_entries_portable(expiry, chunks, moved, due)
 }
 
-/// [`due_entries`] without intrinsics (the compiler's code for it took ≈ 1.3× the time of
-/// [`due_entries_avx2`] over the jaw chew).
+/// [`due_entries`] without intrinsics.
 #[inline(always)]
-fn due_entries_portable(expiry: &[f64], moved: f64, due: &mut Vec<u32>) {
-    let mut chunks = expiry.chunks_exact(CHUNK);
-    let mut base = 0u32;
-    for c in &mut chunks {
-        let mut bits = 0u32;
-        for (k, &e) in c.iter().enumerate() {
-            bits |= ((e <= moved) as u32) << k;
-        }
-        while bits != 0 {
-            due.push(base + bits.trailing_zeros());
-            bits &= bits - 1;
-        }
-        base += CHUNK as u32;
-    }
-    for (k, &e) in chunks.remainder().iter().enumerate() {
-        if e <= moved {
-            due.push(base + k as u32);
+fn due_entries_portable(expiry: &[f64], chunks: &[u32], moved: f64, due: &mut Vec<u32>) {
+    due.clear();
+    for &c in chunks {
+        let base = c as usize * CHUNK;
+        for (k, &e) in expiry[base..base + CHUNK].iter().enumerate() {
+            if e <= moved {
+                due.push((base + k) as u32);
+            }
         }
     }
 }
 
-/// [`due_entries`] in AVX2 intrinsics: four comparisons and one mask per instruction (the
-/// same indices in the same order as [`due_entries_portable`]).
+/// Per 8-bit mask: the positions of its set bits, one per byte, lowest first.
+const COMPRESS: [u64; 256] = {
+    let mut t = [0u64; 256];
+    let mut m = 0;
+    while m < 256 {
+        let (mut k, mut b, mut x) = (0, 0, 0u64);
+        while b < 8 {
+            if (m >> b) & 1 == 1 {
+                x |= (b as u64) << (8 * k);
+                k += 1;
+            }
+            b += 1;
+        }
+        t[m] = x;
+        m += 1;
+    }
+    t
+};
+
+/// [`due_entries`] in AVX2 intrinsics, branch-free per chunk: the mask of a chunk's eight
+/// comparisons picks its due slots' positions from [`COMPRESS`], all eight lanes are
+/// stored and the length advances by the mask's popcount. A loop over the mask's bits (one
+/// push each) mispredicted its exit on most chunks: the scan took ≈ 3× as long on the jaw
+/// chew, where a quarter of the slots are due on the busy frames.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn due_entries_avx2(expiry: &[f64], moved: f64, due: &mut Vec<u32>) {
+unsafe fn due_entries_avx2(expiry: &[f64], chunks: &[u32], moved: f64, due: &mut Vec<u32>) {
     use std::arch::x86_64::*;
+    due.clear();
+    due.reserve(chunks.len() * CHUNK);
+    let out = due.as_mut_ptr();
     let m = _mm256_set1_pd(moved);
-    let n = expiry.len() / CHUNK * CHUNK;
-    let p = expiry.as_ptr();
-    let mut i = 0;
-    while i < n {
-        // SAFETY: `i + 8 ≤ n ≤ expiry.len()`.
-        let (a, b) = unsafe { (_mm256_loadu_pd(p.add(i)), _mm256_loadu_pd(p.add(i + 4))) };
-        let a = _mm256_cmp_pd::<_CMP_LE_OQ>(a, m);
-        let b = _mm256_cmp_pd::<_CMP_LE_OQ>(b, m);
-        let mut bits = (_mm256_movemask_pd(a) | (_mm256_movemask_pd(b) << 4)) as u32;
-        while bits != 0 {
-            due.push(i as u32 + bits.trailing_zeros());
-            bits &= bits - 1;
-        }
-        i += CHUNK;
-    }
-    for (k, &e) in expiry[n..].iter().enumerate() {
-        if e <= moved {
-            due.push((n + k) as u32);
+    let mut len = 0;
+    for &c in chunks {
+        let base = c as usize * CHUNK;
+        let s = &expiry[base..base + CHUNK];
+        // SAFETY: `s` holds 8 values; `len + 8 ≤ 8 · (chunks done + 1) ≤ capacity`.
+        unsafe {
+            let a = _mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_loadu_pd(s.as_ptr()), m);
+            let b = _mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_loadu_pd(s.as_ptr().add(4)), m);
+            let bits = (_mm256_movemask_pd(a) | (_mm256_movemask_pd(b) << 4)) as usize;
+            let pos = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(COMPRESS[bits] as i64));
+            let idx = _mm256_add_epi32(pos, _mm256_set1_epi32(base as i32));
+            _mm256_storeu_si256(out.add(len) as *mut __m256i, idx);
+            len += bits.count_ones() as usize;
         }
     }
+    // SAFETY: the first `len` values were written above.
+    unsafe { due.set_len(len) };
 }
 
-/// `due` sorted by `depth` into `order` (a counting sort: the keys are small and dense,
-/// where a comparison sort through the entries cost as much as a fifth of the steps).
-#[inline(always)]
-fn by_depth(due: &[u32], depth: &[u8], order: &mut Vec<u32>) {
+/// `chunks` set to every chunk index, ordered by its depth key (a counting sort; run only
+/// when chunks were added).
+#[cold]
+fn order_chunks(chunk_depth: &[u8], chunks: &mut Vec<u32>) {
     let mut start = [0u32; DEPTHS + 1];
-    for &e in due {
-        start[depth[e as usize] as usize + 1] += 1;
+    for &d in chunk_depth {
+        start[d as usize + 1] += 1;
     }
     for d in 0..DEPTHS {
         start[d + 1] += start[d];
     }
-    order.clear();
-    order.resize(due.len(), 0);
-    for &e in due {
-        let d = depth[e as usize] as usize;
-        order[start[d] as usize] = e;
-        start[d] += 1;
+    chunks.clear();
+    chunks.resize(chunk_depth.len(), 0);
+    for (c, &d) in chunk_depth.iter().enumerate() {
+        chunks[start[d as usize] as usize] = c as u32;
+        start[d as usize] += 1;
     }
 }
 
@@ -598,45 +677,56 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
-        /// The AVX2 scan finds the same due entries in the same order as the portable one,
-        /// infinities and NaN included (a NaN expiry is never due).
+        /// The scans find exactly the slots with expiry ≤ `moved`, chunk by chunk in the
+        /// given order (AVX2 and portable alike), infinities and NaN included (a NaN expiry
+        /// is never due).
         #[test]
-        fn due_scan_avx2_equals_portable(
+        fn due_scan_finds_expired_slots_in_chunk_order(
             v in prop::collection::vec(prop_oneof![
                 -10.0f64..10.0,
                 Just(f64::INFINITY),
                 Just(f64::NEG_INFINITY),
                 Just(f64::NAN),
-            ], 0..100),
+            ], 0..12usize).prop_flat_map(|c| prop::collection::vec(prop_oneof![
+                -10.0f64..10.0,
+                Just(f64::INFINITY),
+                Just(f64::NEG_INFINITY),
+                Just(f64::NAN),
+            ], c.len() * CHUNK)),
+            perm in any::<prop::sample::Index>(),
             moved in -10.0f64..10.0,
         ) {
-            let mut p = Vec::new();
-            due_entries_portable(&v, moved, &mut p);
-            let want: Vec<u32> = (0..v.len() as u32).filter(|&i| v[i as usize] <= moved).collect();
+            let n = (v.len() / CHUNK) as u32;
+            let mut chunks: Vec<u32> = (0..n).collect();
+            if n > 0 {
+                chunks.rotate_left(perm.index(n as usize));
+            }
+            let want: Vec<u32> = chunks
+                .iter()
+                .flat_map(|&c| c * CHUNK as u32..(c + 1) * CHUNK as u32)
+                .filter(|&i| v[i as usize] <= moved)
+                .collect();
+            let mut p = vec![7];
+            due_entries_portable(&v, &chunks, moved, &mut p);
             prop_assert_eq!(&p, &want);
             #[cfg(target_arch = "x86_64")]
             if std::arch::is_x86_feature_detected!("avx2") {
-                let mut a = Vec::new();
+                let mut a = vec![7];
                 // SAFETY: the CPU has AVX2 (checked just above).
-                unsafe { due_entries_avx2(&v, moved, &mut a) };
+                unsafe { due_entries_avx2(&v, &chunks, moved, &mut a) };
                 prop_assert_eq!(&a, &want);
             }
         }
 
-        /// The depth order is a stable sort of the due entries by their (capped) depth.
+        /// The chunk order lists every chunk once, by depth key.
         #[test]
-        fn by_depth_is_a_stable_sort(
-            depth in prop::collection::vec(0u8..DEPTHS as u8, 1..60),
-            pick in prop::collection::vec(any::<prop::sample::Index>(), 0..60),
-        ) {
-            let mut due: Vec<u32> = pick.iter().map(|i| i.index(depth.len()) as u32).collect();
-            due.sort_unstable();
-            due.dedup();
-            let mut order = Vec::new();
-            by_depth(&due, &depth, &mut order);
-            let mut want = due.clone();
-            want.sort_by_key(|&e| depth[e as usize]);
-            prop_assert_eq!(order, want);
+        fn chunks_are_ordered_by_depth(depth in prop::collection::vec(0u8..DEPTHS as u8, 0..60)) {
+            let mut order = vec![3, 1];
+            order_chunks(&depth, &mut order);
+            let mut seen = order.clone();
+            seen.sort_unstable();
+            prop_assert_eq!(seen, (0..depth.len() as u32).collect::<Vec<_>>());
+            prop_assert!(order.windows(2).all(|w| depth[w[0] as usize] <= depth[w[1] as usize]));
         }
     }
 }

@@ -12,12 +12,26 @@ use super::info::LANES;
 /// are both leaves (their pair gets no rounding slack).
 #[inline(always)]
 pub(crate) fn leaf_pairs_mask(row_leaf: u32, col_leaf: u32) -> u32 {
-    let mut rows = 0u32;
-    for l in 0..LANES {
-        rows |= (((row_leaf >> l) & 1) * 0xF) << (l * LANES);
-    }
-    rows & ((col_leaf & 0xF) * 0x1111)
+    ROWS[(row_leaf & 0xF) as usize] as u32 & ((col_leaf & 0xF) * 0x1111)
 }
+
+/// Per 4-bit row mask: each set bit widened to its row's four pair bits (a lookup where the
+/// loop cost ≈ 14 instructions a step under cachegrind).
+const ROWS: [u16; 16] = {
+    let mut t = [0u16; 16];
+    let mut m = 0;
+    while m < 16 {
+        let mut l = 0;
+        while l < LANES {
+            if (m >> l) & 1 == 1 {
+                t[m] |= 0xF << (l * LANES);
+            }
+            l += 1;
+        }
+        m += 1;
+    }
+    t
+};
 
 /// Bit `4·row + col` set when both lanes are in use (`row < row_count`, `col < col_count`).
 #[inline(always)]
@@ -103,6 +117,19 @@ pub(crate) unsafe fn pairs_avx2(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn leaf_mask_table_equals_the_loop() {
+        for row in 0..16u32 {
+            for col in 0..16u32 {
+                let mut rows = 0u32;
+                for l in 0..LANES {
+                    rows |= (((row >> l) & 1) * 0xF) << (l * LANES);
+                }
+                assert_eq!(leaf_pairs_mask(row, col), rows & (col * 0x1111));
+            }
+        }
+    }
 
     #[test]
     fn masks_by_hand() {

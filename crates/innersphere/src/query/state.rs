@@ -128,11 +128,18 @@ impl Ctx<'_> {
 /// lines, and its second (what to descend to) is read as soon as the block is tested.
 #[inline(always)]
 pub(crate) fn prefetch<T>(r: &T) {
+    prefetch_at(r as *const T)
+}
+
+/// [`prefetch`] by address: `p` need not point into anything (a prefetch never faults).
+#[inline(always)]
+pub(crate) fn prefetch_at<T>(p: *const T) {
     #[cfg(target_arch = "x86_64")]
-    // SAFETY: prefetching the lines of a valid reference has no architectural effect.
+    // SAFETY: a prefetch has no architectural effect, whatever the address (it never
+    // faults), and the pointers are only offset, never read.
     unsafe {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        let p = r as *const T as *const i8;
+        let p = p as *const i8;
         let mut off = 0;
         while off < std::mem::size_of::<T>() {
             _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off));
@@ -140,7 +147,7 @@ pub(crate) fn prefetch<T>(r: &T) {
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = r;
+    let _ = p;
 }
 
 /// Per-pair state: what temporal coherence needs (last contact pairs, last separation bound

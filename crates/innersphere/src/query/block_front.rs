@@ -481,23 +481,24 @@ impl BlockFront {
     /// entries (queued on the work stack), separated ones lose theirs; sets its expiry.
     #[inline(always)]
     fn step(&mut self, ctx: &Ctx, e: u32, slack2: f64) -> u64 {
-        let mut item = self.ent[e as usize].item;
-        let own = self.ent[e as usize].bc;
-        let mut tests = 0;
         let old = self.ent[e as usize];
-        // The common step: two inner sides, and nothing but the expiry changes.
-        if item.inner() {
-            let (over, ll, m) = inner_gaps(ctx, item.ba, item.bb, &mut tests);
-            if over & !ll == old.expanded as u32 && over & ll == 0 && old.hits == 0 {
-                self.expiry[e as usize] = self.moved + m as f64 - slack2;
-                return tests;
-            }
-            tests = 0;
-        }
+        let (mut item, own) = (old.item, old.bc);
         if item.kind == B_LEAF {
             item.c = ctx.rel32.apply(own[0], own[1], own[2]);
         }
-        let (sa, sb, over, ll, m) = block_gaps(ctx, &item, &mut tests);
+        let mut tests = 0;
+        let (over, ll, m) = if item.inner() {
+            inner_gaps(ctx, item.ba, item.bb, &mut tests)
+        } else {
+            block_gaps(ctx, &item, &mut tests)
+        };
+        // The common step: nothing but the expiry changes.
+        if over & !ll == old.expanded as u32 && over & ll == 0 && old.hits == 0 {
+            self.expiry[e as usize] = self.moved + m as f64 - slack2;
+            return tests;
+        }
+        // Otherwise the sides name the children that get entries and the hit.
+        let (sa, sb) = sides(ctx, &item);
         let inner = over & !ll;
         let hits = (over & ll) as u16;
         self.hits = self.hits + hits.count_ones() as usize - old.hits.count_ones() as usize;

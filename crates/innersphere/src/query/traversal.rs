@@ -356,24 +356,25 @@ pub(crate) fn sides(ctx: &Ctx, e: &TItem) -> (Side, Side) {
     (sa, sb)
 }
 
-/// A [`block_step`] for the kinetic block front: both sides, the overlap mask, the mask of
-/// leaf pairs, and how far the step is from changing its outcome: the smallest `|√d2 − sr|`
-/// (a separation, or a leaf pair's overlap depth; the pruning slack is in `sr` for inner
-/// pairs) over all pairs except the overlapping inner ones (+∞ when there are none).
+/// A [`block_step`] for the kinetic block front: the overlap mask, the mask of leaf pairs,
+/// and how far the step is from changing its outcome: the smallest `|√d2 − sr|` (a
+/// separation, or a leaf pair's overlap depth; the pruning slack is in `sr` for inner pairs)
+/// over all pairs except the overlapping inner ones (+∞ when there are none). Any kind of
+/// pair; [`inner_gaps`] is the same for two inner nodes without building the sides.
 #[inline(always)]
-pub(crate) fn block_gaps(ctx: &Ctx, e: &TItem, visits: &mut u64) -> (Side, Side, u32, u32, f32) {
+pub(crate) fn block_gaps(ctx: &Ctx, e: &TItem, visits: &mut u64) -> (u32, u32, f32) {
     let (sa, sb) = sides(ctx, e);
     let ll = lanes::leaf_pairs_mask(sb.leaf, sa.leaf);
     let valid = lanes::valid_mask(sb.count, sa.count);
     let rows = [&sb.x, &sb.y, &sb.z, &sb.r];
-    let over_m = gap_kernel(rows, [&sa.x, &sa.y, &sa.z, &sa.r], ll, valid, ctx.slack);
+    let (over, m) = gap_kernel(rows, [&sa.x, &sa.y, &sa.z, &sa.r], ll, valid, ctx.slack);
     *visits += (sa.count * sb.count) as u64;
-    (sa, sb, over_m.0, ll & valid, over_m.1)
+    (over, ll & valid, m)
 }
 
 /// [`block_gaps`] of a pair of inner nodes (blocks `ba` of A and `bb` of B) without building
-/// the sides: (overlap mask, leaf-pair mask, smallest gap). The block front's common step,
-/// which needs the sides only when its outcome changed (cachegrind: building and returning
+/// the sides. The block front's common step, which needs the sides only when its outcome
+/// changed (cachegrind: building and returning
 /// them was ≈ a quarter of a step's instructions).
 #[inline(always)]
 pub(crate) fn inner_gaps(ctx: &Ctx, ba: u32, bb: u32, visits: &mut u64) -> (u32, u32, f32) {

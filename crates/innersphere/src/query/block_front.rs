@@ -27,7 +27,11 @@
 //! contact it re-runs 250–400 steps where a traversal needs ≈ 1,750, each ≈ 1.5–2× a
 //! traversal step (re-stepping a whole front at one pose, warm: ≈ 1.1×). A per-entry motion
 //! check (the B node's own displacement since its step, from a ring of recent poses) spared a
-//! sixth of the steps but cost more time than it saved (removed in session 12). Keeping every
+//! sixth of the steps but cost more time than it saved (removed in session 12); rebuilt in
+//! sessions 15–16 with the nearest pair's direction (38–40 % fewer steps), it still made
+//! frames ≈ 2× slower: 83 % of the steps are the common step, the cheapest kind, and a check
+//! cost about as much as one at five checks per saved step (BENCHMARKS.md, "Session 16";
+//! branch `wip/guard-soa`). Keeping every
 //! hit up to date through a deep contact costs far more than backtracking, so
 //! [`contact`](super::contact) answers from recent contact pairs while in contact, and the
 //! front only [tends](BlockFront::tend) its backlog there, a fixed number of steps a frame

@@ -30,8 +30,17 @@ fn samples(t: &[DVec3; 3], n: usize) -> Vec<DVec3> {
     out
 }
 
+/// Distance from `p` to the closed triangle `t`. The barycentric closest-point routine alone
+/// loses accuracy on slivers (a point exactly on the long edge of a 1e-5-thin triangle came
+/// out 2.3e-9 away, failing CI once), so the edges' segment distances, which are accurate
+/// for points on the boundary, also bound it (each candidate is a point of the triangle).
 fn point_tri(p: DVec3, t: &[DVec3; 3]) -> f64 {
-    (p - closest_point_on_triangle(p, t[0], t[1], t[2])).length()
+    let mut d = (p - closest_point_on_triangle(p, t[0], t[1], t[2])).length();
+    for i in 0..3 {
+        let (a, b) = (t[i], t[(i + 1) % 3]);
+        d = d.min((p - closest_point_on_segment(p, a, b)).length());
+    }
+    d
 }
 
 /// Upper bound on the distance from sampled points of each triangle to the other, and the
@@ -88,6 +97,26 @@ fn float_intersect(a: &[DVec3; 3], b: &[DVec3; 3], tol: f64) -> Option<bool> {
         }
     }
     Some(hit)
+}
+
+/// The case that failed CI once: coplanar triangles, `a` a sliver 1.3e-5 thin; the reported
+/// common point lies on `a`'s long edge, which the oracle must see.
+#[test]
+fn coplanar_sliver_regression() {
+    let a = [
+        DVec3::new(0.7008453230463862, 0.14840466596635804, 0.0),
+        DVec3::new(0.04785658172625167, -0.6795862487453609, 0.0),
+        DVec3::new(0.017643243532899828, -0.7178571808178411, 0.0),
+    ];
+    let s = 0.32859551092949674;
+    let b = [
+        DVec3::new(-0.7138002675397325 + s, 0.2652590858759049, 0.0),
+        DVec3::new(s, -0.6271018437406015, 0.0),
+        DVec3::new(0.37815567667188554 + s, -0.5829918298070823, 0.0),
+    ];
+    let r = triangle_distance(&a, &b);
+    assert!(r.intersecting && r.dist_sq == 0.0);
+    assert!(point_tri(r.point_a, &a) < 1e-12 && point_tri(r.point_a, &b) < 1e-12);
 }
 
 proptest! {

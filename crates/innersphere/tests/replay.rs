@@ -1,7 +1,10 @@
-//! Replay statistics on a pair whose answer is known in closed form: two unit balls.
+//! Replay statistics on a pair whose answer is known in closed form: two unit balls; which
+//! pass each timing statistic comes from, with an injected clock.
 
 use glam::DVec3;
-use innersphere::eval::replay::{replay, QueryKind, ReplayOptions};
+use innersphere::eval::replay::{
+    replay, replay_with_clock, KindStats, QueryKind, ReplayOptions, ReplayReport,
+};
 use innersphere::exact::ExactMesh;
 use innersphere::field::{DistanceField, VoxelGrid};
 use innersphere::hierarchy::{self, HierarchyOptions};
@@ -36,16 +39,17 @@ fn ball_tree() -> SphereTree {
         .0
 }
 
-#[test]
-fn replay_of_two_balls_matches_the_closed_form() {
-    let a = ball_tree();
-    let b = ball_tree();
-    // Centre distances: separated from 3.0 down to 2.1, then overlapping from 1.9 to 1.0.
-    let centre: Vec<f64> = (0..10)
+/// Centre distances: separated from 3.0 down to 2.1, then overlapping from 1.9 to 1.0.
+fn centres() -> Vec<f64> {
+    (0..10)
         .map(|i| 3.0 - 0.1 * i as f64)
         .chain((0..10).map(|i| 1.9 - 0.1 * i as f64))
-        .collect();
-    let motion = Motion {
+        .collect()
+}
+
+/// B's centre moving along the x axis through `centre`, at 1 kHz.
+fn motion_of(centre: &[f64]) -> Motion {
+    Motion {
         frames: centre
             .iter()
             .enumerate()
@@ -54,7 +58,72 @@ fn replay_of_two_balls_matches_the_closed_form() {
                 pose: Pose::from_translation(DVec3::new(d, 0.0, 0.0)),
             })
             .collect(),
-    };
+    }
+}
+
+fn percentile(v: &[f64], q: f64) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s[((s.len() - 1) as f64 * q).round() as usize]
+}
+
+/// The statistics of every kind are those of the per-frame arrays: the single-pass ones of
+/// `us`, the best-of-passes ones of `best_of_passes_us`, and each frame's best is at most
+/// its first pass.
+fn check_stats_match_rows(report: &ReplayReport) {
+    for (slot, k) in report.kinds.iter().enumerate() {
+        let first: Vec<f64> = report.rows.iter().map(|r| r.us[slot]).collect();
+        let best: Vec<f64> = report
+            .rows
+            .iter()
+            .map(|r| r.best_of_passes_us[slot])
+            .collect();
+        assert_eq!(first.len(), k.frames);
+        assert!(first.iter().all(|t| t.is_finite() && *t >= 0.0), "{k:?}");
+        for (f, b) in first.iter().zip(&best) {
+            assert!(b <= f, "best of passes {b} above the first pass {f}: {k:?}");
+        }
+        let max = first.iter().copied().fold(f64::MIN, f64::max);
+        let KindStats {
+            p50_us,
+            p99_us,
+            max_us,
+            max_frame,
+            frames_over_1ms,
+            ..
+        } = *k;
+        assert_eq!(p50_us, percentile(&first, 0.5), "{k:?}");
+        assert_eq!(p99_us, percentile(&first, 0.99), "{k:?}");
+        assert_eq!(max_us, max, "{k:?}");
+        assert_eq!(first[max_frame], max, "{k:?}");
+        assert_eq!(
+            frames_over_1ms,
+            first.iter().filter(|&&t| t > 1000.0).count()
+        );
+        assert_eq!(k.best_of_passes_p50_us, percentile(&best, 0.5), "{k:?}");
+        assert_eq!(k.best_of_passes_p99_us, percentile(&best, 0.99), "{k:?}");
+        assert_eq!(k.best_of_passes_max_us, percentile(&best, 1.0), "{k:?}");
+        assert_eq!(
+            k.best_of_passes_frames_over_1ms,
+            best.iter().filter(|&&t| t > 1000.0).count()
+        );
+        assert!(k.p50_us <= k.p99_us && k.p99_us <= k.max_us, "{k:?}");
+        assert!(k.best_of_passes_max_us <= k.max_us, "{k:?}");
+        assert!(k.best_of_passes_p99_us <= k.p99_us, "{k:?}");
+        assert!(
+            k.best_of_passes_frames_over_1ms <= k.frames_over_1ms,
+            "{k:?}"
+        );
+        assert!(k.passes_agree, "the passes did different work: {k:?}");
+    }
+}
+
+#[test]
+fn replay_of_two_balls_matches_the_closed_form() {
+    let a = ball_tree();
+    let b = ball_tree();
+    let centre = centres();
+    let motion = motion_of(&centre);
     let sphere_mesh = innersphere::shapes::icosphere(4);
     let exact = ExactMesh::new(&sphere_mesh).unwrap();
     let report = replay(
@@ -68,7 +137,14 @@ fn replay_of_two_balls_matches_the_closed_form() {
     assert_eq!(report.kinds.len(), QueryKind::ALL.len());
     for k in &report.kinds {
         assert_eq!(k.frames, 20);
-        assert!(k.p50_us <= k.p99_us && k.p99_us <= k.max_us, "{k:?}");
+    }
+    check_stats_match_rows(&report);
+    // One pass: best-of-passes is the single pass.
+    for k in &report.kinds {
+        assert_eq!(
+            (k.best_of_passes_p99_us, k.best_of_passes_max_us),
+            (k.p99_us, k.max_us)
+        );
     }
     for (row, &d) in report.rows.iter().zip(&centre) {
         // Closed form: the sphere sets are the two balls.
@@ -95,9 +171,18 @@ fn replay_of_two_balls_matches_the_closed_form() {
         .unwrap();
     assert_eq!(acc.distance_p99_us, dist.p99_us);
     assert_eq!(acc.speedup_p99, acc.exact_p99_us / acc.distance_p99_us);
+    // The exact method is timed on every compared frame (here all), and its statistics are
+    // those of the per-frame times.
+    let exact_us: Vec<f64> = report.rows.iter().map(|r| r.exact_us).collect();
+    assert!(exact_us.iter().all(|t| t.is_finite() && *t >= 0.0));
+    assert_eq!(acc.exact_p99_us, percentile(&exact_us, 0.99));
+    assert_eq!(acc.exact_max_us, percentile(&exact_us, 1.0));
+    assert_eq!(acc.exact_warm_start_frames, 1);
+    assert!(acc.exact_passes_agree);
 
-    // More passes time the same work (each from a fresh state): the same answers, every
-    // frame's time finite, and the accuracy unchanged.
+    // More passes time the same work (each from a fresh state): the same answers on every
+    // frame in every pass, the single-pass numbers from the first, and the accuracy
+    // unchanged. Compared on every 3rd frame: 0, 3, ..., 18.
     let three = replay(
         &a,
         &b,
@@ -105,15 +190,112 @@ fn replay_of_two_balls_matches_the_closed_form() {
         Some((&exact, &exact)),
         &ReplayOptions {
             passes: 3,
+            every: 3,
             ..Default::default()
         },
     );
     assert_eq!((report.passes, three.passes), (1, 3));
     for (r1, r3) in report.rows.iter().zip(&three.rows) {
         assert_eq!((r1.distance, r1.contact), (r3.distance, r3.contact));
-        assert!(r3.us.iter().all(|t| t.is_finite() && *t >= 0.0), "{r3:?}");
+        assert_eq!(r3.exact_us.is_finite(), r3.frame % 3 == 0, "{r3:?}");
+        if r3.frame % 3 == 0 {
+            assert_eq!(r1.exact_distance, r3.exact_distance);
+        }
     }
+    check_stats_match_rows(&three);
     let acc3 = three.accuracy.unwrap();
-    assert_eq!(acc3.abs_err_max, acc.abs_err_max);
-    assert!(acc3.exact_p50_us.is_finite());
+    assert_eq!(acc3.frames, 7);
+    assert_eq!(acc3.exact_warm_start_frames, 3);
+    assert!(acc3.exact_passes_agree);
+    assert!(acc3.exact_best_of_passes_p99_us <= acc3.exact_p99_us);
+    assert!(acc3.exact_best_of_passes_max_us <= acc3.exact_max_us);
+    assert!(acc3.abs_err_max <= acc.abs_err_max);
+    // Our distance on the compared frames only, single pass.
+    let ours: Vec<f64> = three.rows.iter().step_by(3).map(|r| r.us[0]).collect();
+    assert_eq!(acc3.distance_p99_us, percentile(&ours, 0.99));
+}
+
+/// With an injected clock that makes every timed call last a known, different time, the
+/// single-pass statistics are exactly the first pass's times, in motion order, and the
+/// best-of-passes ones each frame's minimum; the exact method is timed once per compared
+/// frame and pass, and nothing else is timed.
+#[test]
+fn single_pass_statistics_come_from_the_first_pass() {
+    let a = ball_tree();
+    let b = ball_tree();
+    let motion = motion_of(&centres());
+    let sphere_mesh = innersphere::shapes::icosphere(2);
+    let exact = ExactMesh::new(&sphere_mesh).unwrap();
+    let (n, passes, every) = (20usize, 3usize, 3usize);
+    let compared = n.div_ceil(every);
+    let kinds = vec![QueryKind::Contact, QueryKind::Distance];
+    // The j-th timed call lasts d(j) µs: a scramble, a third of them over 1 ms, so that
+    // neither the first nor the last pass is always the slowest or fastest.
+    let d = |j: usize| 10.0 + ((j * 7919 + 13) % 1601) as f64;
+    let mut calls = 0usize;
+    let mut now = 0.0;
+    let mut clock = || {
+        if calls % 2 == 1 {
+            now += d(calls / 2);
+        }
+        calls += 1;
+        now
+    };
+    let opts = ReplayOptions {
+        kinds: kinds.clone(),
+        passes,
+        every,
+        ..Default::default()
+    };
+    let report = replay_with_clock(&a, &b, &motion, Some((&exact, &exact)), &opts, &mut clock);
+    // Two clock reads per timed call: kinds × passes × frames, then passes × compared frames.
+    assert_eq!(calls, 2 * (kinds.len() * passes * n + passes * compared));
+    assert_eq!(report.passes, passes);
+    for (slot, k) in report.kinds.iter().enumerate() {
+        assert_eq!((k.kind, k.frames), (kinds[slot], n));
+        let at = |p: usize, i: usize| d((slot * passes + p) * n + i);
+        for (i, r) in report.rows.iter().enumerate() {
+            assert_eq!(r.us[slot], at(0, i), "frame {i}");
+            let best = (0..passes).map(|p| at(p, i)).fold(f64::INFINITY, f64::min);
+            assert_eq!(r.best_of_passes_us[slot], best, "frame {i}");
+        }
+        let first: Vec<f64> = (0..n).map(|i| at(0, i)).collect();
+        assert_eq!(k.p99_us, percentile(&first, 0.99));
+        assert_eq!(k.max_us, percentile(&first, 1.0));
+        assert_eq!(
+            k.frames_over_1ms,
+            first.iter().filter(|&&t| t > 1000.0).count()
+        );
+        assert!(k.frames_over_1ms > 0 && k.frames_over_1ms < n, "{k:?}");
+        assert!(k.best_of_passes_max_us < k.max_us, "{k:?}");
+    }
+    check_stats_match_rows(&report);
+    let base = kinds.len() * passes * n;
+    let acc = report.accuracy.unwrap();
+    assert_eq!(acc.frames, compared);
+    let exact_first: Vec<f64> = (0..compared).map(|j| d(base + j)).collect();
+    for (j, r) in report.rows.iter().step_by(every).enumerate() {
+        assert_eq!(r.exact_us, exact_first[j], "compared frame {j}");
+    }
+    let exact_best: Vec<f64> = (0..compared)
+        .map(|j| {
+            (0..passes)
+                .map(|p| d(base + p * compared + j))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    assert_eq!(acc.exact_p99_us, percentile(&exact_first, 0.99));
+    assert_eq!(acc.exact_max_us, percentile(&exact_first, 1.0));
+    assert_eq!(
+        acc.exact_best_of_passes_p99_us,
+        percentile(&exact_best, 0.99)
+    );
+    assert_eq!(
+        acc.exact_best_of_passes_max_us,
+        percentile(&exact_best, 1.0)
+    );
+    // Our distance (slot 1) on the compared frames, first pass.
+    let ours: Vec<f64> = (0..compared).map(|j| d(passes * n + j * every)).collect();
+    assert_eq!(acc.distance_p99_us, percentile(&ours, 0.99));
+    assert_eq!(acc.speedup_p99, acc.exact_p99_us / acc.distance_p99_us);
 }

@@ -1,0 +1,151 @@
+//! Poses within rounding distance of touching, where "the same answer as brute force"
+//! matters most: B approaches A along the direction in which both roots are tangent to a
+//! leaf (the root sphere touches its farthest leaf there), so that a root test and a leaf
+//! test decide the same geometric contact with different f32 roundings. The offset is bisected
+//! to where the leaf predicate (`|Δ|² < (ra + rb)²` on f32 centres, which defines every
+//! query's answer) flips, and every query kind is compared with the brute-force scan over all
+//! leaf pairs at a few rounding steps either side, with fresh states and with states carried
+//! across the steps.
+
+mod query_util;
+
+use glam::{DQuat, DVec3};
+use innersphere::query::{
+    backtracking, brute, contact, distance_traversal, multipoint, penetration,
+    penetration_budgeted, proximity, ContactOptions, MultipointOptions, PairState,
+    PenetrationOptions, Pose, ProximityOptions, Tracking,
+};
+use innersphere::SphereTree;
+use proptest::prelude::*;
+use query_util::{pair_poses, pose, trees};
+
+const NO_SKIP: ContactOptions = ContactOptions { safe_motion: false };
+
+/// The unit direction (model frame) from the root's centre to the leaf that reaches
+/// farthest from it: the root sphere is tangent to that leaf there.
+fn support_direction(t: &SphereTree) -> DVec3 {
+    let c0 = t.sphere(0).0.as_dvec3();
+    let reach = |n: usize| (t.sphere(n).0.as_dvec3() - c0).length() + t.r[n] as f64;
+    let far = t
+        .leaves()
+        .max_by(|&i, &j| reach(i).total_cmp(&reach(j)))
+        .expect("a leaf");
+    (t.sphere(far).0.as_dvec3() - c0).normalize()
+}
+
+/// Every query kind at one pose against the brute-force answer (leaf predicate in f32).
+fn check_pose(
+    a: &SphereTree,
+    pa: &Pose,
+    b: &SphereTree,
+    pb: &Pose,
+    st: &mut [PairState],
+    what: &str,
+) -> Result<(), TestCaseError> {
+    let pairs = brute::overlapping_pairs(a, pa, b, pb);
+    let (bd, _, _) = brute::min_distance(a, pa, b, pb);
+    let touching = !pairs.is_empty();
+    prop_assert_eq!(touching, bd < 0.0);
+    let q = distance_traversal(a, pa, b, pb, &mut st[0], &NO_SKIP);
+    prop_assert_eq!(q.in_contact(), touching, "{}: distance traversal", what);
+    let q = backtracking(a, pa, b, pb, &mut st[1], &NO_SKIP);
+    prop_assert_eq!(q.in_contact(), touching, "{}: backtracking", what);
+    let q = contact(a, pa, b, pb, &mut st[2], &NO_SKIP);
+    prop_assert_eq!(q.in_contact(), touching, "{}: contact", what);
+    for (i, tracking) in [(3, false), (4, true)] {
+        let opts = MultipointOptions {
+            tracking,
+            k: 4,
+            split_depth: 3,
+            reuse: true,
+            safe_motion: false,
+        };
+        let m = multipoint(a, pa, b, pb, &mut st[i], &opts);
+        prop_assert_eq!(
+            !m.contacts.is_empty(),
+            touching,
+            "{}: multipoint {}",
+            what,
+            tracking
+        );
+    }
+    for (i, tracking) in [(5, Tracking::Front), (6, Tracking::Traversal)] {
+        let opts = PenetrationOptions {
+            safe_motion: false,
+            tracking,
+            ..Default::default()
+        };
+        let p = penetration(a, pa, b, pb, &mut st[i], &opts);
+        prop_assert_eq!(p.pairs, pairs.len(), "{}: penetration {:?}", what, tracking);
+    }
+    let v = penetration_budgeted(a, pa, b, pb, &mut st[7], u64::MAX);
+    prop_assert_eq!(v.volume > 0.0, touching, "{}: budgeted", what);
+    for best_first in [false, true] {
+        let opts = ProximityOptions {
+            best_first,
+            ..Default::default()
+        };
+        let p = proximity(a, pa, b, pb, &mut st[8], &opts);
+        prop_assert_eq!(p.overlapping, touching, "{}: proximity", what);
+        prop_assert_eq!(p.distance, bd.max(0.0), "{}: proximity distance", what);
+    }
+    Ok(())
+}
+
+/// B's roots offset `d` from A's along `u` (A's frame), B turned so that its own support
+/// direction faces A's.
+fn poses_at(
+    a: &SphereTree,
+    b: &SphereTree,
+    pa: Pose,
+    rot: DQuat,
+    u: DVec3,
+    d: f64,
+) -> (Pose, Pose) {
+    pair_poses(a, b, pa, rot, u * d)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(40))]
+
+    /// Bisect to the touching offset; at rounding steps either side every query kind
+    /// answers as the leaf predicate does.
+    #[test]
+    fn every_query_agrees_with_brute_force_at_the_touching_offset(
+        ia in 0usize..4, ib in 0usize..4,
+        qa in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+        ta in [-3.0..3.0f64, -3.0..3.0f64, -3.0..3.0f64],
+        spin in 0.0..std::f64::consts::TAU,
+    ) {
+        let t = trees();
+        let (a, b) = (&t[ia], &t[ib]);
+        let pa = pose(ta, qa);
+        let ua = support_direction(a);
+        let ub = support_direction(b);
+        // B's support direction turned to face A's, then spun about the approach line.
+        let rot = DQuat::from_axis_angle(ua, spin) * DQuat::from_rotation_arc(ub, -ua);
+        let reach = (a.r[0] + b.r[0]) as f64;
+        let touching = |d: f64| {
+            let (pa, pb) = poses_at(a, b, pa, rot, ua, d);
+            brute::min_distance(a, &pa, b, &pb).0 < 0.0
+        };
+        let (mut lo, mut hi) = (0.9 * reach, 1.1 * reach);
+        prop_assert!(touching(lo) && !touching(hi));
+        for _ in 0..80 {
+            let mid = 0.5 * (lo + hi);
+            if touching(mid) { lo = mid } else { hi = mid }
+        }
+        // Steps of about a quarter, one and four f32 roundings of the offset.
+        let ulp = hi * f32::EPSILON as f64;
+        let mut carried: Vec<PairState> = (0..9).map(|_| PairState::new(a, b)).collect();
+        for step in [0.25, 1.0, 4.0] {
+            for k in -3i32..=3 {
+                let d = if k < 0 { lo } else { hi } + k as f64 * step * ulp;
+                let (pa, pb) = poses_at(a, b, pa, rot, ua, d);
+                let mut fresh: Vec<PairState> = (0..9).map(|_| PairState::new(a, b)).collect();
+                check_pose(a, &pa, b, &pb, &mut fresh, &format!("fresh, offset {d}"))?;
+                check_pose(a, &pa, b, &pb, &mut carried, &format!("carried, offset {d}"))?;
+            }
+        }
+    }
+}

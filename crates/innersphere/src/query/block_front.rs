@@ -79,6 +79,12 @@ struct Entry {
 }
 
 /// The block front of one pair of trees (fan-outs ≤ 4).
+///
+/// Memory: 77 bytes per slot (entry, expiry, its place in `due`, chunk bookkeeping), slots
+/// reserved by [`BlockFront::with_capacity`]; beyond that they grow (geometrically, once,
+/// keeping their high-water mark), which only a deep overlap needs: the live entries are the
+/// overlapping node pairs of the overlap traversal, and the front is emptied when its slots
+/// exceed 4 × its live entries + 1024.
 #[derive(Debug)]
 pub(crate) struct BlockFront {
     ent: Vec<Entry>,
@@ -123,7 +129,10 @@ pub(crate) struct BlockFront {
 const RECENT: usize = 4;
 
 impl BlockFront {
-    pub(crate) fn with_capacity(n: usize) -> BlockFront {
+    /// Room for `n` slots (rounded up to whole chunks) without allocating, and work stacks
+    /// of `stack` entries (their bound: depth × 16).
+    pub(crate) fn with_capacity(n: usize, stack: usize) -> BlockFront {
+        let n = n.div_ceil(CHUNK) * CHUNK;
         BlockFront {
             ent: Vec::with_capacity(n),
             expiry: Vec::with_capacity(n),
@@ -133,8 +142,8 @@ impl BlockFront {
             free_head: [NONE; DEPTHS],
             nfree: 0,
             due: Vec::with_capacity(n),
-            work: Vec::with_capacity(256),
-            kill: Vec::with_capacity(256),
+            work: Vec::with_capacity(stack),
+            kill: Vec::with_capacity(stack),
             root: NONE,
             root_expiry: f64::NEG_INFINITY,
             moved: 0.0,

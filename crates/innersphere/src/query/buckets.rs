@@ -22,6 +22,10 @@ const CHUNK: usize = 31;
 /// frames of the replay.
 const RING: i64 = 1 << 15;
 
+/// Non-empty buckets that [`Buckets::with_capacity`] reserves chunks for (a quarter of the
+/// ring; the jaw fronts of up to 80k pairs spread over ≈ 3,000–4,400 chunks in all).
+const HEADS: usize = RING as usize / 4;
+
 #[derive(Debug, Clone, Copy)]
 struct Chunk {
     items: [Sep; CHUNK],
@@ -69,11 +73,13 @@ pub(crate) struct Buckets {
 }
 
 impl Buckets {
-    /// An empty queue with room for about `n` entries.
+    /// An empty queue with room for `n` entries in up to `min(n, HEADS)` non-empty buckets
+    /// (every non-empty bucket holds a chunk of its own; past that, the pool grows).
     pub(crate) fn with_capacity(n: usize) -> Self {
+        let chunks = n / CHUNK + n.min(HEADS) + 2;
         Buckets {
-            pool: Vec::with_capacity(n / CHUNK + 64),
-            free: Vec::with_capacity(n / CHUNK + 64),
+            pool: Vec::with_capacity(chunks),
+            free: Vec::with_capacity(chunks),
             ring: vec![NIL; RING as usize],
             fill: vec![0; RING as usize],
             used: vec![0; RING as usize / 64],

@@ -56,6 +56,13 @@ impl Hit {
 }
 
 /// The tracked front of one pair.
+///
+/// Memory: 16 bytes per separated pair in the queue (plus a 504-byte chunk per non-empty
+/// bucket, at most 2¹⁵ + 1 of them), 16 per pair in `due` and `pending` (each holds up to the
+/// whole front, on a rebuild or a jump), 32 per hit. Reserved by [`Front::with_capacity`];
+/// beyond that the buffers grow (geometrically, once, keeping their high-water mark), which
+/// only a deep overlap needs: the front is rebuilt when it passes max(8 × its size after the
+/// last rebuild, 2¹⁷) pairs, and a rebuild's front is the frontier of one overlap traversal.
 #[derive(Debug)]
 pub(crate) struct Front {
     /// Separated pairs by expiry.
@@ -85,13 +92,15 @@ pub(crate) fn motion_bound(ib: &TreeInfo, from: &Pose, to: &Pose) -> f64 {
 }
 
 impl Front {
-    pub(crate) fn with_capacity(n: usize) -> Front {
+    /// Room for a front of `n` pairs (of which up to `n / 8` hits) without allocating, and a
+    /// refinement stack of `work` pairs (its bound: depth × fan-out).
+    pub(crate) fn with_capacity(n: usize, work: usize) -> Front {
         Front {
             queue: Buckets::with_capacity(n),
-            due: Vec::with_capacity(n / 8),
-            pending: Vec::with_capacity(n / 4),
+            due: Vec::with_capacity(n),
+            pending: Vec::with_capacity(n),
             hits: Vec::with_capacity(n / 8),
-            work: Vec::with_capacity(1024),
+            work: Vec::with_capacity(work),
             moved: 0.0,
             last: None,
             built: 0,

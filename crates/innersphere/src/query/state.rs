@@ -151,8 +151,10 @@ pub(crate) fn prefetch_at<T>(p: *const T) {
 }
 
 /// Per-pair state: what temporal coherence needs (last contact pairs, last separation bound
-/// and the pose it was measured at) and all scratch memory (stacks, heaps, result buffers),
-/// pre-reserved from the tree sizes, so that queries allocate nothing in steady state.
+/// and the pose it was measured at) and all scratch memory (stacks, heaps, fronts, result
+/// buffers), reserved from the tree sizes when it is made, so that queries allocate nothing
+/// from the first frame on (see [`PairState::with_info`] for what is reserved and what may
+/// still grow).
 ///
 /// Create one per pair of trees with [`PairState::new`] and pass it to every query on that
 /// pair; it must always be used with the same two trees (checked by node counts). It is
@@ -163,6 +165,14 @@ pub struct PairState {
     pub(crate) ib: Arc<TreeInfo>,
     pub(crate) s: Scratch,
 }
+
+/// Contacts reserved for [`multipoint`](super::multipoint) (64 KiB): `k` up to this
+/// allocates nothing.
+const MULTIPOINT_K: usize = 1024;
+
+/// Patches reserved for [`penetration`](super::penetration): `max_patches` up to this
+/// allocates nothing.
+const PATCHES: usize = 64;
 
 /// Key of a node pair.
 #[inline(always)]
@@ -177,31 +187,71 @@ impl PairState {
     }
 
     /// The state of a pair from [`TreeInfo`]s shared with other pairs.
+    ///
+    /// Reserves, from the trees' depths `d`, largest fan-outs `f`, node counts `n` and leaf
+    /// counts `l` (A's and B's):
+    /// * every depth-first stack to its bound: a pair is at most `d_A + d_B` refinements
+    ///   below the roots and a refinement pushes at most `f_A · f_B` pairs (16 on blocks);
+    ///   ancestor chains `d + 1`;
+    /// * the kinetic front ([`contact`](super::contact), [`penetration`](super::penetration)
+    ///   with the front, [`multipoint`](super::multipoint) with tracking) for
+    ///   `(l_A + l_B) / 3` node pairs, within 2¹³ ..= 2¹⁷ (its rebuild floor): along the jaw
+    ///   chew and grind it held at most ≈ 0.2 × (l_A + l_B) pairs (0.1 and 0.3 mm voxels);
+    /// * the block front of [`contact`](super::contact) (fan-outs ≤ 4) for `(l_A + l_B) / 16`
+    ///   entries, within 2¹¹ ..= 2¹⁶ (the jaw used at most ≈ 6,700);
+    /// * the priority queue of best-first [`proximity`](super::proximity) and of
+    ///   [`penetration_budgeted`](super::penetration_budgeted) for `(n_A + n_B) / 8` pairs,
+    ///   within 2¹² ..= 2¹⁸ (the jaw used at most 8,192);
+    /// * [`multipoint`](super::multipoint) for `k` up to 1024 contacts and
+    ///   [`penetration`](super::penetration) for up to 64 patches.
+    ///
+    /// On the jaw arches at a 0.3 mm voxel (300k nodes, 200k leaves) that is 9.5 MiB (their
+    /// two [`TreeInfo`]s: 26 MiB), reserved but not written: pages no query reaches need not
+    /// become resident; on small trees the floors make it ≈ 5 MiB. What may still grow,
+    /// once, to a high-water mark that is then kept: a front or queue in a deep overlap
+    /// beyond its reservation (each is bounded, see the fronts' docs), the queue of
+    /// [`penetration_budgeted`](super::penetration_budgeted) with a larger budget (at most
+    /// the budget plus a fan-out), `k` over 1024 (at most `k` contacts, `2k` keys) and
+    /// `max_patches` over 64 (at most `max_patches`).
     pub fn with_info(a: Arc<TreeInfo>, b: Arc<TreeInfo>) -> PairState {
         let depth = a.max_depth as usize + b.max_depth as usize + 2;
-        let fan = a.max_children.max(1) * b.max_children.max(1);
-        let heap_cap = ((a.nodes + b.nodes) / 8).clamp(1024, 1 << 18);
+        let (fa, fb) = (a.max_children.max(1), b.max_children.max(1));
+        let blocks = !a.blocks.is_empty() && !b.blocks.is_empty();
+        // Depth-first stacks (the blocked ones on fan-outs ≤ 4, the others otherwise):
+        // simultaneous descent pushes up to fa·fb pairs per refinement, refining the larger
+        // sphere up to max(fa, fb).
+        let stack = if blocks { 0 } else { depth * fa * fb + 16 };
+        let single = depth * fa.max(fb) + 16;
+        let block_stack = if blocks { depth * 16 + 16 } else { 0 };
+        let leaves = a.leaves + b.leaves;
+        let front = (leaves / 3).clamp(1 << 13, 1 << 17);
+        let block_front = if blocks {
+            (leaves / 16).clamp(1 << 11, 1 << 16)
+        } else {
+            0
+        };
+        let heap = ((a.nodes + b.nodes) / 8).clamp(1 << 12, 1 << 18);
         PairState {
             s: Scratch {
-                stack: Vec::with_capacity((depth * fan + 16).max(heap_cap / 4)),
-                pstack: Vec::with_capacity((depth * fan + 16).max(heap_cap / 4)),
-                // Each pop of the 4×4 search pushes at most 16 pairs, one level deeper.
-                bstack: Vec::with_capacity(depth * 16 + 16),
-                tstack: Vec::with_capacity((depth * fan + 16).max(heap_cap / 4)),
-                heap: PairHeap::with_capacity(heap_cap),
+                stack: Vec::with_capacity(stack),
+                pstack: Vec::with_capacity(if blocks { 0 } else { single }),
+                bstack: Vec::with_capacity(block_stack),
+                tstack: Vec::with_capacity(block_stack),
+                heap: PairHeap::with_capacity(heap),
                 anc_a: Vec::with_capacity(a.max_depth as usize + 1),
                 anc_b: Vec::with_capacity(b.max_depth as usize + 1),
-                excluded: Vec::with_capacity(256),
-                contacts: Vec::with_capacity(256),
-                mp_prev: Vec::with_capacity(256),
-                stale: Vec::with_capacity(256),
-                patches: Vec::with_capacity(64),
-                patch_acc: Vec::with_capacity(64),
+                // Stale contacts and found ones: at most 2k keys.
+                excluded: Vec::with_capacity(2 * MULTIPOINT_K),
+                contacts: Vec::with_capacity(MULTIPOINT_K),
+                mp_prev: Vec::with_capacity(MULTIPOINT_K),
+                stale: Vec::with_capacity(MULTIPOINT_K),
+                patches: Vec::with_capacity(PATCHES),
+                patch_acc: Vec::with_capacity(PATCHES),
                 prox_pair: None,
                 bt_pair: None,
                 separation: None,
-                front: Front::with_capacity(heap_cap),
-                bfront: BlockFront::with_capacity(heap_cap / 4),
+                front: Front::with_capacity(front, single),
+                bfront: BlockFront::with_capacity(block_front, block_stack),
             },
             ia: a,
             ib: b,

@@ -73,25 +73,65 @@ fn assert_tree_invariants(tree: &SphereTree, spheres: &[Sphere]) {
             n = tree.parent[n as usize];
         }
     }
-    // Leaves (f32) stay inside their f64 spheres, hence inside the solid and disjoint.
-    let mut leaf_spheres: Vec<(DVec3, f64)> = tree
+    // Each packed sphere is exactly one leaf: its centre rounded to the nearest f32, and the
+    // largest f32 radius that keeps the leaf inside the packed sphere.
+    let key = |c: [f32; 3], r: f32| [c[0].to_bits(), c[1].to_bits(), c[2].to_bits(), r.to_bits()];
+    let mut want: Vec<[u32; 4]> = spheres
+        .iter()
+        .map(|s| {
+            let c32 = s.center.as_vec3();
+            let room = s.radius - (c32.as_dvec3() - s.center).length();
+            key(c32.to_array(), largest_f32_not_above(room))
+        })
+        .collect();
+    let mut got: Vec<[u32; 4]> = tree
+        .leaves()
+        .map(|n| {
+            let (c, r) = tree.sphere(n);
+            key(c.to_array(), r)
+        })
+        .collect();
+    want.sort_unstable();
+    got.sort_unstable();
+    assert!(
+        want.windows(2).all(|w| w[0] != w[1]),
+        "two packed spheres round to the same leaf"
+    );
+    assert!(
+        want == got,
+        "the leaves are not the packed spheres rounded to f32"
+    );
+    // The stored leaves are pairwise disjoint. Each lies inside its packed sphere, so they
+    // overlap no more than the packed spheres may (1e-12, see `assert_packing_invariants`);
+    // computing the gap from the f32 values in f64 adds at most a few 1e-16.
+    let leaves: Vec<(DVec3, f64)> = tree
         .leaves()
         .map(|n| {
             let (c, r) = tree.sphere(n);
             (c.as_dvec3(), r as f64)
         })
         .collect();
-    let mut orig: Vec<(DVec3, f64)> = spheres.iter().map(|s| (s.center, s.radius)).collect();
-    let key = |a: &(DVec3, f64)| (a.0.x.to_bits(), a.0.y.to_bits(), a.0.z.to_bits());
-    leaf_spheres.sort_by(|a, b| a.1.total_cmp(&b.1).then(key(a).cmp(&key(b))));
-    orig.sort_by(|a, b| a.1.total_cmp(&b.1).then(key(a).cmp(&key(b))));
-    for l in &leaf_spheres {
-        assert!(
-            orig.iter()
-                .any(|o| (o.0 - l.0).length() + l.1 <= o.1 + 1e-12),
-            "leaf {l:?} is not inside any packed sphere"
-        );
+    for (i, a) in leaves.iter().enumerate() {
+        for b in &leaves[i + 1..] {
+            let gap = (a.0 - b.0).length() - a.1 - b.1;
+            assert!(gap >= -1e-12, "leaves {a:?} and {b:?} overlap by {}", -gap);
+        }
     }
+}
+
+/// The largest f32 not above `x` (0 for `x` ≤ 0).
+fn largest_f32_not_above(x: f64) -> f32 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    let r = x as f32;
+    let r = if r as f64 > x {
+        f32::from_bits(r.to_bits() - 1)
+    } else {
+        r
+    };
+    assert!(r as f64 <= x && f32::from_bits(r.to_bits() + 1) as f64 > x);
+    r
 }
 
 #[test]

@@ -4,6 +4,7 @@
 
 mod common;
 mod query_util;
+mod reference;
 
 use glam::{DQuat, DVec3};
 use innersphere::build::{build_tree, BuildOptions, Resolution};
@@ -15,6 +16,8 @@ use innersphere::query::{
 };
 use innersphere::SphereTree;
 use query_util::{close, motion, pair_poses};
+use reference::checks::{check_contact, check_multipoint, check_penetration};
+use reference::RefPair;
 
 fn tree(rel: &str, cells: u32) -> SphereTree {
     let mesh = innersphere::mesh::io::load(&common::data(rel)).unwrap();
@@ -36,8 +39,16 @@ fn rng(seed: u64) -> impl FnMut() -> f64 {
     }
 }
 
-/// Checks every query kind against brute force at one pose pair; `states` carry coherence.
-fn check_pose(a: &SphereTree, b: &SphereTree, pa: &Pose, pb: &Pose, st: &mut [PairState; 4]) {
+/// Checks every query kind against brute force at one pose pair, and with `reference` also
+/// against the independent f64 reference (slower); `states` carry coherence.
+fn check_pose(
+    a: &SphereTree,
+    b: &SphereTree,
+    pa: &Pose,
+    pb: &Pose,
+    st: &mut [PairState; 4],
+    reference: bool,
+) {
     let (bd, _, _) = brute::min_distance(a, pa, b, pb);
     let pairs = brute::overlapping_pairs(a, pa, b, pb);
     let p = proximity(a, pa, b, pb, &mut st[0], &ProximityOptions::default());
@@ -104,6 +115,28 @@ fn check_pose(a: &SphereTree, b: &SphereTree, pa: &Pose, pb: &Pose, st: &mut [Pa
         },
     );
     assert_eq!(m.contacts.is_empty(), pairs.is_empty());
+    if !reference {
+        return;
+    }
+    // The independent reference: contacts, multipoint's contact set, penetration's force,
+    // torques and patches, with the states carried along.
+    let r = RefPair::new(a, pa, b, pb);
+    check_contact(&contact(a, pa, b, pb, &mut st[3], &off), &r, "contact").unwrap();
+    let opts = MultipointOptions {
+        k: 8,
+        split_depth: 3,
+        safe_motion: false,
+        tracking: true,
+        ..Default::default()
+    };
+    check_multipoint(a, pa, b, pb, &r, &mut st[2], &opts).unwrap();
+    let opts = PenetrationOptions {
+        stiffness: 2.0,
+        safe_motion: false,
+        max_patches: 6,
+        ..Default::default()
+    };
+    check_penetration(a, pa, b, pb, &r, &mut st[3], &opts).unwrap();
 }
 
 #[test]
@@ -132,7 +165,7 @@ fn small_meshes_random_poses_equal_brute_force() {
                 let pose_a =
                     Pose::new(DVec3::new(r(), r(), r()), DQuat::from_rotation_y(r())).unwrap();
                 let (pa, pb) = pair_poses(a, b, pose_a, q, off);
-                check_pose(a, b, &pa, &pb, &mut st);
+                check_pose(a, b, &pa, &pb, &mut st, true);
             }
             let frames = motion(
                 a,
@@ -143,8 +176,8 @@ fn small_meshes_random_poses_equal_brute_force() {
                 0.02,
                 60,
             );
-            for (pa, pb) in &frames {
-                check_pose(a, b, pa, pb, &mut st);
+            for (f, (pa, pb)) in frames.iter().enumerate() {
+                check_pose(a, b, pa, pb, &mut st, f % 10 == 0);
             }
             eprintln!("{} vs {}: ok", names[i], names[j]);
         }
@@ -164,7 +197,7 @@ fn opposing_molars_in_the_bite_and_along_a_motion() {
         PairState::new(&a, &b),
     ];
     let id = Pose::IDENTITY;
-    check_pose(&a, &b, &id, &id, &mut st);
+    check_pose(&a, &b, &id, &id, &mut st, true);
     // Open and close the bite: B moves down and back up along z with a small rotation.
     for f in 0..120 {
         let s = f as f64 / 120.0 * std::f64::consts::TAU;
@@ -173,6 +206,6 @@ fn opposing_molars_in_the_bite_and_along_a_motion() {
             DQuat::from_rotation_x(0.02 * s.sin()),
         )
         .unwrap();
-        check_pose(&a, &b, &id, &pb, &mut st);
+        check_pose(&a, &b, &id, &pb, &mut st, f % 8 == 0);
     }
 }

@@ -12,6 +12,8 @@
 //! pairs inside it as undecided.
 #![allow(dead_code)]
 
+pub mod checks;
+
 use glam::DVec3;
 use innersphere::query::Pose;
 use innersphere::SphereTree;

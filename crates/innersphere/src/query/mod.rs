@@ -6,8 +6,10 @@
 //! actually visits are transformed. Traversals read a packed copy of each tree's nodes
 //! ([`TreeInfo`], 32 bytes per node, children contiguous) and keep explicit stacks in the
 //! state; node tests carry a tiny slack covering the f32 rounding, so that an inner-node test
-//! never prunes a leaf pair that the exact leaf test (`|Δ|² < (ra + rb)²` in f32) accepts. The state carries what temporal coherence needs and all
-//! scratch memory, so that a query allocates nothing and takes no lock in steady state; list
+//! never prunes a leaf pair that the exact leaf test (`|Δ|² < (ra + rb)²` in f32) accepts.
+//! The state carries what temporal coherence needs and all scratch memory, reserved at
+//! construction from the trees' sizes, so that a query allocates nothing from the first frame
+//! and takes no lock (what may still grow, and its bound: [`PairState::with_info`]); list
 //! results are slices borrowed from the state. Trees are immutable and shared freely between
 //! threads; one state serves one pair on one thread at a time.
 //!

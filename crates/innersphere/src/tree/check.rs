@@ -104,7 +104,9 @@ pub fn check(tree: &SphereTree, mesh: &Mesh) -> crate::Result<CheckReport> {
 /// Largest overlap r_a + r_b − |c_a − c_b| between two distinct leaves, by a self-join over
 /// the tree's own hierarchy. This is sound only when every node encloses the leaves below it,
 /// which [`check`] verifies independently (and reports as not ok otherwise): then every
-/// overlapping leaf pair lies under a chain of overlapping node pairs and is found.
+/// overlapping leaf pair lies under a chain of overlapping node pairs and is found. ([`check`]
+/// itself searches with twice its tolerance as slack, since it accepts nodes that miss their
+/// leaves by up to the tolerance.)
 pub fn max_leaf_overlap(tree: &SphereTree) -> f64 {
     leaf_overlap_search(tree, 0.0)
 }

@@ -23,24 +23,24 @@
 //! Why blocks and not single pairs ([`front`](super::front)): re-testing one expired pair at
 //! a time cost a cache miss per pair and a bucket-queue push per re-test (≈ 40 ns per test
 //! on the jaw chew); an entry here is one 4×4 step on two blocks, and nothing is queued.
-//! Measured on the jaw chew (BENCHMARKS.md, "Session 12"): on the frames a few microns from
-//! contact it re-runs 250–400 steps where a traversal needs ≈ 1,750, each ≈ 1.5–2× a
-//! traversal step (re-stepping a whole front at one pose, warm: ≈ 1.1×). A per-entry motion
-//! check (the B node's own displacement since its step, from a ring of recent poses) spared a
-//! sixth of the steps but cost more time than it saved (removed in session 12); rebuilt in
-//! sessions 15–16 with the nearest pair's direction (38–40 % fewer steps), it still made
-//! frames ≈ 2× slower: 83 % of the steps are the common step, the cheapest kind, and a check
-//! cost about as much as one at five checks per saved step (BENCHMARKS.md, "Session 16";
-//! branch `wip/guard-soa`). Keeping every
-//! hit up to date through a deep contact costs far more than backtracking, so
+//! On the jaw chew, on the frames a few microns from contact, it re-runs 250–400 steps where
+//! a traversal needs ≈ 1,750, each ≈ 1.5–2× a traversal step (re-stepping a whole front at
+//! one pose, warm: ≈ 1.1×).
+//!
+//! Why an expired entry is stepped without first checking whether its step could have
+//! changed: such checks (the B node's own displacement since its step, or the nearest pair's
+//! direction) spare a sixth to 40 % of the steps but make frames slower, up to ≈ 2×: 83 % of
+//! the steps are the common step, the cheapest kind, and a check costs about as much as one at
+//! five checks per saved step (BENCHMARKS.md, "Tried and did not pay").
+//!
+//! Keeping every hit up to date through a deep contact costs far more than backtracking, so
 //! [`contact`](super::contact) answers from recent contact pairs while in contact, and the
-//! front only [tends](BlockFront::tend) its backlog there, a fixed number of steps a frame
-//! (session 14: with the scan branch-free and no sort, the backlog of a deep contact costs
-//! ≈ 0.5 µs a frame to scan, where the scan and sort of sessions 11–13 made a budget cost
-//! more than it saved). When the recent pairs no longer overlap, the front catches up
-//! deepest first (session 13: against a climb from the newest pair, which needed a second
-//! slow frame when the contact had ended, the frames over 20 µs at the p99 fell by about a
-//! third in the same process).
+//! front only [tends](BlockFront::tend) its backlog there, a fixed number of steps a frame:
+//! with the scan branch-free and no sort, the backlog of a deep contact costs ≈ 0.5 µs a frame
+//! to scan (a scanned and sorted backlog made such a budget cost more than it saved). When the
+//! recent pairs no longer overlap, the front catches up deepest first: a climb from the newest
+//! pair needed a second slow frame when the contact had ended, and deepest first cut
+//! `contact`'s p99 along the chew by about a third in the same process.
 
 use super::front::motion_bound;
 use super::info::{TreeInfo, LANES};

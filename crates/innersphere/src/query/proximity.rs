@@ -375,7 +375,7 @@ fn block_in_a(ctx: &Ctx, k: &Block) -> ([f32; LANES], [f32; LANES], [f32; LANES]
 /// both are tested 4×4 in one vectorised step from their [`Block`]s (two cache lines per
 /// node), a pair with a leaf side tests the leaf against the other's 4 children. Twice the
 /// sphere tests of splitting the larger node, but half the stack pops, and a pop is what
-/// costs (≈ 30 ns against ≈ 1 ns per lane test; measured in session 4). `AVX`: the step in AVX2
+/// costs (≈ 30 ns against ≈ 1 ns per lane test, measured on the jaw chew). `AVX`: the step in AVX2
 /// intrinsics (set only after the CPU was checked).
 #[inline(always)]
 fn depth_first_blocks<const AVX: bool>(

@@ -1,5 +1,5 @@
 //! The finished Inner Sphere Tree: flat f32 arrays ready for traversal, and its file format
-//! ([`file`]).
+//! ([`file`](mod@file)).
 
 pub mod check;
 pub mod export;

@@ -30,9 +30,7 @@ fn read_motion(path: &PathBuf, stride: usize) -> Option<Vec<Pose>> {
             .filter_map(|x| x.trim().parse().ok())
             .collect();
         if v.len() == 8 {
-            poses.push(Pose::from_array([
-                v[1], v[2], v[3], v[4], v[5], v[6], v[7],
-            ])?);
+            poses.push(Pose::from_array([v[1], v[2], v[3], v[4], v[5], v[6], v[7]]).ok()?);
         }
     }
     Some(poses)

@@ -38,6 +38,9 @@ pub enum Error {
     /// An output (a chart, a report) that could not be produced.
     #[error("cannot write output: {0}")]
     Output(String),
+    /// Numbers that are no rigid pose (see [`PoseError`](crate::PoseError)).
+    #[error("invalid pose: {0}")]
+    Pose(#[from] crate::PoseError),
     /// A motion file that cannot be used.
     #[error("{path}:{line}: {message}")]
     Motion {

@@ -11,7 +11,8 @@
 //! packing/    greedy packing of non-overlapping inner spheres
 //! hierarchy/  batch neural gas clustering, minimal enclosing spheres, flat layout
 //! tree/       the finished tree (structure of arrays) and its file format
-//! query/      poses, per-pair state and one file per query kind
+//! pose.rs     rigid poses: from quaternions, rotation matrices, 4×4 matrices, text
+//! query/      per-pair state and one file per query kind
 //! exact/      exact mesh-mesh distance (the accuracy reference)
 //! motion/     motion files and generated motions
 //! eval/       replay and benchmarks
@@ -28,6 +29,7 @@ pub mod hierarchy;
 pub mod mesh;
 pub mod motion;
 pub mod packing;
+pub mod pose;
 pub mod progress;
 pub mod query;
 pub mod shapes;
@@ -36,4 +38,5 @@ pub mod tree;
 pub use error::{Error, Result};
 pub use glam;
 pub use mesh::Mesh;
+pub use pose::{MatrixOrder, Pose, PoseError};
 pub use tree::SphereTree;

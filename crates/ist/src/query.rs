@@ -62,7 +62,10 @@ fn v3(v: innersphere::glam::DVec3) -> [f64; 3] {
 
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
-    let pose_b = query::parse_pose(&args.pose_b).context("--pose-b")?;
+    let pose_b: Pose = args
+        .pose_b
+        .parse()
+        .with_context(|| format!("--pose-b \"{}\"", args.pose_b))?;
     if !(args.stiffness.is_finite() && args.stiffness >= 0.0) {
         anyhow::bail!("--stiffness must be a finite number ≥ 0");
     }

@@ -202,7 +202,7 @@ fn query_gives_the_distance_of_the_posed_trees() {
             coherence: false,
             ..Default::default()
         };
-        let pose = query::parse_pose(pose).unwrap();
+        let pose: Pose = pose.parse().unwrap();
         query::proximity(&a, &Pose::IDENTITY, b, &pose, &mut st, &opts).distance
     };
     // The ball 3 along x: its surface is 1 from the box's +x face; the inner spheres lie
@@ -264,4 +264,6 @@ fn errors_exit_with_code_2() {
         "1 0 0 1 0 0",
     ]);
     assert_eq!(code(&out), 2);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("expected 7 numbers"), "{err}");
 }

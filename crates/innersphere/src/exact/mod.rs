@@ -41,8 +41,8 @@ pub use tri_tri::{
 
 use crate::mesh::bvh::{BvhNode, TriangleBvh, LEAF_SIZE};
 use crate::mesh::winding::FastWinding;
-use crate::query::pose::Pose;
 use crate::Mesh;
+use crate::Pose;
 use glam::{DMat3, DVec3};
 use tri_tri::triangle_distance_hint;
 

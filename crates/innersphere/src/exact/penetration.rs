@@ -16,7 +16,7 @@
 
 use super::tri_tri::segment_triangle_intersect;
 use super::{overlap_pairs, ExactMesh, ExactScratch, Frame};
-use crate::query::pose::Pose;
+use crate::Pose;
 use glam::DVec3;
 
 /// One of the two bodies of a query.

@@ -204,7 +204,7 @@ impl Motion {
                 }
             }
             let pose = Pose::new(DVec3::new(v[1], v[2], v[3]), q)
-                .ok_or_else(|| motion_error(path, line, "not a valid rigid pose"))?;
+                .map_err(|e| motion_error(path, line, format!("not a valid rigid pose: {e}")))?;
             frames.push(Frame { t, pose });
         }
         if frames.is_empty() {

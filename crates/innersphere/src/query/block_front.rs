@@ -46,7 +46,7 @@ use super::front::motion_bound;
 use super::info::{TreeInfo, LANES};
 use super::state::Ctx;
 use super::traversal::{block_gaps, inner_gaps, sides, TItem, B_LEAF};
-use super::Pose;
+use crate::Pose;
 
 const NONE: u32 = u32::MAX;
 

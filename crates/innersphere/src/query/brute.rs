@@ -3,7 +3,7 @@
 
 use super::geometry::{overlaps, sphere_distance, Rel32};
 use super::penetration::Sums;
-use super::Pose;
+use crate::Pose;
 use crate::SphereTree;
 use glam::DVec3;
 

@@ -24,7 +24,7 @@
 use super::buckets::{Buckets, Sep};
 use super::info::TreeInfo;
 use super::state::{expand_larger, Ctx, Item};
-use super::Pose;
+use crate::Pose;
 use glam::DVec3;
 
 /// How far ahead the re-test loops prefetch the nodes of the pairs they will test (the pairs

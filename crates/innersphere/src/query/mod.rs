@@ -42,21 +42,19 @@ mod geometry;
 mod heap;
 mod info;
 mod lanes;
-mod parse;
 mod penetration;
-pub mod pose;
 mod proximity;
 mod state;
 mod traversal;
 
+/// The crate root's [`Pose`], also here for code that imports it with the queries.
+pub use crate::pose::Pose;
 pub use geometry::{lens_volume, Contact};
 pub use info::TreeInfo;
-pub use parse::parse_pose;
 pub use penetration::{
     penetration, penetration_budgeted, BudgetedVolume, Patch, Penetration, PenetrationOptions,
     Tracking, AUTO_FRONT_NODES,
 };
-pub use pose::Pose;
 pub use proximity::{proximity, Proximity, ProximityOptions};
 pub use state::{PairState, SeparationRecord};
 pub use traversal::{

@@ -8,7 +8,7 @@ use super::geometry::{direction, lens};
 use super::heap::Entry;
 use super::state::{expand_larger, safe_separation, Item, PairState};
 use super::traversal::{blocked, overlap_pairs_dispatch, TItem};
-use super::Pose;
+use crate::Pose;
 use crate::SphereTree;
 use glam::DVec3;
 

@@ -5,7 +5,7 @@ use super::heap::Entry;
 use super::info::{Block, TreeInfo, LANES};
 use super::lanes;
 use super::state::{expand_larger, prefetch, Ctx, PairState};
-use super::Pose;
+use crate::Pose;
 use crate::SphereTree;
 use glam::DVec3;
 

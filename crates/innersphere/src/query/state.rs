@@ -8,7 +8,7 @@ use super::info::{Block, Node, TreeInfo};
 use super::penetration::{Patch, PatchAcc};
 use super::proximity::BlockEntry;
 use super::traversal::TItem;
-use super::Pose;
+use crate::Pose;
 use crate::SphereTree;
 use glam::DVec3;
 use std::sync::Arc;

@@ -23,8 +23,8 @@ use super::geometry::{make_contact, Contact};
 use super::info::{Block, Node, TreeInfo, LANES};
 use super::lanes;
 use super::state::{pair_key, prefetch_at, safe_separation, Ctx, Item, PairState, Scratch};
-use super::Pose;
 use crate::tree::NO_PARENT;
+use crate::Pose;
 use crate::SphereTree;
 
 /// Options of [`distance_traversal`] and [`backtracking`].

@@ -13,21 +13,19 @@
 //! tree/       the finished tree (structure of arrays) and its file format
 //! pose.rs     rigid poses: from quaternions, rotation matrices, 4×4 matrices, text
 //! query/      per-pair state and one file per query kind
-//! exact/      exact mesh-mesh distance (the accuracy reference)
-//! motion/     motion files and generated motions
-//! eval/       replay and benchmarks
+//! exact/      exact mesh-mesh distance, intersection and penetration depth (also the
+//!             accuracy reference of the sphere queries)
 //! ```
 //!
 //! [`build::build_tree`] runs the whole build; [`tree::SphereTree`] is what queries use.
+//! Motion files, replay, benchmarks and the paper's figures are the `innersphere-eval` crate.
 
 pub mod build;
 pub mod error;
-pub mod eval;
 pub mod exact;
 pub mod field;
 pub mod hierarchy;
 pub mod mesh;
-pub mod motion;
 pub mod packing;
 pub mod pose;
 pub mod progress;

@@ -193,18 +193,3 @@ fn every_closed_real_mesh_builds_a_checked_tree() {
         assert!(back == tree, "{rel}: the tree changed in a file round trip");
     }
 }
-
-#[test]
-fn the_demo_builds_and_replays_the_generated_tooth_pair() {
-    let pair = innersphere::eval::demo::build_pair(&opts(48), &Silent).unwrap();
-    assert!(pair.a.2.spheres > 100 && pair.b.2.spheres > 100);
-    let rep = innersphere::eval::demo::replay_pair(&pair, 1.2).unwrap();
-    assert_eq!(rep.frames, 1200);
-    assert_eq!(rep.kinds.len(), 4);
-    let acc = rep.accuracy.unwrap();
-    assert!(acc.frames >= 100 && acc.separated_frames > 0, "{acc:?}");
-    assert_eq!(
-        acc.false_contacts, 0,
-        "inner spheres never reach outside the meshes"
-    );
-}

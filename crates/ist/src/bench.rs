@@ -70,10 +70,10 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             every,
             json,
         } => {
-            use innersphere::eval::paper::{run, PaperOptions};
+            use innersphere_eval::paper::{run, PaperOptions};
             let ma = innersphere::mesh::io::load(&a)?;
             let mb = innersphere::mesh::io::load(&b)?;
-            let m = innersphere::motion::Motion::load(&motion)?;
+            let m = innersphere_eval::motion::Motion::load(&motion)?;
             let size = [ma.bbox(), mb.bbox()]
                 .iter()
                 .map(|(lo, hi)| (*hi - *lo).max_element())
@@ -95,7 +95,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             if json {
                 println!("{}", serde_json::to_string_pretty(&s)?);
             } else {
-                println!("machine: {}", innersphere::eval::sysinfo::cpu_description());
+                println!("machine: {}", innersphere_eval::sysinfo::cpu_description());
                 println!("wrote {} files to {}", s.files.len(), out.display());
                 println!(
                     "main trees {} + {} leaves: proximity p99 (1 pass, all frames) {:.1} µs vs exact mesh distance p99 (1 pass, every {} frames, each warm-started from the previous compared frame) {:.1} µs ({:.1}x); backtracking {:.1}x faster than the full traversal in contact (best of 2); distance error p95 {:.4}",
@@ -121,12 +121,12 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             innersphere::build::validate_options(&options)?;
             let mut rows = Vec::new();
             if !json {
-                println!("machine: {}", innersphere::eval::sysinfo::cpu_description());
+                println!("machine: {}", innersphere_eval::sysinfo::cpu_description());
                 println!("| mesh | triangles | voxel | inside voxels | spheres | depth | coverage | load s | field s | packing s | hierarchy s | total s (min–max) | peak MiB |");
                 println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
             }
             for m in &meshes {
-                let r = innersphere::eval::bench::bench_build(m, &options, repeat)?;
+                let r = innersphere_eval::bench::bench_build(m, &options, repeat)?;
                 if !json {
                     println!(
                         "| {} | {} | {:.4} | {} | {} | {} | {:.3} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} ({:.2}–{:.2}) | {} |",

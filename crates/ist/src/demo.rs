@@ -34,16 +34,16 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         "--seconds must be between 0 and 600"
     );
     let pair = match (&args.a, &args.b) {
-        (Some(a), Some(b)) => innersphere::eval::demo::build_pair_from(
+        (Some(a), Some(b)) => innersphere_eval::demo::build_pair_from(
             innersphere::mesh::io::load(a)?,
             innersphere::mesh::io::load(b)?,
             &opts,
             &bars,
         )?,
-        _ => innersphere::eval::demo::build_pair(&opts, &bars)?,
+        _ => innersphere_eval::demo::build_pair(&opts, &bars)?,
     };
     let replay = if args.seconds > 0.0 {
-        Some(innersphere::eval::demo::replay_pair(&pair, args.seconds)?)
+        Some(innersphere_eval::demo::replay_pair(&pair, args.seconds)?)
     } else {
         None
     };

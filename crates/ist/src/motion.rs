@@ -1,7 +1,7 @@
 //! `ist motion`: generate a hand-recorded-looking motion of body B against body A.
 
 use anyhow::Context;
-use innersphere::motion::{generate_with, ClearanceOptions, GenerateOptions, Scenario};
+use innersphere_eval::motion::{generate_with, ClearanceOptions, GenerateOptions, Scenario};
 use std::path::PathBuf;
 use std::time::Instant;
 

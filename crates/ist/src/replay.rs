@@ -1,8 +1,8 @@
 //! `ist replay`: run a motion frame by frame through a pair's state, as a haptic loop would.
 
 use anyhow::Context;
-use innersphere::eval::replay::{replay, QueryKind, ReplayOptions};
 use innersphere::exact::ExactMesh;
+use innersphere_eval::replay::{replay, QueryKind, ReplayOptions};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -62,7 +62,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let b = innersphere::tree::file::load(&args.b)?;
     crate::warn_if_stale(&args.a, &a);
     crate::warn_if_stale(&args.b, &b);
-    let motion = innersphere::motion::Motion::load(&args.motion)?;
+    let motion = innersphere_eval::motion::Motion::load(&args.motion)?;
     let exact = match &args.exact {
         Some(m) => Some((
             ExactMesh::new(&innersphere::mesh::io::load(&m[0])?)?,

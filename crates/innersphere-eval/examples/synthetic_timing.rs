@@ -49,6 +49,6 @@ fn main() {
     );
     println!(
         "peak {:?} MB",
-        innersphere::eval::sysinfo::peak_memory_bytes().map(|b| b >> 20)
+        innersphere_eval::sysinfo::peak_memory_bytes().map(|b| b >> 20)
     );
 }

@@ -24,6 +24,6 @@ fn main() {
         r.coverage,
         r.stage_seconds,
         t.elapsed().as_secs_f64(),
-        innersphere::eval::sysinfo::peak_memory_bytes().map(|b| b >> 20)
+        innersphere_eval::sysinfo::peak_memory_bytes().map(|b| b >> 20)
     );
 }

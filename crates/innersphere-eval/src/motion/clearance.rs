@@ -18,12 +18,12 @@
 //! number (cached per grid cell for points away from the surface). A frame of a 1 kHz motion
 //! of the jaw pair costs some tens of closest-point queries.
 
-use crate::mesh::bvh::{TriangleBvh, MAX_DEPTH};
-use crate::mesh::closest::closest_point_on_triangle;
-use crate::mesh::winding::FastWinding;
-use crate::query::Pose;
-use crate::Mesh;
 use glam::{DQuat, DVec3};
+use innersphere::mesh::bvh::{TriangleBvh, MAX_DEPTH};
+use innersphere::mesh::closest::closest_point_on_triangle;
+use innersphere::mesh::winding::FastWinding;
+use innersphere::Mesh;
+use innersphere::Pose;
 use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
 

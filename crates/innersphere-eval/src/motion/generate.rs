@@ -21,9 +21,9 @@ use super::clearance::{phase_of, ClearanceEstimator, ClearanceOptions, Phase, Ph
 use super::frame::AnatomicalFrame;
 use super::rng::Rng;
 use super::{Frame, Motion};
-use crate::query::Pose;
-use crate::{Error, Mesh, Result};
 use glam::{DQuat, DVec3};
+use innersphere::Pose;
+use innersphere::{Error, Mesh, Result};
 use std::f64::consts::TAU;
 
 /// A kind of generated motion.

@@ -5,12 +5,12 @@
 mod common;
 
 use glam::{DQuat, DVec3};
-use innersphere::motion::{
+use innersphere::query::Pose;
+use innersphere::{Error, Mesh};
+use innersphere_eval::motion::{
     generate, generate_with, phase_of, AnatomicalFrame, ClearanceEstimator, ClearanceOptions,
     Frame, GenerateOptions, Generated, Motion, Phase, PhaseCounts, Scenario, HEADER,
 };
-use innersphere::query::Pose;
-use innersphere::{Error, Mesh};
 use proptest::prelude::*;
 use std::path::Path;
 use std::sync::OnceLock;
@@ -279,7 +279,7 @@ fn clearance_of_two_spheres() {
         assert!((c - expect).abs() < 0.01, "z {z}: {c} vs {expect}");
         assert_eq!(est.clearance_capped(&at(z), 0.5), c.min(0.5));
     }
-    let one = innersphere::motion::clearance(&s, &s, &at(2.5));
+    let one = innersphere_eval::motion::clearance(&s, &s, &at(2.5));
     assert!((one - 0.5).abs() < 0.01, "{one}");
 }
 
@@ -559,7 +559,7 @@ fn bad_requests_are_errors() {
     assert!(generate(Scenario::Chew, 1.0, 1, a, &Mesh::default()).is_err());
     // The estimate copes with empty bodies (no samples, no surface): no gap is known.
     let empty = Mesh::default();
-    let c = innersphere::motion::clearance(&empty, &empty, &Pose::IDENTITY);
+    let c = innersphere_eval::motion::clearance(&empty, &empty, &Pose::IDENTITY);
     assert_eq!(c, f64::INFINITY);
     assert_eq!(
         "open-close".parse::<Scenario>().unwrap(),

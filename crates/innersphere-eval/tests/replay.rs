@@ -2,18 +2,18 @@
 //! pass each timing statistic comes from, with an injected clock.
 
 use glam::DVec3;
-use innersphere::eval::replay::{
-    replay, replay_with_clock, KindStats, QueryKind, ReplayOptions, ReplayReport,
-};
 use innersphere::exact::ExactMesh;
 use innersphere::field::{DistanceField, VoxelGrid};
 use innersphere::hierarchy::{self, HierarchyOptions};
-use innersphere::motion::{Frame, Motion};
 use innersphere::packing::{self, PackingOptions};
 use innersphere::progress::Silent;
 use innersphere::query::Pose;
 use innersphere::tree::TreeMeta;
 use innersphere::SphereTree;
+use innersphere_eval::motion::{Frame, Motion};
+use innersphere_eval::replay::{
+    replay, replay_with_clock, KindStats, QueryKind, ReplayOptions, ReplayReport,
+};
 
 /// The tree of a unit ball: the grid has a voxel at the centre, so the packing is one sphere,
 /// the ball itself.

@@ -12,19 +12,19 @@
 //! that filters out the stalls where the operating system or hypervisor took the CPU away,
 //! but a haptic loop never gets a second try, so best-of-N is a lower bound on what it sees.
 //!
-//! The exact reference ([`crate::exact::distance`]) is timed the same way on every frame it
+//! The exact reference ([`innersphere::exact::distance`]) is timed the same way on every frame it
 //! is compared on: the timed call is the one whose answer the accuracy uses. Its scratch
 //! keeps its warm start (the last answer's triangle pair) from the previous *compared* frame,
 //! i.e. [`ReplayOptions::every`] frames back (the first compared frame starts cold), while
 //! our queries are warm-started from the previous frame.
 
-use crate::exact::{self, ExactDistance, ExactMesh, ExactScratch};
 use crate::motion::Motion;
-use crate::query::{
+use innersphere::exact::{self, ExactDistance, ExactMesh, ExactScratch};
+use innersphere::query::{
     backtracking, multipoint, penetration, proximity, ContactOptions, MultipointOptions, PairState,
     PenetrationOptions, Pose, ProximityOptions,
 };
-use crate::SphereTree;
+use innersphere::SphereTree;
 use std::time::Instant;
 
 /// The query kinds a replay can run.

@@ -1,13 +1,13 @@
 //! Line charts as PNG files (plotters), for the paper's figures (`ist bench paper`).
 
-use crate::error::{Error, Result};
+use innersphere::error::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
 
 /// The font the charts draw their text with (DejaVu Sans Mono, free licence in `assets/`),
 /// bundled so that no system font library is needed.
-static FONT: &[u8] = include_bytes!("../../assets/DejaVuSansMono.ttf");
+static FONT: &[u8] = include_bytes!("../assets/DejaVuSansMono.ttf");
 
 fn register() {
     static ONCE: Once = Once::new();

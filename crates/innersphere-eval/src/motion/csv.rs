@@ -2,9 +2,9 @@
 //! line — time in seconds and the pose of body B in body A's frame, applied to B's model
 //! coordinates as `p' = R(q)·p + t`. A final `.gz` in the path means gzip.
 
-use crate::query::Pose;
-use crate::{Error, Result};
 use glam::{DQuat, DVec3};
+use innersphere::Pose;
+use innersphere::{Error, Result};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
@@ -71,7 +71,7 @@ impl Motion {
         let path = path.as_ref();
         let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
         let mut bytes = Vec::new();
-        let read = if crate::mesh::io::is_gzip(path) {
+        let read = if innersphere::mesh::io::is_gzip(path) {
             flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file))
                 .take(MAX_FILE_BYTES + 1)
                 .read_to_end(&mut bytes)
@@ -272,7 +272,7 @@ impl Motion {
         self.validate(path)?;
         let text = self.to_csv();
         let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
-        let result = if crate::mesh::io::is_gzip(path) {
+        let result = if innersphere::mesh::io::is_gzip(path) {
             let mut enc = flate2::write::GzEncoder::new(file, flate2::Compression::default());
             enc.write_all(text.as_bytes())
                 .and_then(|()| enc.finish().map(drop))

@@ -7,16 +7,16 @@
 
 use super::plot::{line_chart, Chart, Series};
 use super::replay::{replay, time_exact, Accuracy, ReplayOptions};
-use crate::build::{build_tree, BuildOptions, Resolution};
-use crate::exact::ExactMesh;
-use crate::mesh::Mesh;
 use crate::motion::Motion;
-use crate::progress::Silent;
-use crate::query::{
+use innersphere::build::{build_tree, BuildOptions, Resolution};
+use innersphere::exact::ExactMesh;
+use innersphere::mesh::Mesh;
+use innersphere::progress::Silent;
+use innersphere::query::{
     backtracking, contact, distance_traversal, multipoint, penetration, proximity, ContactOptions,
     MultipointOptions, PairState, PenetrationOptions, Pose, ProximityOptions,
 };
-use crate::{Error, Result, SphereTree};
+use innersphere::{Error, Result, SphereTree};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;

@@ -15,8 +15,8 @@
 //!   the [`scale`](AnatomicalFrame::scale)); the opening rotation turns about the axis
 //!   through it along left.
 
-use crate::{Error, Mesh, Result};
 use glam::DVec3;
+use innersphere::{Error, Mesh, Result};
 
 /// Distance of the opening hinge behind the lower incisal tip, in millimetres at scale 1.
 pub const HINGE_BEHIND: f64 = 95.0;
@@ -170,7 +170,7 @@ impl AnatomicalFrame {
     }
 
     /// The frame moved with body B by `pose` (directions turn, points move).
-    pub fn moved(&self, pose: &crate::query::Pose) -> AnatomicalFrame {
+    pub fn moved(&self, pose: &innersphere::Pose) -> AnatomicalFrame {
         AnatomicalFrame {
             up: pose.transform_vector(self.up),
             left: pose.transform_vector(self.left),

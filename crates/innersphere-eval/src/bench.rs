@@ -1,8 +1,8 @@
 //! `ist bench build`: the whole build on real meshes, stage by stage, for BENCHMARKS.md.
 
-use crate::build::{build_tree, BuildOptions};
-use crate::progress::Silent;
-use crate::Result;
+use innersphere::build::{build_tree, BuildOptions};
+use innersphere::progress::Silent;
+use innersphere::Result;
 use std::path::Path;
 use std::time::Instant;
 
@@ -54,7 +54,7 @@ pub fn bench_build(mesh_path: &Path, opts: &BuildOptions, repeats: usize) -> Res
     let mut last = None;
     for _ in 0..repeats {
         let t0 = Instant::now();
-        let mesh = crate::mesh::io::load(mesh_path)?;
+        let mesh = innersphere::mesh::io::load(mesh_path)?;
         let t_load = t0.elapsed().as_secs_f64();
         let (_tree, report) = build_tree(&mesh, opts, &Silent)?;
         total.push(t0.elapsed().as_secs_f64());

@@ -2,8 +2,8 @@
 //! sweep's leaf counts grow as the voxels shrink and its error is finite and non-negative.
 
 use innersphere::build::{BuildOptions, Resolution};
-use innersphere::eval::paper::{run, PaperOptions};
-use innersphere::motion::{generate, Scenario};
+use innersphere_eval::motion::{generate, Scenario};
+use innersphere_eval::paper::{run, PaperOptions};
 
 #[test]
 fn paper_figures_on_the_tooth_pair() {

@@ -1,11 +1,11 @@
 //! Queries between the real jaw trees along several motions, per query kind and phase.
 //!
-//! `cargo bench -p innersphere --bench queries`
+//! `cargo bench -p innersphere-eval --bench queries`
 //!
 //! Builds (once, cached under `target/bench-trees/`) the trees of the maxilla (A) and the
 //! mandible (B) at `Resolution::VoxelSize(0.15)`, and replays, pose of B in A's frame with A at
 //! the identity, the shared `motion/jaw_chew_demo.csv` and three generated motions of the
-//! pair (`chew`, `grind`, `open-close`: `innersphere::motion::generate`, the same as `ist
+//! pair (`chew`, `grind`, `open-close`: `innersphere_eval::motion::generate`, the same as `ist
 //! motion --scenario S --seed 1 --seconds 3`; saved beside the cached trees for `ist replay`).
 //! Every frame of every query kind is timed with `Instant` (criterion's per-iteration model
 //! does not fit a stateful motion), single thread.
@@ -39,7 +39,6 @@
 //! penetration). Skips with a message when the data is missing.
 
 use innersphere::build::{build_tree, BuildOptions, Resolution};
-use innersphere::motion::{generate_with, GenerateOptions, Motion, Scenario};
 use innersphere::query::{
     backtracking, contact, distance_traversal, multipoint, penetration, penetration_budgeted,
     proximity, ContactOptions, MultipointOptions, PairState, PenetrationOptions, Pose,
@@ -47,6 +46,7 @@ use innersphere::query::{
 };
 use innersphere::tree::file;
 use innersphere::SphereTree;
+use innersphere_eval::motion::{generate_with, GenerateOptions, Motion, Scenario};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;

@@ -2,9 +2,9 @@
 //! generated chewing motion replayed frame by frame through every query kind — runs on a fresh
 //! clone with no files.
 
-use crate::build::{build_tree, BuildOptions, BuildReport};
-use crate::progress::Progress;
-use crate::{Mesh, Result, SphereTree};
+use innersphere::build::{build_tree, BuildOptions, BuildReport};
+use innersphere::progress::Progress;
+use innersphere::{Mesh, Result, SphereTree};
 
 /// The demo's pair of bodies and their trees.
 pub struct DemoPair {
@@ -14,9 +14,9 @@ pub struct DemoPair {
     pub b: (Mesh, SphereTree, BuildReport),
 }
 
-/// Generates the tooth pair (see [`crate::shapes::tooth_pair`]) and builds both trees.
+/// Generates the tooth pair (see [`innersphere::shapes::tooth_pair`]) and builds both trees.
 pub fn build_pair(opts: &BuildOptions, progress: &dyn Progress) -> Result<DemoPair> {
-    let (ma, mb) = crate::shapes::tooth_pair(5);
+    let (ma, mb) = innersphere::shapes::tooth_pair(5);
     build_pair_from(ma, mb, opts, progress)
 }
 
@@ -37,7 +37,7 @@ pub fn build_pair_from(
 
 /// Generates a chewing motion of `seconds` for the pair (seed 1) and replays it through every
 /// query kind, with the exact mesh distance as reference on every 10th frame.
-pub fn replay_pair(pair: &DemoPair, seconds: f64) -> Result<crate::eval::replay::ReplayReport> {
+pub fn replay_pair(pair: &DemoPair, seconds: f64) -> Result<crate::replay::ReplayReport> {
     let motion = crate::motion::generate(
         crate::motion::Scenario::Chew,
         seconds,
@@ -45,13 +45,13 @@ pub fn replay_pair(pair: &DemoPair, seconds: f64) -> Result<crate::eval::replay:
         &pair.a.0,
         &pair.b.0,
     )?;
-    let ea = crate::exact::ExactMesh::new(&pair.a.0)?;
-    let eb = crate::exact::ExactMesh::new(&pair.b.0)?;
-    let opts = crate::eval::replay::ReplayOptions {
+    let ea = innersphere::exact::ExactMesh::new(&pair.a.0)?;
+    let eb = innersphere::exact::ExactMesh::new(&pair.b.0)?;
+    let opts = crate::replay::ReplayOptions {
         every: 10,
         ..Default::default()
     };
-    Ok(crate::eval::replay::replay(
+    Ok(crate::replay::replay(
         &pair.a.1,
         &pair.b.1,
         &motion,

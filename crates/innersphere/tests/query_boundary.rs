@@ -17,7 +17,8 @@ use innersphere::query::{
 };
 use innersphere::SphereTree;
 use proptest::prelude::*;
-use query_util::{pair_poses, pose, trees};
+use query_util::{box_tree, pair_poses, pose, trees};
+use std::sync::OnceLock;
 
 const NO_SKIP: ContactOptions = ContactOptions { safe_motion: false };
 
@@ -105,8 +106,120 @@ fn poses_at(
     pair_poses(a, b, pa, rot, u * d)
 }
 
+/// Trees far from their own frames' origins, on opposite sides: when they touch, the
+/// relative translation is about as long as the two extents together, so the rounding of the
+/// transform is as large as the slack must cover.
+fn far_trees() -> &'static [SphereTree] {
+    static T: OnceLock<Vec<SphereTree>> = OnceLock::new();
+    T.get_or_init(|| {
+        vec![
+            box_tree(
+                DVec3::new(60.0, 20.0, -10.0),
+                DVec3::new(0.5, 0.3, 0.4),
+                0.08,
+                4,
+            ),
+            box_tree(
+                DVec3::new(-60.0, -20.0, 10.0),
+                DVec3::new(0.4, 0.4, 0.3),
+                0.08,
+                3,
+            ),
+        ]
+    })
+}
+
+/// `t` mirrored through its frame's origin (every coordinate negated: exact in f32, so every
+/// node still encloses its leaves bit for bit).
+fn mirrored(t: &SphereTree) -> SphereTree {
+    let mut m = t.clone();
+    for v in [&mut m.x, &mut m.y, &mut m.z] {
+        v.iter_mut().for_each(|c| *c = -*c);
+    }
+    m
+}
+
+/// Bisects B's offset along A's support direction to where the leaf predicate flips and
+/// checks every query kind at rounding steps either side.
+fn check_touching_offset(
+    a: &SphereTree,
+    b: &SphereTree,
+    pa: Pose,
+    spin: f64,
+) -> Result<(), TestCaseError> {
+    let ua = support_direction(a);
+    let ub = support_direction(b);
+    // B's support direction turned to face A's, then spun about the approach line.
+    let rot = DQuat::from_axis_angle(ua, spin) * DQuat::from_rotation_arc(ub, -ua);
+    let reach = (a.r[0] + b.r[0]) as f64;
+    let touching = |d: f64| {
+        let (pa, pb) = poses_at(a, b, pa, rot, ua, d);
+        brute::min_distance(a, &pa, b, &pb).0 < 0.0
+    };
+    let (mut lo, mut hi) = (0.98 * reach, 1.1 * reach);
+    // The first offset, coming in from outside, where some leaf pair overlaps (the tips of
+    // the two bodies may hold no sphere).
+    prop_assert!(!touching(hi));
+    while !touching(lo) {
+        prop_assert!(lo > 0.0, "no overlap along the approach");
+        hi = lo;
+        lo -= 0.02 * reach;
+    }
+    for _ in 0..80 {
+        let mid = 0.5 * (lo + hi);
+        if touching(mid) {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    // Steps of about a quarter, one and four f32 roundings of the relative translation.
+    let (_, pb) = poses_at(a, b, pa, rot, ua, hi);
+    let t = Pose::relative(&pa, &pb).translation.length();
+    let ulp = t.max(hi) * f32::EPSILON as f64;
+    let mut carried: Vec<PairState> = (0..9).map(|_| PairState::new(a, b)).collect();
+    for step in [0.25, 1.0, 4.0] {
+        for k in -3i32..=3 {
+            let d = if k < 0 { lo } else { hi } + k as f64 * step * ulp;
+            let (pa, pb) = poses_at(a, b, pa, rot, ua, d);
+            let mut fresh: Vec<PairState> = (0..9).map(|_| PairState::new(a, b)).collect();
+            check_pose(a, &pa, b, &pb, &mut fresh, &format!("fresh, offset {d}"))?;
+            check_pose(
+                a,
+                &pa,
+                b,
+                &pb,
+                &mut carried,
+                &format!("carried, offset {d}"),
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// A tree far from its frame's origin against its own mirror image, B unrotated: at the
+/// touching offset the relative translation is as long as the two extents together, the most
+/// the transform's rounding has to cover.
+#[test]
+fn a_far_tree_against_its_mirror_image() {
+    for a in far_trees() {
+        check_touching_offset(a, &mirrored(a), Pose::IDENTITY, 0.0).unwrap();
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(40))]
+
+    /// The same for trees far from their frames' origins (A at the identity, so that the
+    /// relative translation is long).
+    #[test]
+    fn far_from_the_origin_too(
+        ia in 0usize..2,
+        spin in 0.0..std::f64::consts::TAU,
+    ) {
+        let t = far_trees();
+        check_touching_offset(&t[ia], &t[1 - ia], Pose::IDENTITY, spin)?;
+    }
 
     /// Bisect to the touching offset; at rounding steps either side every query kind
     /// answers as the leaf predicate does.
@@ -118,34 +231,6 @@ proptest! {
         spin in 0.0..std::f64::consts::TAU,
     ) {
         let t = trees();
-        let (a, b) = (&t[ia], &t[ib]);
-        let pa = pose(ta, qa);
-        let ua = support_direction(a);
-        let ub = support_direction(b);
-        // B's support direction turned to face A's, then spun about the approach line.
-        let rot = DQuat::from_axis_angle(ua, spin) * DQuat::from_rotation_arc(ub, -ua);
-        let reach = (a.r[0] + b.r[0]) as f64;
-        let touching = |d: f64| {
-            let (pa, pb) = poses_at(a, b, pa, rot, ua, d);
-            brute::min_distance(a, &pa, b, &pb).0 < 0.0
-        };
-        let (mut lo, mut hi) = (0.9 * reach, 1.1 * reach);
-        prop_assert!(touching(lo) && !touching(hi));
-        for _ in 0..80 {
-            let mid = 0.5 * (lo + hi);
-            if touching(mid) { lo = mid } else { hi = mid }
-        }
-        // Steps of about a quarter, one and four f32 roundings of the offset.
-        let ulp = hi * f32::EPSILON as f64;
-        let mut carried: Vec<PairState> = (0..9).map(|_| PairState::new(a, b)).collect();
-        for step in [0.25, 1.0, 4.0] {
-            for k in -3i32..=3 {
-                let d = if k < 0 { lo } else { hi } + k as f64 * step * ulp;
-                let (pa, pb) = poses_at(a, b, pa, rot, ua, d);
-                let mut fresh: Vec<PairState> = (0..9).map(|_| PairState::new(a, b)).collect();
-                check_pose(a, &pa, b, &pb, &mut fresh, &format!("fresh, offset {d}"))?;
-                check_pose(a, &pa, b, &pb, &mut carried, &format!("carried, offset {d}"))?;
-            }
-        }
+        check_touching_offset(&t[ia], &t[ib], pose(ta, qa), spin)?;
     }
 }

@@ -151,6 +151,47 @@ fn reference_lens_limits() {
     assert!((v - 4.0 / 3.0 * pi).abs() < 1e-12);
 }
 
+/// Lenses where the circle of intersection lies behind one centre (a large ball mostly
+/// inside a larger one), at several scales: volume and centroid against the reference.
+#[test]
+fn lenses_with_the_circle_behind_a_centre() {
+    for (ra, rb, d) in [
+        (10.0, 15.0, 6.0),
+        (15.0, 10.0, 6.0),
+        (3.0, 3.5, 0.6),
+        (0.2, 0.3, 0.11),
+    ] {
+        let a = hand_tree(&[([0.0; 3], ra)], [0.0; 3]);
+        let b = hand_tree(&[([0.0; 3], rb)], [0.0; 3]);
+        let (pa, pb) = (
+            Pose::IDENTITY,
+            Pose::from_translation(DVec3::new(0.0, 0.0, d)),
+        );
+        let (v, g) = reference::lens(ra, rb, d);
+        assert!(
+            (innersphere::query::lens_volume(ra, rb, d) - v).abs() < 1e-9 * v,
+            "{ra} {rb} {d}"
+        );
+        let opts = PenetrationOptions {
+            max_patches: 1,
+            safe_motion: false,
+            ..Default::default()
+        };
+        let mut st = PairState::new(&a, &b);
+        let p = penetration(&a, &pa, &b, &pb, &mut st, &opts);
+        assert!((p.volume - v).abs() < 1e-7 * v, "{} vs {v}", p.volume);
+        assert!(
+            near(
+                p.patches[0].point,
+                DVec3::new(0.0, 0.0, g),
+                1e-7 * (ra + rb)
+            ),
+            "{} vs {g}",
+            p.patches[0].point
+        );
+    }
+}
+
 /// A tree of two leaves and a root, against the reference under a rotation: the rotation's
 /// direction and the leaf order matter.
 #[test]
@@ -228,6 +269,34 @@ proptest! {
                 let opts = PenetrationOptions { stiffness: 10.0, max_patches: 4, patch_radius: 0.0, safe_motion: true, tracking };
                 check_penetration(a, pa, b, pb, &r, &mut st[i], &opts)?;
             }
+        }
+    }
+
+    /// Two balls of any size from 1e-2 to 1e2 at any overlap: volume, deepest overlap and
+    /// the lens centroid (the one patch's point) against the reference's integration.
+    #[test]
+    fn two_balls_at_every_scale(
+        la in -2.0..2.0f64, lb in -2.0..2.0f64,
+        frac in 0.0..1.0f64,
+        dir in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+    ) {
+        let (ra, rb) = (10f64.powf(la), 10f64.powf(lb));
+        let u = DVec3::from_array(dir).try_normalize().unwrap_or(DVec3::X);
+        // From full containment (d = 0) to just touching (d = ra + rb).
+        let d = frac * (ra + rb);
+        let a = hand_tree(&[([0.0; 3], ra)], [0.0; 3]);
+        let b = hand_tree(&[([0.0; 3], rb)], [0.0; 3]);
+        let (pa, pb) = (Pose::IDENTITY, Pose::from_translation(u * d));
+        let r = RefPair::new(&a, &pa, &b, &pb);
+        let want = r.penetration(1.0, 0.0);
+        let opts = PenetrationOptions { max_patches: 1, safe_motion: false, ..Default::default() };
+        let mut st = PairState::new(&a, &b);
+        let p = penetration(&a, &pa, &b, &pb, &mut st, &opts);
+        let tol = r.volume_tolerance() + 1e-9 * want.volume;
+        prop_assert!((p.volume - want.volume).abs() <= tol, "volume {} vs {} (ra {}, rb {}, d {})", p.volume, want.volume, ra, rb, d);
+        if want.volume > 1e3 * tol {
+            let g = dv(want.moment) / want.volume;
+            prop_assert!(near(p.patches[0].point, g, 1e-6 * (ra + rb)), "centroid {} vs {} (ra {}, rb {}, d {})", p.patches[0].point, g, ra, rb, d);
         }
     }
 }

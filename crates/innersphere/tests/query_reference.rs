@@ -151,6 +151,46 @@ fn reference_lens_limits() {
     assert!((v - 4.0 / 3.0 * pi).abs() < 1e-12);
 }
 
+/// Two unit balls exactly 2 apart (every number exact in f32) touch without overlapping:
+/// no contact, no volume, distance 0; concentric balls overlap with the smaller ball's volume
+/// and no direction, so the force and torques are zero, not NaN.
+#[test]
+fn touching_and_concentric_balls() {
+    let a = hand_tree(&[([0.0; 3], 1.0)], [0.0; 3]);
+    let b = hand_tree(&[([0.0; 3], 1.0)], [0.0; 3]);
+    let pa = Pose::IDENTITY;
+    let pb = Pose::from_translation(DVec3::new(2.0, 0.0, 0.0));
+    let mut st = PairState::new(&a, &b);
+    let opts = PenetrationOptions {
+        safe_motion: false,
+        ..Default::default()
+    };
+    let p = penetration(&a, &pa, &b, &pb, &mut st, &opts);
+    assert_eq!((p.pairs, p.volume), (0, 0.0));
+    assert!(innersphere::query::brute::overlapping_pairs(&a, &pa, &b, &pb).is_empty());
+    assert!(!contact(&a, &pa, &b, &pb, &mut st, &NO_SKIP).in_contact());
+    let q = proximity(
+        &a,
+        &pa,
+        &b,
+        &pb,
+        &mut st,
+        &ProximityOptions {
+            signed: true,
+            ..Default::default()
+        },
+    );
+    assert_eq!((q.distance, q.overlapping), (0.0, false));
+    let small = hand_tree(&[([0.0; 3], 0.5)], [0.0; 3]);
+    let mut st = PairState::new(&a, &small);
+    let p = penetration(&a, &pa, &small, &pa, &mut st, &opts);
+    assert_eq!(p.pairs, 1);
+    assert!((p.volume - std::f64::consts::PI / 6.0).abs() < 1e-12);
+    for v in [p.normal, p.force, p.torque_a, p.torque_b] {
+        assert_eq!(v, DVec3::ZERO);
+    }
+}
+
 /// Lenses where the circle of intersection lies behind one centre (a large ball mostly
 /// inside a larger one), at several scales: volume and centroid against the reference.
 #[test]

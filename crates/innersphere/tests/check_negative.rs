@@ -618,3 +618,32 @@ fn malformed_trees_and_meshes_are_errors() {
     bad_mesh.triangles[0][0] = 99;
     assert!(check(&t, &bad_mesh).is_err());
 }
+
+/// The overlap search descends the inner node of a pair even when the other side is a larger
+/// leaf: a small inner node whose leaf pokes into a big leaf of another subtree.
+#[test]
+fn an_overlap_below_a_node_smaller_than_the_leaf_it_meets_is_found() {
+    // Root (0) with children N (1, inner, small) and L (2, a big leaf); N holds leaves 3, 4.
+    let spheres: [([f32; 3], f32); 5] = [
+        ([0.2, 0.0, 0.0], 1.2),
+        ([1.15, 0.0, 0.0], 0.2),
+        ([0.0, 0.0, 0.0], 1.0),
+        ([1.05, 0.0, 0.0], 0.1),
+        ([1.25, 0.0, 0.0], 0.1),
+    ];
+    let t = SphereTree {
+        x: spheres.iter().map(|s| s.0[0]).collect(),
+        y: spheres.iter().map(|s| s.0[1]).collect(),
+        z: spheres.iter().map(|s| s.0[2]).collect(),
+        r: spheres.iter().map(|s| s.1).collect(),
+        first_child: vec![1, 3, 0, 0, 0],
+        child_count: vec![2, 2, 0, 0, 0],
+        parent: vec![NO_PARENT, 0, 0, 1, 1],
+        depth: vec![0, 1, 1, 2, 2],
+        meta: meta(),
+    };
+    t.validate_structure().unwrap();
+    // Leaf 3 reaches 1.05 − 0.1 = 0.95 < 1.0: it pokes 0.05 into L.
+    let o = max_leaf_overlap(&t);
+    assert!((o - 0.05).abs() < 1e-6, "{o}");
+}

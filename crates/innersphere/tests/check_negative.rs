@@ -646,4 +646,21 @@ fn an_overlap_below_a_node_smaller_than_the_leaf_it_meets_is_found() {
     // Leaf 3 reaches 1.05 − 0.1 = 0.95 < 1.0: it pokes 0.05 into L.
     let o = max_leaf_overlap(&t);
     assert!((o - 0.05).abs() < 1e-6, "{o}");
+    // The same with the root's children in the other order (L first, then N): the pair
+    // (leaf, inner node) must descend the inner node too.
+    let order = [0, 2, 1, 3, 4];
+    let swapped = SphereTree {
+        x: order.iter().map(|&i| t.x[i]).collect(),
+        y: order.iter().map(|&i| t.y[i]).collect(),
+        z: order.iter().map(|&i| t.z[i]).collect(),
+        r: order.iter().map(|&i| t.r[i]).collect(),
+        first_child: vec![1, 0, 3, 0, 0],
+        child_count: vec![2, 0, 2, 0, 0],
+        parent: vec![NO_PARENT, 0, 0, 2, 2],
+        depth: vec![0, 1, 1, 2, 2],
+        meta: meta(),
+    };
+    swapped.validate_structure().unwrap();
+    let o = max_leaf_overlap(&swapped);
+    assert!((o - 0.05).abs() < 1e-6, "{o}");
 }

@@ -5,6 +5,7 @@
 
 #[path = "../../innersphere/tests/alloc_util/mod.rs"]
 mod alloc_util;
+#[path = "../../innersphere/tests/common/mod.rs"]
 mod common;
 
 use alloc_util::*;

@@ -1,0 +1,232 @@
+//! Every query answer on the jaw arches along the recorded chew, bit for bit: a digest of all
+//! answer bits per query kind (and of the node-pair tests, the work done), compared with the
+//! digests recorded before the library's API and `query/` were reorganised. A change to any
+//! answer, or to the work a query does, changes a digest; a deliberate change of an answer
+//! must update the digest here and say why in its commit.
+
+#[path = "../../innersphere/tests/common/mod.rs"]
+mod common;
+
+use innersphere::build::{build_tree, BuildOptions, Resolution};
+use innersphere::glam::DVec3;
+use innersphere::query::{
+    backtracking, contact, distance_traversal, multipoint, penetration, penetration_budgeted,
+    proximity, ContactOptions, MultipointOptions, PairState, PenetrationOptions, Pose,
+    ProximityOptions, Tracking,
+};
+use innersphere::SphereTree;
+use innersphere_eval::motion::Motion;
+
+/// FNV-1a over the bits of everything fed to it.
+struct Digest(u64);
+
+impl Digest {
+    fn new() -> Digest {
+        Digest(0xcbf2_9ce4_8422_2325)
+    }
+    fn u(&mut self, x: u64) {
+        for b in x.to_le_bytes() {
+            self.0 = (self.0 ^ b as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    fn f(&mut self, x: f64) {
+        self.u(x.to_bits())
+    }
+    fn v(&mut self, x: DVec3) {
+        self.f(x.x);
+        self.f(x.y);
+        self.f(x.z);
+    }
+}
+
+/// The query kinds and options compared.
+const KINDS: [&str; 13] = [
+    "proximity",
+    "proximity best first",
+    "proximity signed",
+    "distance traversal",
+    "backtracking",
+    "contact",
+    "multipoint k=16",
+    "multipoint k=16 tracking",
+    "penetration",
+    "penetration traversal",
+    "penetration front",
+    "penetration budget 8000",
+    "all kinds on one state",
+];
+
+/// Runs query kind `kind` (an index into [`KINDS`]) with state `st` at `pose_b` and feeds its
+/// answer to `ans` and its node-pair tests to `work`.
+fn query(
+    kind: usize,
+    a: &SphereTree,
+    b: &SphereTree,
+    st: &mut PairState,
+    pose_b: &Pose,
+    ans: &mut Digest,
+    work: &mut Digest,
+) {
+    let pa = Pose::IDENTITY;
+    let prox = |o: ProximityOptions, st: &mut PairState, ans: &mut Digest, work: &mut Digest| {
+        let p = proximity(a, &pa, b, pose_b, st, &o);
+        ans.f(p.distance);
+        ans.f(p.pair_distance);
+        ans.f(p.lower_bound);
+        ans.u(p.overlapping as u64);
+        ans.v(p.point_a);
+        ans.v(p.point_b);
+        ans.v(p.normal);
+        ans.u(p.leaf_a as u64);
+        ans.u(p.leaf_b as u64);
+        work.u(p.visits);
+    };
+    let cq = |q: innersphere::query::ContactQuery, ans: &mut Digest, work: &mut Digest| {
+        ans.f(q.distance);
+        ans.u(q.skipped as u64);
+        match q.contact {
+            None => ans.u(u64::MAX),
+            Some(c) => {
+                ans.u(c.leaf_a as u64);
+                ans.u(c.leaf_b as u64);
+                ans.v(c.point);
+                ans.v(c.normal);
+                ans.f(c.depth);
+            }
+        }
+        work.u(q.visits);
+    };
+    let mp = |tracking: bool, st: &mut PairState, ans: &mut Digest, work: &mut Digest| {
+        let o = MultipointOptions {
+            k: 16,
+            tracking,
+            ..Default::default()
+        };
+        let m = multipoint(a, &pa, b, pose_b, st, &o);
+        ans.u(m.contacts.len() as u64);
+        for c in m.contacts {
+            ans.u(c.leaf_a as u64);
+            ans.u(c.leaf_b as u64);
+            ans.v(c.point);
+            ans.v(c.normal);
+            ans.f(c.depth);
+        }
+        ans.u(m.reused as u64);
+        ans.f(m.distance);
+        ans.u(m.skipped as u64);
+        work.u(m.visits);
+    };
+    let pen = |tracking: Tracking, st: &mut PairState, ans: &mut Digest, work: &mut Digest| {
+        let o = PenetrationOptions {
+            tracking,
+            ..Default::default()
+        };
+        let p = penetration(a, &pa, b, pose_b, st, &o);
+        ans.f(p.volume);
+        ans.u(p.pairs as u64);
+        ans.f(p.max_depth);
+        ans.v(p.normal);
+        ans.v(p.force);
+        ans.v(p.torque_a);
+        ans.v(p.torque_b);
+        ans.u(p.patches.len() as u64);
+        for q in p.patches {
+            ans.v(q.point);
+            ans.v(q.normal);
+            ans.f(q.depth);
+            ans.f(q.volume);
+            ans.u(q.pairs as u64);
+        }
+        ans.f(p.distance);
+        ans.u(p.skipped as u64);
+        work.u(p.visits);
+    };
+    let co = ContactOptions::default();
+    match kind {
+        0 => prox(ProximityOptions::default(), st, ans, work),
+        1 => prox(
+            ProximityOptions {
+                best_first: true,
+                ..Default::default()
+            },
+            st,
+            ans,
+            work,
+        ),
+        2 => prox(
+            ProximityOptions {
+                signed: true,
+                ..Default::default()
+            },
+            st,
+            ans,
+            work,
+        ),
+        3 => cq(distance_traversal(a, &pa, b, pose_b, st, &co), ans, work),
+        4 => cq(backtracking(a, &pa, b, pose_b, st, &co), ans, work),
+        5 => cq(contact(a, &pa, b, pose_b, st, &co), ans, work),
+        6 => mp(false, st, ans, work),
+        7 => mp(true, st, ans, work),
+        8 => pen(Tracking::Auto, st, ans, work),
+        9 => pen(Tracking::Traversal, st, ans, work),
+        10 => pen(Tracking::Front, st, ans, work),
+        11 => {
+            let v = penetration_budgeted(a, &pa, b, pose_b, st, 8000);
+            ans.f(v.volume);
+            ans.f(v.upper_bound);
+            ans.u(v.complete as u64);
+            work.u(v.visits);
+        }
+        _ => {
+            for k in [5, 0, 8, 7, 4, 11] {
+                query(k, a, b, st, pose_b, ans, work);
+            }
+        }
+    }
+}
+
+/// Digests recorded before the reorganisation: (kind, answers, work).
+const RECORDED: [(&str, u64, u64); 13] = [
+    ("proximity", 0x27a28e9c1598773c, 0x3b91f149fdeca5dc),
+    ("proximity best first", 0xbd08b69e5c85e665, 0xd745af7258a44d14),
+    ("proximity signed", 0xa4e9f899a7ccafcd, 0x70e43f13146c5bca),
+    ("distance traversal", 0x421bcdc79afd6a2e, 0x01baab2a731dfa5b),
+    ("backtracking", 0xf3717a5a38497a93, 0x74f884d44954fe63),
+    ("contact", 0xc664ba1f71d6654d, 0x7253fd73242436e9),
+    ("multipoint k=16", 0x976e55c1f49258e7, 0x23f341c019a98ea9),
+    ("multipoint k=16 tracking", 0xd311b6d223070bd1, 0x7773e70fa20b8cea),
+    ("penetration", 0xb831f2dc0833959e, 0x4c159414d85aeb33),
+    ("penetration traversal", 0x39fe732ab99acc51, 0x3d21625a022a6a99),
+    ("penetration front", 0xb831f2dc0833959e, 0x4c159414d85aeb33),
+    ("penetration budget 8000", 0xccf1be038fe83115, 0x6a2947013d11895b),
+    ("all kinds on one state", 0x444301c2b7ab54ce, 0x6e76ff9b5ec80e8c),
+];
+
+#[test]
+#[ignore = "real data: run with --ignored"]
+fn jaw_chew_answers_are_bit_for_bit_the_recorded_ones() {
+    let load = |rel: &str| innersphere::mesh::io::load(&common::data(rel)).unwrap();
+    let opts = BuildOptions {
+        resolution: Resolution::VoxelSize(0.3),
+        ..Default::default()
+    };
+    let build = |rel: &str| {
+        build_tree(&load(rel), &opts, &innersphere::progress::Silent)
+            .unwrap()
+            .0
+    };
+    let a = build("jaw/ofj_p26_maxilla_teeth.stl.gz");
+    let b = build("jaw/ofj_p26_mandible_teeth.stl.gz");
+    let motion = Motion::load(common::data("motion/jaw_chew_demo.csv")).unwrap();
+    let mut got = Vec::new();
+    for (kind, name) in KINDS.iter().enumerate() {
+        let mut st = PairState::new(&a, &b);
+        let (mut ans, mut work) = (Digest::new(), Digest::new());
+        for f in &motion.frames {
+            query(kind, &a, &b, &mut st, &f.pose, &mut ans, &mut work);
+        }
+        eprintln!("    (\"{name}\", {:#018x}, {:#018x}),", ans.0, work.0);
+        got.push((*name, ans.0, work.0));
+    }
+    assert_eq!(got, RECORDED);
+}

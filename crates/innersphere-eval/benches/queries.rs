@@ -11,7 +11,7 @@
 //! does not fit a stateful motion), single thread.
 //!
 //! Timing rule: each query runs `QUERY_BENCH_PASSES` (N, default 2) passes over a motion, the
-//! first from a fresh `PairState`, the others after `PairState::reset`. The first pass is what
+//! first from a fresh `Pair`, the others after `Pair::reset`. The first pass is what
 //! a haptic loop sees — every frame once, in motion order, the state carried frame to frame,
 //! no warm-up — and gives the headline columns "(1 pass)": median, p99, max, frames over 1 ms.
 //! Each frame's fastest of the N passes ("best-of-N": filters the stalls of a shared or
@@ -39,13 +39,12 @@
 //! penetration). Skips with a message when the data is missing.
 
 use innersphere::build::{build_tree, BuildOptions, Resolution};
-use innersphere::query::{
-    backtracking, contact, distance_traversal, multipoint, penetration, penetration_budgeted,
-    proximity, ContactOptions, MultipointOptions, PairState, PenetrationOptions, Pose,
-    ProximityOptions, Tracking,
-};
+use innersphere::query::TraversalOptions;
 use innersphere::tree::file;
 use innersphere::SphereTree;
+use innersphere::{
+    DistanceOptions, MultipointOptions, Pair, PenetrationOptions, Pose, SharedTree, Tracking,
+};
 use innersphere_eval::motion::{generate_with, GenerateOptions, Motion, Scenario};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -260,7 +259,7 @@ fn summary(t: &mut [u64]) -> (f64, f64, f64, f64) {
     (q(0.5), q(0.99), t[t.len() - 1] as f64 / 1e3, mean)
 }
 
-type Query<'a> = Box<dyn FnMut(&Pose, &mut PairState) -> (bool, u64) + 'a>;
+type Query<'a> = Box<dyn FnMut(&Pose, &mut Pair) -> (bool, u64) + 'a>;
 
 /// The queries of the quick mode and of the final table's default selection.
 const HEADLINE: [&str; 4] = [
@@ -326,9 +325,9 @@ fn main() {
             .join(", ")
     );
     let id = Pose::IDENTITY;
-    let (a, b) = (&a, &b);
-    let off = ContactOptions { safe_motion: false };
-    let on = ContactOptions { safe_motion: true };
+    let (a, b) = (&SharedTree::new(a), &SharedTree::new(b));
+    let off = TraversalOptions { safe_motion: false };
+    let on = TraversalOptions { safe_motion: true };
     let mp = |k: usize| MultipointOptions {
         k,
         split_depth: 4,
@@ -344,93 +343,93 @@ fn main() {
         (
             "proximity (exact, ours)",
             Box::new(|p, st| {
-                let r = proximity(a, &id, b, p, st, &ProximityOptions::default());
+                let r = st.distance(&id, p);
                 (r.overlapping, r.visits)
             }),
         ),
         (
             "proximity best-first",
             Box::new(|p, st| {
-                let o = ProximityOptions {
+                let o = DistanceOptions {
                     best_first: true,
                     ..Default::default()
                 };
-                let r = proximity(a, &id, b, p, st, &o);
+                let r = st.distance_with(&id, p, &o);
                 (r.overlapping, r.visits)
             }),
         ),
         (
             "proximity rel_tol 1%",
             Box::new(|p, st| {
-                let o = ProximityOptions {
+                let o = DistanceOptions {
                     rel_tolerance: 0.01,
                     ..Default::default()
                 };
-                let r = proximity(a, &id, b, p, st, &o);
+                let r = st.distance_with(&id, p, &o);
                 (r.overlapping, r.visits)
             }),
         ),
         (
             "paper distance traversal",
             Box::new(|p, st| {
-                let r = distance_traversal(a, &id, b, p, st, &off);
+                let r = st.paper().distance_traversal(&id, p, &off);
                 (r.in_contact(), r.visits)
             }),
         ),
         (
             "paper distance + safe motion",
             Box::new(|p, st| {
-                let r = distance_traversal(a, &id, b, p, st, &on);
+                let r = st.paper().distance_traversal(&id, p, &on);
                 (r.in_contact(), r.visits)
             }),
         ),
         (
             "backtracking",
             Box::new(|p, st| {
-                let r = backtracking(a, &id, b, p, st, &off);
+                let r = st.paper().backtracking(&id, p, &off);
                 (r.in_contact(), r.visits)
             }),
         ),
         (
             "backtracking + safe motion",
             Box::new(|p, st| {
-                let r = backtracking(a, &id, b, p, st, &on);
+                let r = st.paper().backtracking(&id, p, &on);
                 (r.in_contact(), r.visits)
             }),
         ),
         (
             "contact (kinetic front, ours)",
             Box::new(|p, st| {
-                let r = contact(a, &id, b, p, st, &on);
+                let r = st.contact(&id, p);
                 (r.in_contact(), r.visits)
             }),
         ),
         (
             "multipoint k=1",
             Box::new(move |p, st| {
-                let r = multipoint(a, &id, b, p, st, &mp(1));
-                (!r.contacts.is_empty(), r.visits)
+                let r = st.multipoint(&id, p, &mp(1));
+                (r.count > 0, r.visits)
             }),
         ),
         (
             "multipoint k=4",
             Box::new(move |p, st| {
-                let r = multipoint(a, &id, b, p, st, &mp(4));
-                (!r.contacts.is_empty(), r.visits)
+                let r = st.multipoint(&id, p, &mp(4));
+                (r.count > 0, r.visits)
             }),
         ),
         (
             "multipoint k=16",
             Box::new(move |p, st| {
-                let r = multipoint(a, &id, b, p, st, &mp(16));
-                (!r.contacts.is_empty(), r.visits)
+                let r = st.multipoint(&id, p, &mp(16));
+                (r.count > 0, r.visits)
             }),
         ),
         (
             "multipoint k=16 front",
             Box::new(move |p, st| {
-                let r = multipoint(a, &id, b, p, st, &mpt(16));
-                (!r.contacts.is_empty(), r.visits)
+                let r = st.multipoint(&id, p, &mpt(16));
+                (r.count > 0, r.visits)
             }),
         ),
         (
@@ -440,21 +439,21 @@ fn main() {
                     tracking: Tracking::Traversal,
                     ..Default::default()
                 };
-                let r = penetration(a, &id, b, p, st, &o);
+                let r = st.penetration_with(&id, p, &o);
                 (r.pairs > 0, r.visits)
             }),
         ),
         (
             "penetration (default: auto)",
             Box::new(|p, st| {
-                let r = penetration(a, &id, b, p, st, &PenetrationOptions::default());
+                let r = st.penetration(&id, p);
                 (r.pairs > 0, r.visits)
             }),
         ),
         (
             "penetration budget 8k",
             Box::new(|p, st| {
-                let r = penetration_budgeted(a, &id, b, p, st, 8_000);
+                let r = st.penetration_within(&id, p, 8_000);
                 (r.volume > 0.0, r.visits)
             }),
         ),
@@ -529,7 +528,7 @@ fn main() {
             let mut agree = true;
             // A fresh state, as a haptic loop starts with; reset between passes so that
             // every pass does the same work.
-            let mut st = PairState::new(a, b);
+            let mut st = Pair::new(a, b);
             for pass in 0..passes {
                 if pass > 0 {
                     st.reset();

@@ -4,14 +4,14 @@
 
 use innersphere::build::{build_tree, BuildOptions, BuildReport};
 use innersphere::progress::Progress;
-use innersphere::{Mesh, Result, SphereTree};
+use innersphere::{Mesh, Result, SharedTree};
 
 /// The demo's pair of bodies and their trees.
 pub struct DemoPair {
     /// Body A (upper tooth) and its tree.
-    pub a: (Mesh, SphereTree, BuildReport),
+    pub a: (Mesh, SharedTree, BuildReport),
     /// Body B (lower tooth) and its tree.
-    pub b: (Mesh, SphereTree, BuildReport),
+    pub b: (Mesh, SharedTree, BuildReport),
 }
 
 /// Generates the tooth pair (see [`innersphere::shapes::tooth_pair`]) and builds both trees.
@@ -30,8 +30,8 @@ pub fn build_pair_from(
     let (ta, ra) = build_tree(&ma, opts, progress)?;
     let (tb, rb) = build_tree(&mb, opts, progress)?;
     Ok(DemoPair {
-        a: (ma, ta, ra),
-        b: (mb, tb, rb),
+        a: (ma, SharedTree::new(ta), ra),
+        b: (mb, SharedTree::new(tb), rb),
     })
 }
 

@@ -12,11 +12,8 @@ use innersphere::build::{build_tree, BuildOptions, Resolution};
 use innersphere::exact::ExactMesh;
 use innersphere::mesh::Mesh;
 use innersphere::progress::Silent;
-use innersphere::query::{
-    backtracking, contact, distance_traversal, multipoint, penetration, proximity, ContactOptions,
-    MultipointOptions, PairState, PenetrationOptions, Pose, ProximityOptions,
-};
-use innersphere::{Error, Result, SphereTree};
+use innersphere::query::TraversalOptions;
+use innersphere::{Error, MultipointOptions, Pair, Pose, Result, SharedTree};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -75,13 +72,13 @@ struct Timed {
 /// time a haptic loop sees; each frame's faster pass (the same rule as `ist replay --passes
 /// 2` and the query benchmark's best-of-N) filters the stalls of a shared or virtual machine
 /// and gives the sweeps' curves.
-fn time_frames<F: FnMut(&Pose, &mut PairState) -> bool>(
-    a: &SphereTree,
-    b: &SphereTree,
+fn time_frames<F: FnMut(&Pose, &mut Pair) -> bool>(
+    a: &SharedTree,
+    b: &SharedTree,
     motion: &Motion,
     mut f: F,
 ) -> Timed {
-    let mut st = PairState::new(a, b);
+    let mut st = Pair::new(a, b);
     let mut out = Timed {
         us: vec![f64::INFINITY; motion.frames.len()],
         first: vec![f64::NAN; motion.frames.len()],
@@ -128,32 +125,28 @@ const SWEEP_KINDS: [&str; 5] = [
     "penetration (ours)",
 ];
 
-fn time_kind(a: &SphereTree, b: &SphereTree, motion: &Motion, kind: &str) -> Timed {
+fn time_kind(a: &SharedTree, b: &SharedTree, motion: &Motion, kind: &str) -> Timed {
     let id = Pose::IDENTITY;
-    let off = ContactOptions { safe_motion: false };
+    let off = TraversalOptions { safe_motion: false };
     match kind {
         "paper distance traversal" => time_frames(a, b, motion, |p, st| {
-            distance_traversal(a, &id, b, p, st, &off).in_contact()
+            st.paper().distance_traversal(&id, p, &off).in_contact()
         }),
         "paper backtracking" => time_frames(a, b, motion, |p, st| {
-            backtracking(a, &id, b, p, st, &off).in_contact()
+            st.paper().backtracking(&id, p, &off).in_contact()
         }),
-        "proximity (ours)" => time_frames(a, b, motion, |p, st| {
-            proximity(a, &id, b, p, st, &ProximityOptions::default()).overlapping
-        }),
-        "contact kinetic front (ours)" => time_frames(a, b, motion, |p, st| {
-            contact(a, &id, b, p, st, &ContactOptions::default()).in_contact()
-        }),
-        _ => time_frames(a, b, motion, |p, st| {
-            penetration(a, &id, b, p, st, &PenetrationOptions::default()).pairs > 0
-        }),
+        "proximity (ours)" => time_frames(a, b, motion, |p, st| st.distance(&id, p).overlapping),
+        "contact kinetic front (ours)" => {
+            time_frames(a, b, motion, |p, st| st.contact(&id, p).in_contact())
+        }
+        _ => time_frames(a, b, motion, |p, st| st.penetration(&id, p).pairs > 0),
     }
 }
 
-fn build(mesh: &Mesh, opts: &BuildOptions) -> Result<(SphereTree, f64)> {
+fn build(mesh: &Mesh, opts: &BuildOptions) -> Result<(SharedTree, f64)> {
     let t0 = Instant::now();
     let (t, _) = build_tree(mesh, opts, &Silent)?;
-    Ok((t, t0.elapsed().as_secs_f64()))
+    Ok((SharedTree::new(t), t0.elapsed().as_secs_f64()))
 }
 
 /// The output folder and the files written into it so far.
@@ -182,8 +175,8 @@ impl Out<'_> {
 /// Distance error and contact disagreement of the trees against the exact meshes on every
 /// `every`-th frame (a replay that times nothing).
 fn accuracy(
-    ta: &SphereTree,
-    tb: &SphereTree,
+    ta: &SharedTree,
+    tb: &SharedTree,
     motion: &Motion,
     exact: (&ExactMesh, &ExactMesh),
     every: usize,
@@ -495,9 +488,9 @@ pub fn run(
         };
         let mut n_contacts = 0usize;
         let t = time_frames(&ta, &tb, motion, |p, st| {
-            let r = multipoint(&ta, &id, &tb, p, st, &o);
-            n_contacts += r.contacts.len();
-            !r.contacts.is_empty()
+            let r = st.multipoint(&id, p, &o);
+            n_contacts += r.count;
+            r.count > 0
         });
         let [p50, p99, max, mean] = stats(&t.us);
         let _ = writeln!(

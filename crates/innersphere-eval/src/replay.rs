@@ -4,7 +4,7 @@
 //!
 //! Timing rule. A haptic loop runs each query once per frame, in motion order, with the
 //! pair's state carried from frame to frame. The first pass over the motion (from a fresh
-//! [`PairState`]) is exactly that, and the headline statistics ([`KindStats::p99_us`],
+//! [`Pair`]) is exactly that, and the headline statistics ([`KindStats::p99_us`],
 //! [`KindStats::max_us`], [`KindStats::frames_over_1ms`]) come from it alone: they are
 //! *single-pass* numbers. With [`ReplayOptions::passes`] `N > 1` the motion is run `N − 1`
 //! more times, each from a fresh state, and each frame's fastest of the `N` passes gives the
@@ -20,24 +20,20 @@
 
 use crate::motion::Motion;
 use innersphere::exact::{self, ExactDistance, ExactMesh, ExactScratch};
-use innersphere::query::{
-    backtracking, multipoint, penetration, proximity, ContactOptions, MultipointOptions, PairState,
-    PenetrationOptions, Pose, ProximityOptions,
-};
-use innersphere::SphereTree;
+use innersphere::{MultipointOptions, Pair, Pose, SharedTree};
 use std::time::Instant;
 
 /// The query kinds a replay can run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum QueryKind {
-    /// Exact proximity of the sphere sets ([`proximity`]).
+    /// Exact distance of the sphere sets ([`Pair::distance`]).
     Distance,
-    /// First contact with backtracking ([`backtracking`]).
+    /// First contact ([`Pair::contact`]).
     Contact,
-    /// Up to `k` contacts ([`multipoint`]).
+    /// Up to `k` contacts ([`Pair::multipoint`]).
     Multipoint,
-    /// Penetration volume, force and torque ([`penetration`]).
+    /// Penetration volume, force and torque ([`Pair::penetration`]).
     Penetration,
 }
 
@@ -232,12 +228,12 @@ fn instant_clock() -> impl FnMut() -> f64 {
     move || origin.elapsed().as_secs_f64() * 1e6
 }
 
-/// Replays `motion` (pose of B in A's frame; A at the identity) through one [`PairState`] per
+/// Replays `motion` (pose of B in A's frame; A at the identity) through one [`Pair`] per
 /// query kind and pass, and compares with the exact mesh distance when `exact` meshes are
 /// given (see the [module docs](self) for what is timed).
 pub fn replay(
-    a: &SphereTree,
-    b: &SphereTree,
+    a: &SharedTree,
+    b: &SharedTree,
     motion: &Motion,
     exact: Option<(&ExactMesh, &ExactMesh)>,
     opts: &ReplayOptions,
@@ -250,8 +246,8 @@ pub fn replay(
 /// [`ReplayOptions::kinds`] order, pass after pass, frame after frame; then the exact method,
 /// pass after pass, compared frame after compared frame.
 pub fn replay_with_clock<C: FnMut() -> f64>(
-    a: &SphereTree,
-    b: &SphereTree,
+    a: &SharedTree,
+    b: &SharedTree,
     motion: &Motion,
     exact: Option<(&ExactMesh, &ExactMesh)>,
     opts: &ReplayOptions,
@@ -335,9 +331,9 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
     let accuracy = exact.map(|(ma, mb)| {
         // The tree distance is needed on compared frames even if Distance was not timed.
         if !opts.kinds.contains(&QueryKind::Distance) {
-            let mut st = PairState::new(a, b);
+            let mut pair = Pair::new(a, b);
             for (i, f) in motion.frames.iter().enumerate() {
-                let p = proximity(a, &id, b, &f.pose, &mut st, &ProximityOptions::default());
+                let p = pair.distance(&id, &f.pose);
                 rows[i].distance = p.distance;
                 rows[i].contact = p.overlapping;
             }
@@ -488,8 +484,8 @@ impl PartialEq for Answer {
 /// `times` and its answer into `answers`.
 #[allow(clippy::too_many_arguments)]
 fn replay_pass<C: FnMut() -> f64>(
-    a: &SphereTree,
-    b: &SphereTree,
+    a: &SharedTree,
+    b: &SharedTree,
     motion: &Motion,
     kind: QueryKind,
     opts: &ReplayOptions,
@@ -498,23 +494,18 @@ fn replay_pass<C: FnMut() -> f64>(
     answers: &mut [Answer],
 ) {
     let id = Pose::IDENTITY;
-    let mut st = PairState::new(a, b);
+    let mut pair = Pair::new(a, b);
     let mo = MultipointOptions {
         k: opts.k,
         split_depth: opts.split_depth,
         ..Default::default()
     };
-    let (po, co, pe) = (
-        ProximityOptions::default(),
-        ContactOptions::default(),
-        PenetrationOptions::default(),
-    );
     for (i, f) in motion.frames.iter().enumerate() {
         let pb = f.pose;
         let t0 = clock();
         let (ans, t1) = match kind {
             QueryKind::Distance => {
-                let r = std::hint::black_box(proximity(a, &id, b, &pb, &mut st, &po));
+                let r = std::hint::black_box(pair.distance(&id, &pb));
                 let t1 = clock();
                 (
                     Answer {
@@ -526,7 +517,7 @@ fn replay_pass<C: FnMut() -> f64>(
                 )
             }
             QueryKind::Contact => {
-                let r = std::hint::black_box(backtracking(a, &id, b, &pb, &mut st, &co));
+                let r = std::hint::black_box(pair.contact(&id, &pb));
                 let t1 = clock();
                 (
                     Answer {
@@ -538,19 +529,19 @@ fn replay_pass<C: FnMut() -> f64>(
                 )
             }
             QueryKind::Multipoint => {
-                let r = std::hint::black_box(multipoint(a, &id, b, &pb, &mut st, &mo));
+                let r = std::hint::black_box(pair.multipoint(&id, &pb, &mo));
                 let t1 = clock();
                 (
                     Answer {
-                        value: r.contacts.len() as f64,
-                        flag: !r.contacts.is_empty(),
+                        value: r.count as f64,
+                        flag: r.count > 0,
                         visits: r.visits,
                     },
                     t1,
                 )
             }
             QueryKind::Penetration => {
-                let r = std::hint::black_box(penetration(a, &id, b, &pb, &mut st, &pe));
+                let r = std::hint::black_box(pair.penetration(&id, &pb));
                 let t1 = clock();
                 (
                     Answer {

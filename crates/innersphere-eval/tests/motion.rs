@@ -6,7 +6,7 @@
 mod common;
 
 use glam::{DQuat, DVec3};
-use innersphere::query::Pose;
+use innersphere::Pose;
 use innersphere::{Error, Mesh};
 use innersphere_eval::motion::{
     generate, generate_with, phase_of, AnatomicalFrame, ClearanceEstimator, ClearanceOptions,

@@ -10,7 +10,7 @@ mod common;
 
 use alloc_util::*;
 use innersphere::build::{build_tree, BuildOptions, Resolution};
-use innersphere::query::{PairState, Pose, TreeInfo};
+use innersphere::{Pair, Pose, SharedTree};
 use innersphere_eval::motion::{generate, Motion, Scenario};
 
 /// The jaw arches at a coarse voxel size along the recorded chew and a generated grind:
@@ -36,20 +36,15 @@ fn jaw_queries_allocate_nothing_from_the_first_frame() {
     };
     let chew = frames(&Motion::load(common::data("motion/jaw_chew_demo.csv")).unwrap());
     let grind = frames(&generate(Scenario::Grind, 2.0, 3, &ma, &mb).unwrap());
-    let (_, info, (ia, ib)) = counted(|| {
-        (
-            std::sync::Arc::new(TreeInfo::new(&a)),
-            std::sync::Arc::new(TreeInfo::new(&b)),
-        )
-    });
-    let (_, state, st) = counted(|| PairState::with_info(ia, ib));
+    let (_, info, (a, b)) = counted(|| (SharedTree::new(a), SharedTree::new(b)));
+    let (_, state, st) = counted(|| Pair::new(&a, &b));
     let mib = |b: u64| b as f64 / (1 << 20) as f64;
     eprintln!(
-        "jaw trees: {} + {} nodes, {} + {} leaves; TreeInfo {:.1} MiB, PairState {:.1} MiB",
+        "jaw trees: {} + {} nodes, {} + {} leaves; TreeInfo {:.1} MiB, Pair {:.1} MiB",
         a.len(),
         b.len(),
-        st.info_a().leaves,
-        st.info_b().leaves,
+        st.tree_a().info().leaves,
+        st.tree_b().info().leaves,
         mib(info),
         mib(state)
     );

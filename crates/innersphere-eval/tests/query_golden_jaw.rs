@@ -9,12 +9,10 @@ mod common;
 
 use innersphere::build::{build_tree, BuildOptions, Resolution};
 use innersphere::glam::DVec3;
-use innersphere::query::{
-    backtracking, contact, distance_traversal, multipoint, penetration, penetration_budgeted,
-    proximity, ContactOptions, MultipointOptions, PairState, PenetrationOptions, Pose,
-    ProximityOptions, Tracking,
+use innersphere::query::TraversalOptions;
+use innersphere::{
+    ContactResult, DistanceOptions, MultipointOptions, Pair, PenetrationOptions, Pose, Tracking,
 };
-use innersphere::SphereTree;
 use innersphere_eval::motion::Motion;
 
 /// FNV-1a over the bits of everything fed to it.
@@ -58,18 +56,10 @@ const KINDS: [&str; 13] = [
 
 /// Runs query kind `kind` (an index into [`KINDS`]) with state `st` at `pose_b` and feeds its
 /// answer to `ans` and its node-pair tests to `work`.
-fn query(
-    kind: usize,
-    a: &SphereTree,
-    b: &SphereTree,
-    st: &mut PairState,
-    pose_b: &Pose,
-    ans: &mut Digest,
-    work: &mut Digest,
-) {
+fn query(kind: usize, st: &mut Pair, pose_b: &Pose, ans: &mut Digest, work: &mut Digest) {
     let pa = Pose::IDENTITY;
-    let prox = |o: ProximityOptions, st: &mut PairState, ans: &mut Digest, work: &mut Digest| {
-        let p = proximity(a, &pa, b, pose_b, st, &o);
+    let prox = |o: DistanceOptions, st: &mut Pair, ans: &mut Digest, work: &mut Digest| {
+        let p = st.distance_with(&pa, pose_b, &o);
         ans.f(p.distance);
         ans.f(p.pair_distance);
         ans.f(p.lower_bound);
@@ -81,7 +71,7 @@ fn query(
         ans.u(p.leaf_b as u64);
         work.u(p.visits);
     };
-    let cq = |q: innersphere::query::ContactQuery, ans: &mut Digest, work: &mut Digest| {
+    let cq = |q: ContactResult, ans: &mut Digest, work: &mut Digest| {
         ans.f(q.distance);
         ans.u(q.skipped as u64);
         match q.contact {
@@ -96,15 +86,15 @@ fn query(
         }
         work.u(q.visits);
     };
-    let mp = |tracking: bool, st: &mut PairState, ans: &mut Digest, work: &mut Digest| {
+    let mp = |tracking: bool, st: &mut Pair, ans: &mut Digest, work: &mut Digest| {
         let o = MultipointOptions {
             k: 16,
             tracking,
             ..Default::default()
         };
-        let m = multipoint(a, &pa, b, pose_b, st, &o);
-        ans.u(m.contacts.len() as u64);
-        for c in m.contacts {
+        let m = st.multipoint(&pa, pose_b, &o);
+        ans.u(m.count as u64);
+        for c in st.contacts() {
             ans.u(c.leaf_a as u64);
             ans.u(c.leaf_b as u64);
             ans.v(c.point);
@@ -116,12 +106,12 @@ fn query(
         ans.u(m.skipped as u64);
         work.u(m.visits);
     };
-    let pen = |tracking: Tracking, st: &mut PairState, ans: &mut Digest, work: &mut Digest| {
+    let pen = |tracking: Tracking, st: &mut Pair, ans: &mut Digest, work: &mut Digest| {
         let o = PenetrationOptions {
             tracking,
             ..Default::default()
         };
-        let p = penetration(a, &pa, b, pose_b, st, &o);
+        let p = st.penetration_with(&pa, pose_b, &o);
         ans.f(p.volume);
         ans.u(p.pairs as u64);
         ans.f(p.max_depth);
@@ -129,8 +119,8 @@ fn query(
         ans.v(p.force);
         ans.v(p.torque_a);
         ans.v(p.torque_b);
-        ans.u(p.patches.len() as u64);
-        for q in p.patches {
+        ans.u(p.patch_count as u64);
+        for q in st.patches() {
             ans.v(q.point);
             ans.v(q.normal);
             ans.f(q.depth);
@@ -141,11 +131,11 @@ fn query(
         ans.u(p.skipped as u64);
         work.u(p.visits);
     };
-    let co = ContactOptions::default();
+    let co = TraversalOptions::default();
     match kind {
-        0 => prox(ProximityOptions::default(), st, ans, work),
+        0 => prox(DistanceOptions::default(), st, ans, work),
         1 => prox(
-            ProximityOptions {
+            DistanceOptions {
                 best_first: true,
                 ..Default::default()
             },
@@ -154,7 +144,7 @@ fn query(
             work,
         ),
         2 => prox(
-            ProximityOptions {
+            DistanceOptions {
                 signed: true,
                 ..Default::default()
             },
@@ -162,16 +152,16 @@ fn query(
             ans,
             work,
         ),
-        3 => cq(distance_traversal(a, &pa, b, pose_b, st, &co), ans, work),
-        4 => cq(backtracking(a, &pa, b, pose_b, st, &co), ans, work),
-        5 => cq(contact(a, &pa, b, pose_b, st, &co), ans, work),
+        3 => cq(st.paper().distance_traversal(&pa, pose_b, &co), ans, work),
+        4 => cq(st.paper().backtracking(&pa, pose_b, &co), ans, work),
+        5 => cq(st.contact(&pa, pose_b), ans, work),
         6 => mp(false, st, ans, work),
         7 => mp(true, st, ans, work),
         8 => pen(Tracking::Auto, st, ans, work),
         9 => pen(Tracking::Traversal, st, ans, work),
         10 => pen(Tracking::Front, st, ans, work),
         11 => {
-            let v = penetration_budgeted(a, &pa, b, pose_b, st, 8000);
+            let v = st.penetration_within(&pa, pose_b, 8000);
             ans.f(v.volume);
             ans.f(v.upper_bound);
             ans.u(v.complete as u64);
@@ -179,7 +169,7 @@ fn query(
         }
         _ => {
             for k in [5, 0, 8, 7, 4, 11] {
-                query(k, a, b, st, pose_b, ans, work);
+                query(k, st, pose_b, ans, work);
             }
         }
     }
@@ -188,18 +178,38 @@ fn query(
 /// Digests recorded before the reorganisation: (kind, answers, work).
 const RECORDED: [(&str, u64, u64); 13] = [
     ("proximity", 0x27a28e9c1598773c, 0x3b91f149fdeca5dc),
-    ("proximity best first", 0xbd08b69e5c85e665, 0xd745af7258a44d14),
+    (
+        "proximity best first",
+        0xbd08b69e5c85e665,
+        0xd745af7258a44d14,
+    ),
     ("proximity signed", 0xa4e9f899a7ccafcd, 0x70e43f13146c5bca),
     ("distance traversal", 0x421bcdc79afd6a2e, 0x01baab2a731dfa5b),
     ("backtracking", 0xf3717a5a38497a93, 0x74f884d44954fe63),
     ("contact", 0xc664ba1f71d6654d, 0x7253fd73242436e9),
     ("multipoint k=16", 0x976e55c1f49258e7, 0x23f341c019a98ea9),
-    ("multipoint k=16 tracking", 0xd311b6d223070bd1, 0x7773e70fa20b8cea),
+    (
+        "multipoint k=16 tracking",
+        0xd311b6d223070bd1,
+        0x7773e70fa20b8cea,
+    ),
     ("penetration", 0xb831f2dc0833959e, 0x4c159414d85aeb33),
-    ("penetration traversal", 0x39fe732ab99acc51, 0x3d21625a022a6a99),
+    (
+        "penetration traversal",
+        0x39fe732ab99acc51,
+        0x3d21625a022a6a99,
+    ),
     ("penetration front", 0xb831f2dc0833959e, 0x4c159414d85aeb33),
-    ("penetration budget 8000", 0xccf1be038fe83115, 0x6a2947013d11895b),
-    ("all kinds on one state", 0x444301c2b7ab54ce, 0x6e76ff9b5ec80e8c),
+    (
+        "penetration budget 8000",
+        0xccf1be038fe83115,
+        0x6a2947013d11895b,
+    ),
+    (
+        "all kinds on one state",
+        0x444301c2b7ab54ce,
+        0x6e76ff9b5ec80e8c,
+    ),
 ];
 
 #[test]
@@ -215,15 +225,15 @@ fn jaw_chew_answers_are_bit_for_bit_the_recorded_ones() {
             .unwrap()
             .0
     };
-    let a = build("jaw/ofj_p26_maxilla_teeth.stl.gz");
-    let b = build("jaw/ofj_p26_mandible_teeth.stl.gz");
+    let a = innersphere::SharedTree::new(build("jaw/ofj_p26_maxilla_teeth.stl.gz"));
+    let b = innersphere::SharedTree::new(build("jaw/ofj_p26_mandible_teeth.stl.gz"));
     let motion = Motion::load(common::data("motion/jaw_chew_demo.csv")).unwrap();
     let mut got = Vec::new();
     for (kind, name) in KINDS.iter().enumerate() {
-        let mut st = PairState::new(&a, &b);
+        let mut st = Pair::new(&a, &b);
         let (mut ans, mut work) = (Digest::new(), Digest::new());
         for f in &motion.frames {
-            query(kind, &a, &b, &mut st, &f.pose, &mut ans, &mut work);
+            query(kind, &mut st, &f.pose, &mut ans, &mut work);
         }
         eprintln!("    (\"{name}\", {:#018x}, {:#018x}),", ans.0, work.0);
         got.push((*name, ans.0, work.0));

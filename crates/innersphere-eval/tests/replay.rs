@@ -7,9 +7,9 @@ use innersphere::field::{DistanceField, VoxelGrid};
 use innersphere::hierarchy::{self, HierarchyOptions};
 use innersphere::packing::{self, PackingOptions};
 use innersphere::progress::Silent;
-use innersphere::query::Pose;
 use innersphere::tree::TreeMeta;
-use innersphere::SphereTree;
+use innersphere::Pose;
+use innersphere::SharedTree;
 use innersphere_eval::motion::{Frame, Motion};
 use innersphere_eval::replay::{
     replay, replay_with_clock, KindStats, QueryKind, ReplayOptions, ReplayReport,
@@ -17,7 +17,7 @@ use innersphere_eval::replay::{
 
 /// The tree of a unit ball: the grid has a voxel at the centre, so the packing is one sphere,
 /// the ball itself.
-fn ball_tree() -> SphereTree {
+fn ball_tree() -> SharedTree {
     let grid = VoxelGrid::covering(DVec3::splat(-1.0), DVec3::splat(1.0), 0.1).unwrap();
     let field = DistanceField::from_signed_distance(grid, |p| 1.0 - p.length());
     let spheres = packing::pack(&field, &PackingOptions::default(), None, &Silent);
@@ -34,9 +34,11 @@ fn ball_tree() -> SphereTree {
         mesh_closed: true,
         built_by: None,
     };
-    hierarchy::build(&spheres, &HierarchyOptions::default(), meta, &Silent)
-        .unwrap()
-        .0
+    SharedTree::new(
+        hierarchy::build(&spheres, &HierarchyOptions::default(), meta, &Silent)
+            .unwrap()
+            .0,
+    )
 }
 
 /// Centre distances: separated from 3.0 down to 2.1, then overlapping from 1.9 to 1.0.

@@ -7,7 +7,7 @@
 //! data files are missing.
 
 use innersphere::exact::{distance, intersects, penetration_depth, ExactMesh, ExactScratch};
-use innersphere::query::Pose;
+use innersphere::Pose;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 

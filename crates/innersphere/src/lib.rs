@@ -20,6 +20,8 @@
 //! [`build::build_tree`] runs the whole build; [`tree::SphereTree`] is what queries use.
 //! Motion files, replay, benchmarks and the paper's figures are the `innersphere-eval` crate.
 
+#![deny(missing_docs)]
+
 pub mod build;
 pub mod error;
 pub mod exact;
@@ -37,4 +39,8 @@ pub use error::{Error, Result};
 pub use glam;
 pub use mesh::Mesh;
 pub use pose::{MatrixOrder, Pose, PoseError};
+pub use query::{
+    BudgetedVolume, Contact, ContactResult, Distance, DistanceOptions, Multipoint,
+    MultipointOptions, Pair, Patch, Penetration, PenetrationOptions, SharedTree, Tracking,
+};
 pub use tree::SphereTree;

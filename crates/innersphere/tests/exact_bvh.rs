@@ -7,7 +7,7 @@ use innersphere::exact::{
 };
 use innersphere::glam::{DQuat, DVec3};
 use innersphere::mesh::winding::exact_winding_number;
-use innersphere::query::Pose;
+use innersphere::Pose;
 use innersphere::{shapes, Mesh};
 use proptest::prelude::*;
 

@@ -7,8 +7,8 @@ use innersphere::exact::{
 };
 use innersphere::glam::{DQuat, DVec3};
 use innersphere::mesh::bvh::TriangleBvh;
-use innersphere::query::Pose;
 use innersphere::Mesh;
+use innersphere::Pose;
 
 fn load(rel: &str) -> Mesh {
     innersphere::mesh::io::load(&common::data(rel)).expect("load")

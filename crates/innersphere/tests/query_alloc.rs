@@ -1,6 +1,6 @@
 //! Queries allocate nothing and take no lock: a counting global allocator (this test binary
 //! only, `alloc_util`) counts the allocations of every query kind and option of the public
-//! API, from the first frame of a fresh [`PairState`] on (no warm-up) and on a second,
+//! API, from the first frame of a fresh [`Pair`] on (no warm-up) and on a second,
 //! different motion after the first, on small generated trees. The same on the jaw arches
 //! along a generated grind is `innersphere-eval`'s `tests/query_alloc_jaw.rs`.
 //!
@@ -11,17 +11,15 @@ mod query_util;
 
 use alloc_util::*;
 use glam::DVec3;
-use innersphere::query::{
-    multipoint, penetration, proximity, MultipointOptions, PairState, PenetrationOptions, Pose,
-    ProximityOptions, Tracking,
+use innersphere::{
+    DistanceOptions, MultipointOptions, Pair, Pose, SharedTree, SphereTree, Tracking,
 };
-use innersphere::SphereTree;
 use query_util::*;
 
 /// A motion of B against A in contact: `n` frames along which B, turning about `axis` by
 /// `spin` radians per frame and sliding along `side`, is held along `dir` between `depth`
 /// apart from first contact and `depth` pressed in beyond it (found per frame by bisection
-/// on the signed proximity); A moves rigidly too.
+/// on the signed distance); A moves rigidly too.
 #[allow(clippy::too_many_arguments)]
 fn pressing(
     a: &SphereTree,
@@ -33,8 +31,8 @@ fn pressing(
     depth: f64,
     n: usize,
 ) -> Vec<(Pose, Pose)> {
-    let mut st = PairState::new(a, b);
-    let signed = ProximityOptions {
+    let mut pair = pair(a, b);
+    let signed = DistanceOptions {
         signed: true,
         ..Default::default()
     };
@@ -55,7 +53,7 @@ fn pressing(
             let at = |t: f64| pair_poses(a, b, pose_a, rot_b, dir * t + lateral);
             let mut dist = |t: f64| {
                 let (pa, pb) = at(t);
-                proximity(a, &pa, b, &pb, &mut st, &signed).distance
+                pair.distance_with(&pa, &pb, &signed).distance
             };
             let (mut hi, mut lo) = (reach, reach);
             while dist(lo) > 0.0 && lo > -reach {
@@ -111,7 +109,8 @@ fn queries_allocate_nothing_from_the_first_frame() {
     for (ia, ib) in PAIRS {
         let (a, b) = (&t[ia], &t[ib]);
         let [m1, m2] = contact_motions(a, b);
-        assert_allocation_free(&format!("trees {ia}, {ib}"), a, b, &m1, &m2);
+        let (sa, sb) = (SharedTree::new(a.clone()), SharedTree::new(b.clone()));
+        assert_allocation_free(&format!("trees {ia}, {ib}"), &sa, &sb, &m1, &m2);
     }
 }
 
@@ -119,12 +118,12 @@ fn queries_allocate_nothing_from_the_first_frame() {
 /// fronts, the best-first queue and the budgeted queue beyond its reservation.
 fn grows_in_deep_overlap(kind: &Kind) -> bool {
     match kind {
-        Kind::Contact(_) => true,
+        Kind::Contact => true,
         Kind::Multipoint(o) => o.tracking,
         Kind::Penetration(o) => o.tracking != Tracking::Traversal,
-        Kind::Proximity(o) => o.best_first,
+        Kind::Distance(o) => o.best_first,
         Kind::Budgeted(budget) => *budget >= 4096,
-        Kind::Distance(_) | Kind::Backtracking(_) => false,
+        Kind::DistanceTraversal(_) | Kind::Backtracking(_) => false,
     }
 }
 
@@ -132,7 +131,7 @@ fn grows_in_deep_overlap(kind: &Kind) -> bool {
 /// the tracked kinds share the one front; running each would only take time).
 fn deep_sample(kind: &Kind) -> bool {
     match kind {
-        Kind::Contact(o) => o.safe_motion,
+        Kind::Contact => true,
         Kind::Multipoint(o) if o.tracking => o.k == 256 && o.split_depth == 9,
         Kind::Penetration(o) if o.tracking != Tracking::Traversal => {
             o.max_patches == 64 && o.safe_motion == (o.tracking == Tracking::Auto)
@@ -167,13 +166,14 @@ fn deep_overlap_grows_only_the_fronts_and_once() {
             0.03,
             240,
         );
+        let (sa, sb) = (SharedTree::new(a.clone()), SharedTree::new(b.clone()));
         for kind in kinds().into_iter().filter(deep_sample) {
-            let mut st = PairState::new(a, b);
+            let mut pair = Pair::new(&sa, &sb);
             let mut pass = || {
                 counted(|| {
                     m1.iter()
                         .chain(&m2)
-                        .map(|(pa, pb)| run(&kind, a, pa, b, pb, &mut st))
+                        .map(|(pa, pb)| run(&kind, &mut pair, pa, pb))
                         .sum::<f64>()
                 })
             };
@@ -192,7 +192,7 @@ fn deep_overlap_grows_only_the_fronts_and_once() {
 }
 
 /// The counting allocator does count (the tests above are not vacuous): an allocation, a
-/// growth and an allocation inside a query's state construction.
+/// growth and an allocation inside a pair's construction.
 #[test]
 fn the_counter_counts() {
     let (n, bytes, v) = counted(|| std::hint::black_box(vec![1u8; 10]));
@@ -205,8 +205,9 @@ fn the_counter_counts() {
     });
     assert!(n >= 1 && w.len() == 100);
     let t = trees();
-    let (n, bytes, st) = counted(|| PairState::new(&t[0], &t[1]));
-    assert!(n > 0 && bytes > 0 && st.info_a().nodes == t[0].len());
+    let (sa, sb) = (SharedTree::new(t[0].clone()), SharedTree::new(t[1].clone()));
+    let (n, bytes, pair) = counted(|| Pair::new(&sa, &sb));
+    assert!(n > 0 && bytes > 0 && pair.tree_a().info().nodes == t[0].len());
 }
 
 /// Identifiers in Rust source outside comments.
@@ -286,19 +287,23 @@ fn locking_names(src: &str) -> Vec<&str> {
         .collect()
 }
 
-/// No lock anywhere on the query path: the query sources name no lock, lazy or one-time
-/// initialisation.
+/// No lock anywhere on the query path: the query sources (`src/query` and its
+/// subdirectories) name no lock, lazy or one-time initialisation.
 #[test]
 fn no_locks_in_the_query_sources() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/query");
+    let mut dirs = vec![std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/query")];
     let mut checked = 0;
-    for e in std::fs::read_dir(&dir).unwrap() {
-        let p = e.unwrap().path();
-        if p.extension().is_some_and(|x| x == "rs") {
-            let s = std::fs::read_to_string(&p).unwrap();
-            let found = locking_names(&s);
-            assert!(found.is_empty(), "{} uses {found:?}", p.display());
-            checked += 1;
+    while let Some(dir) = dirs.pop() {
+        for e in std::fs::read_dir(&dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                dirs.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                let s = std::fs::read_to_string(&p).unwrap();
+                let found = locking_names(&s);
+                assert!(found.is_empty(), "{} uses {found:?}", p.display());
+                checked += 1;
+            }
         }
     }
     assert!(checked >= 10);
@@ -328,17 +333,17 @@ fn the_lock_search_finds_locks() {
     assert!(locking_names(clean).is_empty());
 }
 
-/// Trees and states can be shared and sent across threads.
+/// Trees and pairs can be shared and sent across threads.
 #[test]
-fn trees_and_states_are_send_and_sync() {
+fn trees_and_pairs_are_send_and_sync() {
     fn check<T: Send + Sync>() {}
     check::<innersphere::SphereTree>();
-    check::<PairState>();
+    check::<Pair>();
     check::<innersphere::query::TreeInfo>();
 }
 
-/// Many pairs queried from many threads at once (shared immutable trees, one state per pair
-/// and thread) give the same answers as one thread.
+/// Many pairs queried from many threads at once (shared immutable trees, one [`Pair`] per
+/// pair of trees and thread) give the same answers as one thread.
 #[test]
 fn many_pairs_from_many_threads() {
     let t = trees();
@@ -354,15 +359,14 @@ fn many_pairs_from_many_threads() {
             0.02,
             80,
         );
-        let mut st = PairState::new(a, b);
+        let mut pair = pair(a, b);
         frames
             .iter()
             .map(|(pa, pb)| {
-                let d = proximity(a, pa, b, pb, &mut st, &ProximityOptions::default()).distance;
-                let v = penetration(a, pa, b, pb, &mut st, &PenetrationOptions::default()).volume;
-                let c = multipoint(a, pa, b, pb, &mut st, &MultipointOptions::default())
-                    .contacts
-                    .len();
+                let d = pair.distance(pa, pb).distance;
+                let v = pair.penetration(pa, pb).volume;
+                pair.multipoint(pa, pb, &MultipointOptions::default());
+                let c = pair.contacts().len();
                 (d.to_bits(), v.to_bits(), c)
             })
             .collect()

@@ -4,23 +4,22 @@
 //! test decide the same geometric contact with different f32 roundings. The offset is bisected
 //! to where the leaf predicate (`|Δ|² < (ra + rb)²` on f32 centres, which defines every
 //! query's answer) flips, and every query kind is compared with the brute-force scan over all
-//! leaf pairs at a few rounding steps either side, with fresh states and with states carried
+//! leaf pairs at a few rounding steps either side, with fresh pairs and with pairs carried
 //! across the steps.
 
 mod query_util;
 
 use glam::{DQuat, DVec3};
-use innersphere::query::{
-    backtracking, brute, contact, distance_traversal, multipoint, penetration,
-    penetration_budgeted, proximity, ContactOptions, MultipointOptions, PairState,
-    PenetrationOptions, Pose, ProximityOptions, Tracking,
+use innersphere::query::{brute, TraversalOptions};
+use innersphere::{
+    DistanceOptions, MultipointOptions, Pair, PenetrationOptions, Pose, SharedTree, SphereTree,
+    Tracking,
 };
-use innersphere::SphereTree;
 use proptest::prelude::*;
 use query_util::{box_tree, pair_poses, pose, trees};
 use std::sync::OnceLock;
 
-const NO_SKIP: ContactOptions = ContactOptions { safe_motion: false };
+const NO_SKIP: TraversalOptions = TraversalOptions { safe_motion: false };
 
 /// The unit direction (model frame) from the root's centre to the leaf that reaches
 /// farthest from it: the root sphere is tangent to that leaf there.
@@ -40,18 +39,18 @@ fn check_pose(
     pa: &Pose,
     b: &SphereTree,
     pb: &Pose,
-    st: &mut [PairState],
+    st: &mut [Pair],
     what: &str,
 ) -> Result<(), TestCaseError> {
     let pairs = brute::overlapping_pairs(a, pa, b, pb);
     let (bd, _, _) = brute::min_distance(a, pa, b, pb);
     let touching = !pairs.is_empty();
     prop_assert_eq!(touching, bd < 0.0);
-    let q = distance_traversal(a, pa, b, pb, &mut st[0], &NO_SKIP);
+    let q = st[0].paper().distance_traversal(pa, pb, &NO_SKIP);
     prop_assert_eq!(q.in_contact(), touching, "{}: distance traversal", what);
-    let q = backtracking(a, pa, b, pb, &mut st[1], &NO_SKIP);
+    let q = st[1].paper().backtracking(pa, pb, &NO_SKIP);
     prop_assert_eq!(q.in_contact(), touching, "{}: backtracking", what);
-    let q = contact(a, pa, b, pb, &mut st[2], &NO_SKIP);
+    let q = st[2].contact(pa, pb);
     prop_assert_eq!(q.in_contact(), touching, "{}: contact", what);
     for (i, tracking) in [(3, false), (4, true)] {
         let opts = MultipointOptions {
@@ -61,9 +60,9 @@ fn check_pose(
             reuse: true,
             safe_motion: false,
         };
-        let m = multipoint(a, pa, b, pb, &mut st[i], &opts);
+        st[i].multipoint(pa, pb, &opts);
         prop_assert_eq!(
-            !m.contacts.is_empty(),
+            !st[i].contacts().is_empty(),
             touching,
             "{}: multipoint {}",
             what,
@@ -76,19 +75,19 @@ fn check_pose(
             tracking,
             ..Default::default()
         };
-        let p = penetration(a, pa, b, pb, &mut st[i], &opts);
+        let p = st[i].penetration_with(pa, pb, &opts);
         prop_assert_eq!(p.pairs, pairs.len(), "{}: penetration {:?}", what, tracking);
     }
-    let v = penetration_budgeted(a, pa, b, pb, &mut st[7], u64::MAX);
+    let v = st[7].penetration_within(pa, pb, u64::MAX);
     prop_assert_eq!(v.volume > 0.0, touching, "{}: budgeted", what);
     for best_first in [false, true] {
-        let opts = ProximityOptions {
+        let opts = DistanceOptions {
             best_first,
             ..Default::default()
         };
-        let p = proximity(a, pa, b, pb, &mut st[8], &opts);
-        prop_assert_eq!(p.overlapping, touching, "{}: proximity", what);
-        prop_assert_eq!(p.distance, bd.max(0.0), "{}: proximity distance", what);
+        let p = st[8].distance_with(pa, pb, &opts);
+        prop_assert_eq!(p.overlapping, touching, "{}: distance, overlapping", what);
+        prop_assert_eq!(p.distance, bd.max(0.0), "{}: distance", what);
     }
     Ok(())
 }
@@ -177,12 +176,13 @@ fn check_touching_offset(
     let (_, pb) = poses_at(a, b, pa, rot, ua, hi);
     let t = Pose::relative(&pa, &pb).translation.length();
     let ulp = t.max(hi) * f32::EPSILON as f64;
-    let mut carried: Vec<PairState> = (0..9).map(|_| PairState::new(a, b)).collect();
+    let (sa, sb) = (SharedTree::new(a.clone()), SharedTree::new(b.clone()));
+    let mut carried: Vec<Pair> = (0..9).map(|_| Pair::new(&sa, &sb)).collect();
     for step in [0.25, 1.0, 4.0] {
         for k in -3i32..=3 {
             let d = if k < 0 { lo } else { hi } + k as f64 * step * ulp;
             let (pa, pb) = poses_at(a, b, pa, rot, ua, d);
-            let mut fresh: Vec<PairState> = (0..9).map(|_| PairState::new(a, b)).collect();
+            let mut fresh: Vec<Pair> = (0..9).map(|_| Pair::new(&sa, &sb)).collect();
             check_pose(a, &pa, b, &pb, &mut fresh, &format!("fresh, offset {d}"))?;
             check_pose(
                 a,

@@ -4,9 +4,8 @@
 mod query_util;
 
 use glam::DVec3;
-use innersphere::query::{
-    brute, penetration, penetration_budgeted, PairState, PenetrationOptions, Tracking,
-};
+use innersphere::query::brute;
+use innersphere::{PenetrationOptions, Tracking};
 use proptest::prelude::*;
 use query_util::*;
 
@@ -39,9 +38,10 @@ proptest! {
         let scale = (a.r[0] + b.r[0]) as f64;
         let (pa, pb) = pair_poses(a, b, pose([1.0, 2.0, -0.5], qa), quat(qb[0], qb[1], qb[2], qb[3]), off * 0.9 * scale);
         let want = brute::penetration(a, &pa, b, &pb, stiffness);
-        let mut st = PairState::new(a, b);
+        let mut pair = pair(a, b);
         let opts = PenetrationOptions { stiffness, max_patches, patch_radius, safe_motion: false, tracking };
-        let p = penetration(a, &pa, b, &pb, &mut st, &opts);
+        let p = pair.penetration_with(&pa, &pb, &opts);
+        let patches = pair.patches();
         prop_assert_eq!(p.pairs, want.pairs);
         prop_assert!(close(p.volume, want.volume, 1e-10, 1e-15), "{} vs {}", p.volume, want.volume);
         prop_assert_eq!(p.max_depth, want.max_depth);
@@ -55,20 +55,20 @@ proptest! {
             prop_assert!((p.force.length() - f).abs() <= 1e-9 * f + 1e-15);
             prop_assert!((p.normal.length() - 1.0).abs() < 1e-9 || p.force == DVec3::ZERO);
             prop_assert_eq!(p.distance, 0.0);
-            prop_assert!(p.patches.len() <= max_patches);
+            prop_assert!(patches.len() <= max_patches);
             if max_patches > 0 {
-                prop_assert!(!p.patches.is_empty());
-                let pv: f64 = p.patches.iter().map(|q| q.volume).sum();
-                let pn: u32 = p.patches.iter().map(|q| q.pairs).sum();
+                prop_assert!(!patches.is_empty());
+                let pv: f64 = patches.iter().map(|q| q.volume).sum();
+                let pn: u32 = patches.iter().map(|q| q.pairs).sum();
                 prop_assert!(close(pv, p.volume, 1e-9, 1e-15));
                 prop_assert_eq!(pn as usize, p.pairs);
-                for q in p.patches {
+                for q in patches {
                     prop_assert!(q.depth > 0.0 && q.depth <= p.max_depth);
                 }
             }
         } else {
             prop_assert_eq!(p.volume, 0.0);
-            prop_assert!(p.patches.is_empty());
+            prop_assert!(patches.is_empty());
             let (bd, _, _) = brute::min_distance(a, &pa, b, &pb);
             prop_assert!(p.distance <= bd);
         }
@@ -86,12 +86,12 @@ proptest! {
         let (a, b) = (&t[ia], &t[ib]);
         let scale = (a.r[0] + b.r[0]) as f64;
         let (pa, pb) = pair_poses(a, b, Default::default(), quat(qb[0], qb[1], qb[2], qb[3]), off * 0.8 * scale);
-        let mut st = PairState::new(a, b);
-        let exact = penetration(a, &pa, b, &pb, &mut st, &PenetrationOptions { safe_motion: false, tracking: Tracking::Traversal, ..Default::default() }).volume;
+        let mut pair = pair(a, b);
+        let exact = pair.penetration_with(&pa, &pb, &PenetrationOptions { safe_motion: false, tracking: Tracking::Traversal, ..Default::default() }).volume;
         let tol = 1e-9 * exact + 1e-15;
         let mut last_visits = 0;
         for budget in [0u64, 1, 5, 20, 100, 400, 2000, 10_000, u64::MAX] {
-            let r = penetration_budgeted(a, &pa, b, &pb, &mut st, budget);
+            let r = pair.penetration_within(&pa, &pb, budget);
             prop_assert!(r.volume <= exact + tol, "budget {}: found {} > exact {}", budget, r.volume, exact);
             prop_assert!(exact <= r.upper_bound + tol, "budget {}: exact {} > upper {}", budget, exact, r.upper_bound);
             prop_assert!(r.volume <= r.upper_bound);
@@ -119,14 +119,14 @@ proptest! {
         let t = trees();
         let (a, b) = (&t[ia], &t[ib]);
         let frames = motion(a, b, dir, side, axis, spin, 120);
-        let mut tracked = PairState::new(a, b);
-        let mut plain = PairState::new(a, b);
+        let mut tracked = pair(a, b);
+        let mut plain = pair(a, b);
         let topt = PenetrationOptions { tracking: Tracking::Front, ..Default::default() };
         let popt = PenetrationOptions { tracking: Tracking::Traversal, safe_motion: false, ..Default::default() };
         for (f, (pa, pb)) in frames.iter().enumerate() {
-            let q = penetration(a, pa, b, pb, &mut tracked, &topt);
+            let q = tracked.penetration_with(pa, pb, &topt);
             let (qv, qp, qf) = (q.volume, q.pairs, q.force);
-            let r = penetration(a, pa, b, pb, &mut plain, &popt);
+            let r = plain.penetration_with(pa, pb, &popt);
             prop_assert_eq!(qp, r.pairs, "frame {}", f);
             prop_assert!(close(qv, r.volume, 1e-10, 1e-15), "frame {}: {} vs {}", f, qv, r.volume);
             prop_assert!((qf - r.force).length() <= 1e-8 * r.force.length() + 1e-15);

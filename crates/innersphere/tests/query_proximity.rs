@@ -1,10 +1,11 @@
-//! Exact proximity against a brute-force scan over all leaf pairs, on random poses of small
+//! Exact distance ([`Pair::distance`](innersphere::Pair::distance)) against a brute-force scan over all leaf pairs, on random poses of small
 //! trees, with and without tolerances, signed or not, and along motions (coherence).
 
 mod query_util;
 
 use glam::DVec3;
-use innersphere::query::{brute, proximity, PairState, ProximityOptions};
+use innersphere::query::brute;
+use innersphere::DistanceOptions;
 use proptest::prelude::*;
 use query_util::*;
 
@@ -36,10 +37,10 @@ proptest! {
         let scale = (a.r[0] + b.r[0]) as f64;
         let (pa, pb) = pair_poses(a, b, pose(ta, qa), quat(qb[0], qb[1], qb[2], qb[3]), off * scale);
         let (bd, _, _) = brute::min_distance(a, &pa, b, &pb);
-        let mut st = PairState::new(a, b);
+        let mut pair = pair(a, b);
         for (coherence, best_first) in [(false, false), (true, false), (true, false), (false, true), (true, true)] {
-            let opts = ProximityOptions { coherence, best_first, ..Default::default() };
-            let p = proximity(a, &pa, b, &pb, &mut st, &opts);
+            let opts = DistanceOptions { coherence, best_first, ..Default::default() };
+            let p = pair.distance_with(&pa, &pb, &opts);
             prop_assert_eq!(p.overlapping, bd < 0.0);
             prop_assert_eq!(p.distance, bd.max(0.0));
             prop_assert_eq!(p.lower_bound, p.distance);
@@ -53,7 +54,7 @@ proptest! {
                 prop_assert!(brute::leaves_overlap(a, p.leaf_a, &pa, b, p.leaf_b, &pb));
                 prop_assert!(p.pair_distance < 0.0);
             }
-            let s = proximity(a, &pa, b, &pb, &mut st, &ProximityOptions { signed: true, coherence, best_first, ..Default::default() });
+            let s = pair.distance_with(&pa, &pb, &DistanceOptions { signed: true, coherence, best_first, ..Default::default() });
             prop_assert_eq!(s.distance, bd);
             prop_assert_eq!(s.pair_distance, bd);
         }
@@ -74,9 +75,9 @@ proptest! {
         let scale = (a.r[0] + b.r[0]) as f64;
         let (pa, pb) = pair_poses(a, b, Default::default(), quat(qb[0], qb[1], qb[2], qb[3]), off * 1.5 * scale);
         let (bd, _, _) = brute::min_distance(a, &pa, b, &pb);
-        let mut st = PairState::new(a, b);
-        let opts = ProximityOptions { abs_tolerance: abs, rel_tolerance: rel, coherence: false, signed: false, best_first };
-        let p = proximity(a, &pa, b, &pb, &mut st, &opts);
+        let mut pair = pair(a, b);
+        let opts = DistanceOptions { abs_tolerance: abs, rel_tolerance: rel, coherence: false, signed: false, best_first };
+        let p = pair.distance_with(&pa, &pb, &opts);
         let truth = bd.max(0.0);
         let slop = 1e-6 * scale;
         prop_assert!(p.distance >= truth - slop, "{} < {}", p.distance, truth);
@@ -85,7 +86,7 @@ proptest! {
         prop_assert!(p.lower_bound <= p.distance);
     }
 
-    /// Along a motion with coherence (the state carried from frame to frame) every frame
+    /// Along a motion with coherence (the pair carried from frame to frame) every frame
     /// still equals brute force.
     #[test]
     fn proximity_along_motions(
@@ -98,10 +99,10 @@ proptest! {
         let t = trees();
         let (a, b) = (&t[ia], &t[ib]);
         let frames = motion(a, b, DVec3::from_array(dir), DVec3::from_array(side), DVec3::from_array(axis), spin, 40);
-        let mut st = PairState::new(a, b);
+        let mut pair = pair(a, b);
         for (pa, pb) in &frames {
             let (bd, _, _) = brute::min_distance(a, pa, b, pb);
-            let p = proximity(a, pa, b, pb, &mut st, &ProximityOptions::default());
+            let p = pair.distance(pa, pb);
             prop_assert_eq!(p.distance, bd.max(0.0));
         }
     }

@@ -9,12 +9,10 @@ mod reference;
 use glam::{DQuat, DVec3};
 use innersphere::build::{build_tree, BuildOptions, Resolution};
 use innersphere::progress::Silent;
-use innersphere::query::{
-    backtracking, brute, contact, distance_traversal, multipoint, penetration,
-    penetration_budgeted, proximity, ContactOptions, MultipointOptions, PairState,
-    PenetrationOptions, Pose, ProximityOptions, Tracking,
+use innersphere::query::{brute, TraversalOptions};
+use innersphere::{
+    MultipointOptions, Pair, PenetrationOptions, Pose, SharedTree, SphereTree, Tracking,
 };
-use innersphere::SphereTree;
 use query_util::{close, motion, pair_poses};
 use reference::checks::{check_contact, check_multipoint, check_penetration};
 use reference::RefPair;
@@ -40,39 +38,33 @@ fn rng(seed: u64) -> impl FnMut() -> f64 {
 }
 
 /// Checks every query kind against brute force at one pose pair, and with `reference` also
-/// against the independent f64 reference (slower); `states` carry coherence.
+/// against the independent f64 reference (slower); the pairs `st` carry coherence.
 fn check_pose(
     a: &SphereTree,
     b: &SphereTree,
     pa: &Pose,
     pb: &Pose,
-    st: &mut [PairState; 4],
+    st: &mut [Pair; 4],
     reference: bool,
 ) {
     let (bd, _, _) = brute::min_distance(a, pa, b, pb);
     let pairs = brute::overlapping_pairs(a, pa, b, pb);
-    let p = proximity(a, pa, b, pb, &mut st[0], &ProximityOptions::default());
+    let p = st[0].distance(pa, pb);
     assert_eq!(p.distance, bd.max(0.0));
-    let off = ContactOptions { safe_motion: false };
+    let off = TraversalOptions { safe_motion: false };
     assert_eq!(
-        distance_traversal(a, pa, b, pb, &mut st[1], &off).in_contact(),
+        st[1].paper().distance_traversal(pa, pb, &off).in_contact(),
         !pairs.is_empty()
     );
     assert_eq!(
-        backtracking(a, pa, b, pb, &mut st[2], &off).in_contact(),
+        st[2].paper().backtracking(pa, pb, &off).in_contact(),
         !pairs.is_empty()
     );
-    assert_eq!(
-        contact(a, pa, b, pb, &mut st[3], &off).in_contact(),
-        !pairs.is_empty()
-    );
+    assert_eq!(st[3].contact(pa, pb).in_contact(), !pairs.is_empty());
     let want = brute::penetration(a, pa, b, pb, 2.0);
-    let q = penetration(
-        a,
+    let q = st[1].penetration_with(
         pa,
-        b,
         pb,
-        &mut st[1],
         &PenetrationOptions {
             stiffness: 2.0,
             safe_motion: false,
@@ -83,12 +75,9 @@ fn check_pose(
     assert_eq!(q.pairs, want.pairs);
     assert!(close(q.volume, want.volume, 1e-10, 1e-18));
     assert!((q.force - want.force).length() <= 1e-7 * want.force.length() + 1e-18);
-    let t = penetration(
-        a,
+    let t = st[3].penetration_with(
         pa,
-        b,
         pb,
-        &mut st[3],
         &PenetrationOptions {
             stiffness: 2.0,
             ..Default::default()
@@ -97,16 +86,13 @@ fn check_pose(
     assert_eq!(t.pairs, want.pairs);
     assert!(close(t.volume, want.volume, 1e-10, 1e-18));
     for budget in [10, 1000, u64::MAX] {
-        let r = penetration_budgeted(a, pa, b, pb, &mut st[1], budget);
+        let r = st[1].penetration_within(pa, pb, budget);
         assert!(r.volume <= want.volume * (1.0 + 1e-9) + 1e-18);
         assert!(want.volume <= r.upper_bound * (1.0 + 1e-9) + 1e-18);
     }
-    let m = multipoint(
-        a,
+    st[2].multipoint(
         pa,
-        b,
         pb,
-        &mut st[2],
         &MultipointOptions {
             k: 8,
             split_depth: 3,
@@ -114,14 +100,14 @@ fn check_pose(
             ..Default::default()
         },
     );
-    assert_eq!(m.contacts.is_empty(), pairs.is_empty());
+    assert_eq!(st[2].contacts().is_empty(), pairs.is_empty());
     if !reference {
         return;
     }
     // The independent reference: contacts, multipoint's contact set, penetration's force,
-    // torques and patches, with the states carried along.
+    // torques and patches, with the pairs carried along.
     let r = RefPair::new(a, pa, b, pb);
-    check_contact(&contact(a, pa, b, pb, &mut st[3], &off), &r, "contact").unwrap();
+    check_contact(&st[3].contact(pa, pb), &r, "contact").unwrap();
     let opts = MultipointOptions {
         k: 8,
         split_depth: 3,
@@ -129,14 +115,14 @@ fn check_pose(
         tracking: true,
         ..Default::default()
     };
-    check_multipoint(a, pa, b, pb, &r, &mut st[2], &opts).unwrap();
+    check_multipoint(&mut st[2], pa, pb, &r, &opts).unwrap();
     let opts = PenetrationOptions {
         stiffness: 2.0,
         safe_motion: false,
         max_patches: 6,
         ..Default::default()
     };
-    check_penetration(a, pa, b, pb, &r, &mut st[3], &opts).unwrap();
+    check_penetration(&mut st[3], pa, pb, &r, &opts).unwrap();
 }
 
 #[test]
@@ -148,17 +134,13 @@ fn small_meshes_random_poses_equal_brute_force() {
         "small/femur_cgal.stl",
         "small/torus_trimesh.stl",
     ];
-    let trees: Vec<SphereTree> = names.iter().map(|n| tree(n, 40)).collect();
+    let trees: Vec<SharedTree> = names.iter().map(|n| SharedTree::new(tree(n, 40))).collect();
     let mut r = rng(7);
-    for (i, a) in trees.iter().enumerate() {
-        for (j, b) in trees.iter().enumerate() {
+    for (i, sa) in trees.iter().enumerate() {
+        for (j, sb) in trees.iter().enumerate() {
+            let (a, b) = (&**sa.tree(), &**sb.tree());
             let scale = (a.r[0] + b.r[0]) as f64;
-            let mut st = [
-                PairState::new(a, b),
-                PairState::new(a, b),
-                PairState::new(a, b),
-                PairState::new(a, b),
-            ];
+            let mut st: [Pair; 4] = std::array::from_fn(|_| Pair::new(sa, sb));
             for _ in 0..12 {
                 let q = DQuat::from_xyzw(r(), r(), r(), r()).normalize();
                 let off = DVec3::new(r(), r(), r()) * scale * 0.9;
@@ -187,17 +169,13 @@ fn small_meshes_random_poses_equal_brute_force() {
 #[test]
 #[ignore = "real data: run with --ignored"]
 fn opposing_molars_in_the_bite_and_along_a_motion() {
-    let a = tree("jaw/ofj_p26_tooth03_upper_first_molar.stl", 48);
-    let b = tree("jaw/ofj_p26_tooth30_lower_first_molar.stl", 48);
+    let sa = SharedTree::new(tree("jaw/ofj_p26_tooth03_upper_first_molar.stl", 48));
+    let sb = SharedTree::new(tree("jaw/ofj_p26_tooth30_lower_first_molar.stl", 48));
+    let (a, b) = (&**sa.tree(), &**sb.tree());
     // Both are in the same frame: the bite pose is the identity.
-    let mut st = [
-        PairState::new(&a, &b),
-        PairState::new(&a, &b),
-        PairState::new(&a, &b),
-        PairState::new(&a, &b),
-    ];
+    let mut st: [Pair; 4] = std::array::from_fn(|_| Pair::new(&sa, &sb));
     let id = Pose::IDENTITY;
-    check_pose(&a, &b, &id, &id, &mut st, true);
+    check_pose(a, b, &id, &id, &mut st, true);
     // Open and close the bite: B moves down and back up along z with a small rotation.
     for f in 0..120 {
         let s = f as f64 / 120.0 * std::f64::consts::TAU;
@@ -206,6 +184,6 @@ fn opposing_molars_in_the_bite_and_along_a_motion() {
             DQuat::from_rotation_x(0.02 * s.sin()),
         )
         .unwrap();
-        check_pose(&a, &b, &id, &pb, &mut st, f % 8 == 0);
+        check_pose(a, b, &id, &pb, &mut st, f % 8 == 0);
     }
 }

@@ -1,17 +1,17 @@
 //! Every query kind against the independent f64 reference (`reference/`), which shares no
 //! code with the queries: hand-worked two-ball cases computed on paper, random poses of
-//! generated trees, and motions that carry each query's coherent state from frame to frame.
+//! generated trees, and motions that carry each query's pair from frame to frame.
 
 mod query_util;
 mod reference;
 
 use glam::DVec3;
-use innersphere::query::{
-    backtracking, contact, distance_traversal, penetration, proximity, ContactOptions,
-    MultipointOptions, PairState, PenetrationOptions, Pose, ProximityOptions, Tracking,
+use innersphere::query::TraversalOptions;
+use innersphere::{
+    DistanceOptions, MultipointOptions, Pair, PenetrationOptions, Pose, SharedTree, Tracking,
 };
 use proptest::prelude::*;
-use query_util::{motion, pair_poses, pose, quat, trees};
+use query_util::{motion, pair, pair_poses, pose, quat, trees};
 use reference::checks::*;
 use reference::{dv, hand_tree, RefPair};
 
@@ -26,13 +26,10 @@ fn two_equal_balls_on_paper() {
     let pa = Pose::IDENTITY;
     let pb = Pose::from_translation(DVec3::new(1.5, 0.0, 0.0));
     let (k, v) = (2.0, 11.0 * std::f64::consts::PI / 96.0);
-    let mut st = PairState::new(&a, &b);
-    let p = penetration(
-        &a,
+    let mut st = pair(&a, &b);
+    let p = st.penetration_with(
         &pa,
-        &b,
         &pb,
-        &mut st,
         &PenetrationOptions {
             stiffness: k,
             safe_motion: false,
@@ -54,29 +51,28 @@ fn two_equal_balls_on_paper() {
         "{}",
         p.torque_b
     );
-    assert_eq!(p.patches.len(), 1);
-    assert!(near(p.patches[0].point, DVec3::new(0.75, 0.0, 0.0), 1e-12));
+    assert_eq!(st.patches().len(), 1);
+    assert!(near(
+        st.patches()[0].point,
+        DVec3::new(0.75, 0.0, 0.0),
+        1e-12
+    ));
     let r = RefPair::new(&a, &pa, &b, &pb).penetration(k, 0.0);
     assert!(
         (r.volume - v).abs() < 1e-12
             && near(dv(r.torque_a), p.torque_a, 1e-12)
             && near(dv(r.torque_b), p.torque_b, 1e-12)
     );
-    let s = proximity(
-        &a,
+    let s = st.distance_with(
         &pa,
-        &b,
         &pb,
-        &mut st,
-        &ProximityOptions {
+        &DistanceOptions {
             signed: true,
             ..Default::default()
         },
     );
     assert!((s.distance + 0.5).abs() < 1e-12);
-    let c = contact(&a, &pa, &b, &pb, &mut st, &NO_SKIP)
-        .contact
-        .expect("contact");
+    let c = st.contact(&pa, &pb).contact.expect("contact");
     assert!(near(c.point, DVec3::new(0.75, 0.0, 0.0), 1e-12) && (c.depth - 0.5).abs() < 1e-12);
 }
 
@@ -97,13 +93,10 @@ fn unequal_balls_on_paper() {
     )
     .unwrap();
     let (k, v, g) = (1.0, 73.0 * std::f64::consts::PI / 480.0, 1.7787671232876712);
-    let mut st = PairState::new(&a, &b);
-    let p = penetration(
-        &a,
+    let mut st = pair(&a, &b);
+    let p = st.penetration_with(
         &pa,
-        &b,
         &pb,
-        &mut st,
         &PenetrationOptions {
             stiffness: k,
             safe_motion: false,
@@ -125,9 +118,9 @@ fn unequal_balls_on_paper() {
         p.torque_b
     );
     assert!(
-        near(p.patches[0].point, DVec3::new(0.0, g, 0.0), 1e-6),
+        near(st.patches()[0].point, DVec3::new(0.0, g, 0.0), 1e-6),
         "{}",
-        p.patches[0].point
+        st.patches()[0].point
     );
     let (rv, rg) = reference::lens(2.0, 1.0, 2.5);
     assert!(
@@ -160,30 +153,27 @@ fn touching_and_concentric_balls() {
     let b = hand_tree(&[([0.0; 3], 1.0)], [0.0; 3]);
     let pa = Pose::IDENTITY;
     let pb = Pose::from_translation(DVec3::new(2.0, 0.0, 0.0));
-    let mut st = PairState::new(&a, &b);
+    let mut st = pair(&a, &b);
     let opts = PenetrationOptions {
         safe_motion: false,
         ..Default::default()
     };
-    let p = penetration(&a, &pa, &b, &pb, &mut st, &opts);
+    let p = st.penetration_with(&pa, &pb, &opts);
     assert_eq!((p.pairs, p.volume), (0, 0.0));
     assert!(innersphere::query::brute::overlapping_pairs(&a, &pa, &b, &pb).is_empty());
-    assert!(!contact(&a, &pa, &b, &pb, &mut st, &NO_SKIP).in_contact());
-    let q = proximity(
-        &a,
+    assert!(!st.contact(&pa, &pb).in_contact());
+    let q = st.distance_with(
         &pa,
-        &b,
         &pb,
-        &mut st,
-        &ProximityOptions {
+        &DistanceOptions {
             signed: true,
             ..Default::default()
         },
     );
     assert_eq!((q.distance, q.overlapping), (0.0, false));
     let small = hand_tree(&[([0.0; 3], 0.5)], [0.0; 3]);
-    let mut st = PairState::new(&a, &small);
-    let p = penetration(&a, &pa, &small, &pa, &mut st, &opts);
+    let mut st = pair(&a, &small);
+    let p = st.penetration_with(&pa, &pa, &opts);
     assert_eq!(p.pairs, 1);
     assert!((p.volume - std::f64::consts::PI / 6.0).abs() < 1e-12);
     for v in [p.normal, p.force, p.torque_a, p.torque_b] {
@@ -217,17 +207,17 @@ fn lenses_with_the_circle_behind_a_centre() {
             safe_motion: false,
             ..Default::default()
         };
-        let mut st = PairState::new(&a, &b);
-        let p = penetration(&a, &pa, &b, &pb, &mut st, &opts);
+        let mut st = pair(&a, &b);
+        let p = st.penetration_with(&pa, &pb, &opts);
         assert!((p.volume - v).abs() < 1e-7 * v, "{} vs {v}", p.volume);
         assert!(
             near(
-                p.patches[0].point,
+                st.patches()[0].point,
                 DVec3::new(0.0, 0.0, g),
                 1e-7 * (ra + rb)
             ),
             "{} vs {g}",
-            p.patches[0].point
+            st.patches()[0].point
         );
     }
 }
@@ -293,21 +283,22 @@ proptest! {
         let t = trees();
         let (a, b) = (&t[ia], &t[ib]);
         let frames = motion(a, b, DVec3::from_array(dir), DVec3::from_array(side), DVec3::from_array(axis), spin, 48);
-        let mut st: Vec<PairState> = (0..8).map(|_| PairState::new(a, b)).collect();
-        let safe = ContactOptions { safe_motion: true };
+        let (sa, sb) = (SharedTree::new(a.clone()), SharedTree::new(b.clone()));
+        let mut st: Vec<Pair> = (0..8).map(|_| Pair::new(&sa, &sb)).collect();
+        let safe = TraversalOptions { safe_motion: true };
         for (pa, pb) in &frames {
             let r = RefPair::new(a, pa, b, pb);
-            check_proximity(a, pa, b, pb, &r, &mut st[0])?;
-            check_contact(&backtracking(a, pa, b, pb, &mut st[1], &safe), &r, "backtracking")?;
-            check_contact(&contact(a, pa, b, pb, &mut st[2], &safe), &r, "contact")?;
-            check_contact(&distance_traversal(a, pa, b, pb, &mut st[3], &safe), &r, "distance traversal")?;
+            check_proximity(&mut st[0], pa, pb, &r)?;
+            check_contact(&st[1].paper().backtracking(pa, pb, &safe), &r, "backtracking")?;
+            check_contact(&st[2].contact(pa, pb), &r, "contact")?;
+            check_contact(&st[3].paper().distance_traversal(pa, pb, &safe), &r, "distance traversal")?;
             for (i, tracking) in [(4, false), (5, true)] {
                 let opts = MultipointOptions { tracking, k: 6, split_depth: split, reuse: true, safe_motion: true };
-                check_multipoint(a, pa, b, pb, &r, &mut st[i], &opts)?;
+                check_multipoint(&mut st[i], pa, pb, &r, &opts)?;
             }
             for (i, tracking) in [(6, Tracking::Front), (7, Tracking::Traversal)] {
                 let opts = PenetrationOptions { stiffness: 10.0, max_patches: 4, patch_radius: 0.0, safe_motion: true, tracking };
-                check_penetration(a, pa, b, pb, &r, &mut st[i], &opts)?;
+                check_penetration(&mut st[i], pa, pb, &r, &opts)?;
             }
         }
     }
@@ -330,13 +321,13 @@ proptest! {
         let r = RefPair::new(&a, &pa, &b, &pb);
         let want = r.penetration(1.0, 0.0);
         let opts = PenetrationOptions { max_patches: 1, safe_motion: false, ..Default::default() };
-        let mut st = PairState::new(&a, &b);
-        let p = penetration(&a, &pa, &b, &pb, &mut st, &opts);
+        let mut st = pair(&a, &b);
+        let p = st.penetration_with(&pa, &pb, &opts);
         let tol = r.volume_tolerance() + 1e-9 * want.volume;
         prop_assert!((p.volume - want.volume).abs() <= tol, "volume {} vs {} (ra {}, rb {}, d {})", p.volume, want.volume, ra, rb, d);
         if want.volume > 1e3 * tol {
             let g = dv(want.moment) / want.volume;
-            prop_assert!(near(p.patches[0].point, g, 1e-6 * (ra + rb)), "centroid {} vs {} (ra {}, rb {}, d {})", p.patches[0].point, g, ra, rb, d);
+            prop_assert!(near(st.patches()[0].point, g, 1e-6 * (ra + rb)), "centroid {} vs {} (ra {}, rb {}, d {})", st.patches()[0].point, g, ra, rb, d);
         }
     }
 }

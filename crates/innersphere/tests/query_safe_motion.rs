@@ -5,10 +5,8 @@
 mod query_util;
 
 use glam::DVec3;
-use innersphere::query::{
-    backtracking, brute, contact, distance_traversal, multipoint, penetration, proximity,
-    ContactOptions, MultipointOptions, PairState, PenetrationOptions, ProximityOptions, Tracking,
-};
+use innersphere::query::{brute, TraversalOptions};
+use innersphere::{MultipointOptions, PenetrationOptions, Tracking};
 use proptest::prelude::*;
 use query_util::*;
 
@@ -33,24 +31,24 @@ proptest! {
         let t = trees();
         let (a, b) = (&t[ia], &t[ib]);
         let motion = motion(a, b, dir, side, axis, spin, frames);
-        let on = ContactOptions { safe_motion: true };
-        let off = ContactOptions { safe_motion: false };
-        let mut s_bt = PairState::new(a, b);
-        let mut s_dt = PairState::new(a, b);
-        let mut s_mp = PairState::new(a, b);
-        let mut s_pen = PairState::new(a, b);
-        let mut s_ref = PairState::new(a, b);
-        let mut s_front = PairState::new(a, b);
-        let mut s_pen_front = PairState::new(a, b);
+        let on = TraversalOptions { safe_motion: true };
+        let off = TraversalOptions { safe_motion: false };
+        let mut s_bt = pair(a, b);
+        let mut s_dt = pair(a, b);
+        let mut s_mp = pair(a, b);
+        let mut s_pen = pair(a, b);
+        let mut s_ref = pair(a, b);
+        let mut s_front = pair(a, b);
+        let mut s_pen_front = pair(a, b);
         let mut skipped = 0;
         for (f, (pa, pb)) in motion.iter().enumerate() {
             if with_proximity && f % 7 == 0 {
-                // A proximity query records its exact separation too.
-                proximity(a, pa, b, pb, &mut s_bt, &ProximityOptions::default());
+                // A distance query records its exact separation too.
+                s_bt.distance(pa, pb);
             }
-            let truth = distance_traversal(a, pa, b, pb, &mut s_ref, &off).in_contact();
+            let truth = s_ref.paper().distance_traversal(pa, pb, &off).in_contact();
             let bound = s_bt.safe_separation(pa, pb);
-            let q = backtracking(a, pa, b, pb, &mut s_bt, &on);
+            let q = s_bt.paper().backtracking(pa, pb, &on);
             prop_assert_eq!(q.in_contact(), truth, "backtracking, frame {}", f);
             let (bd, _, _) = brute::min_distance(a, pa, b, pb);
             if let Some(s) = bound {
@@ -60,17 +58,17 @@ proptest! {
                 skipped += 1;
                 prop_assert!(q.distance > 0.0 && q.distance <= bd);
             }
-            prop_assert_eq!(distance_traversal(a, pa, b, pb, &mut s_dt, &on).in_contact(), truth, "distance traversal, frame {}", f);
-            let m = multipoint(a, pa, b, pb, &mut s_mp, &MultipointOptions { k: 3, split_depth: 2, ..Default::default() });
-            prop_assert_eq!(!m.contacts.is_empty(), truth, "multipoint, frame {}", f);
-            let p = penetration(a, pa, b, pb, &mut s_pen, &PenetrationOptions { tracking: Tracking::Traversal, ..Default::default() });
+            prop_assert_eq!(s_dt.paper().distance_traversal(pa, pb, &on).in_contact(), truth, "distance traversal, frame {}", f);
+            s_mp.multipoint(pa, pb, &MultipointOptions { k: 3, split_depth: 2, ..Default::default() });
+            prop_assert_eq!(!s_mp.contacts().is_empty(), truth, "multipoint, frame {}", f);
+            let p = s_pen.penetration_with(pa, pb, &PenetrationOptions { tracking: Tracking::Traversal, ..Default::default() });
             prop_assert_eq!(p.pairs > 0, truth, "penetration, frame {}", f);
             if p.skipped {
                 prop_assert!(p.distance > 0.0 && p.distance <= bd);
             }
-            let p = penetration(a, pa, b, pb, &mut s_pen_front, &PenetrationOptions::default());
+            let p = s_pen_front.penetration(pa, pb);
             prop_assert_eq!(p.pairs > 0, truth, "penetration (front), frame {}", f);
-            let c = contact(a, pa, b, pb, &mut s_front, &on);
+            let c = s_front.contact(pa, pb);
             prop_assert_eq!(c.in_contact(), truth, "front contact, frame {}", f);
             if !truth {
                 prop_assert!(c.distance <= bd.max(0.0));
@@ -93,16 +91,13 @@ fn root_spheres_reject_far_pairs() {
         Default::default(),
         DVec3::new(10.0, 0.0, 0.0),
     );
-    let mut st = PairState::new(a, b);
-    let off = ContactOptions { safe_motion: false };
-    assert_eq!(distance_traversal(a, &pa, b, &pb, &mut st, &off).visits, 1);
-    assert_eq!(backtracking(a, &pa, b, &pb, &mut st, &off).visits, 1);
-    let p = penetration(
-        a,
+    let mut st = pair(a, b);
+    let off = TraversalOptions { safe_motion: false };
+    assert_eq!(st.paper().distance_traversal(&pa, &pb, &off).visits, 1);
+    assert_eq!(st.paper().backtracking(&pa, &pb, &off).visits, 1);
+    let p = st.penetration_with(
         &pa,
-        b,
         &pb,
-        &mut st,
         &PenetrationOptions {
             safe_motion: false,
             tracking: Tracking::Traversal,
@@ -118,6 +113,8 @@ fn root_spheres_reject_far_pairs() {
         Default::default(),
         DVec3::new(9.99, 0.0, 0.0),
     );
-    let q = distance_traversal(a, &pa2, b, &pb2, &mut st, &ContactOptions::default());
+    let q = st
+        .paper()
+        .distance_traversal(&pa2, &pb2, &TraversalOptions::default());
     assert!(q.skipped && q.distance > 5.0);
 }

@@ -5,16 +5,13 @@
 mod query_util;
 
 use glam::DVec3;
-use innersphere::query::{
-    backtracking, brute, contact, distance_traversal, multipoint, ContactOptions,
-    MultipointOptions, PairState,
-};
-use innersphere::SphereTree;
+use innersphere::query::{brute, TraversalOptions};
+use innersphere::{MultipointOptions, SphereTree};
 use proptest::prelude::*;
 use query_util::*;
 use std::collections::BTreeSet;
 
-const NO_SKIP: ContactOptions = ContactOptions { safe_motion: false };
+const NO_SKIP: TraversalOptions = TraversalOptions { safe_motion: false };
 
 fn ancestor_at(t: &SphereTree, mut n: u32, d: u32) -> u32 {
     while t.depth[n as usize] as u32 > d {
@@ -43,8 +40,8 @@ proptest! {
         let scale = (a.r[0] + b.r[0]) as f64;
         let (pa, pb) = pair_poses(a, b, pose([0.3, -1.0, 2.0], [1.0, 0.2, 0.0, 0.3]), quat(qb[0], qb[1], qb[2], qb[3]), off * 1.2 * scale);
         let (bd, _, _) = brute::min_distance(a, &pa, b, &pb);
-        let mut st = PairState::new(a, b);
-        let q = distance_traversal(a, &pa, b, &pb, &mut st, &NO_SKIP);
+        let mut st = pair(a, b);
+        let q = st.paper().distance_traversal(&pa, &pb, &NO_SKIP);
         prop_assert_eq!(q.in_contact(), bd < 0.0);
         match q.contact {
             Some(c) => {
@@ -69,15 +66,15 @@ proptest! {
         let t = trees();
         let (a, b) = (&t[ia], &t[ib]);
         let motion = motion(a, b, dir, side, axis, spin, frames);
-        let mut bt = PairState::new(a, b);
-        let mut full = PairState::new(a, b);
-        let mut front = PairState::new(a, b);
+        let mut bt = pair(a, b);
+        let mut full = pair(a, b);
+        let mut front = pair(a, b);
         let mut contacts = 0;
         for (f, (pa, pb)) in motion.iter().enumerate() {
-            let q = backtracking(a, pa, b, pb, &mut bt, &NO_SKIP);
-            let r = distance_traversal(a, pa, b, pb, &mut full, &NO_SKIP);
+            let q = bt.paper().backtracking(pa, pb, &NO_SKIP);
+            let r = full.paper().distance_traversal(pa, pb, &NO_SKIP);
             prop_assert_eq!(q.in_contact(), r.in_contact(), "frame {}", f);
-            let t = contact(a, pa, b, pb, &mut front, &NO_SKIP);
+            let t = front.contact(pa, pb);
             prop_assert_eq!(t.in_contact(), r.in_contact(), "front, frame {}", f);
             if let Some(c) = t.contact {
                 prop_assert!(brute::leaves_overlap(a, c.leaf_a, pa, b, c.leaf_b, pb));
@@ -113,9 +110,9 @@ proptest! {
         let t = trees();
         let (a, b) = (&t[ia], &t[ib]);
         let motion = motion(a, b, dir, side, axis, spin, 50);
-        let mut reuse = PairState::new(a, b);
-        let mut fresh = PairState::new(a, b);
-        let mut tracked = PairState::new(a, b);
+        let mut reuse = pair(a, b);
+        let mut fresh = pair(a, b);
+        let mut tracked = pair(a, b);
         for (f, (pa, pb)) in motion.iter().enumerate() {
             let pairs = brute::overlapping_pairs(a, pa, b, pb);
             let regions: BTreeSet<(u32, u32)> = pairs
@@ -125,16 +122,17 @@ proptest! {
             let want = k.min(regions.len());
             for (st, reuse_on, tracking) in [(&mut reuse, true, false), (&mut fresh, false, false), (&mut tracked, true, true)] {
                 let opts = MultipointOptions { k, split_depth: split, reuse: reuse_on, safe_motion: false, tracking };
-                let r = multipoint(a, pa, b, pb, st, &opts);
-                prop_assert_eq!(r.contacts.len(), want, "frame {} reuse {}", f, reuse_on);
-                prop_assert!(r.reused <= r.contacts.len());
+                let r = st.multipoint(pa, pb, &opts);
+                let contacts = st.contacts();
+                prop_assert_eq!(contacts.len(), want, "frame {} reuse {}", f, reuse_on);
+                prop_assert!(r.reused <= contacts.len());
                 let mut seen = BTreeSet::new();
-                for c in r.contacts {
+                for c in contacts {
                     prop_assert!(brute::leaves_overlap(a, c.leaf_a, pa, b, c.leaf_b, pb));
                     let key = (ancestor_at(a, c.leaf_a, split), ancestor_at(b, c.leaf_b, split));
                     prop_assert!(seen.insert(key), "two contacts below one split pair");
                 }
-                if r.contacts.is_empty() {
+                if contacts.is_empty() {
                     let (bd, _, _) = brute::min_distance(a, pa, b, pb);
                     prop_assert!(r.distance <= bd.max(0.0));
                 }

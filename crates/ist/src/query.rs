@@ -1,9 +1,7 @@
 //! `ist query`: one query between two trees, B posed in A's frame (A at identity).
 
 use anyhow::Context;
-use innersphere::query::{
-    self, ContactOptions, MultipointOptions, PairState, PenetrationOptions, Pose, ProximityOptions,
-};
+use innersphere::{DistanceOptions, MultipointOptions, Pair, PenetrationOptions, Pose};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -12,7 +10,7 @@ use std::path::PathBuf;
 pub enum Kind {
     /// Exact distance of the sphere packings, closest points.
     Distance,
-    /// First contact (the paper's distance traversal).
+    /// First contact (the same answer as the paper's distance traversal).
     Contact,
     /// Up to --k contacts, one per split-depth pair (the paper's multipoint traversal).
     Multipoint,
@@ -79,18 +77,18 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     crate::warn_if_stale(&args.a, &a);
     crate::warn_if_stale(&args.b, &b);
     let pose_a = Pose::IDENTITY;
-    let mut st = PairState::new(&a, &b);
+    let mut pair = Pair::new(a, b);
     let t0 = std::time::Instant::now();
     let (out, summary) = match args.query {
         Kind::Distance => {
-            let opts = ProximityOptions {
+            let opts = DistanceOptions {
                 abs_tolerance: args.abs_tol,
                 rel_tolerance: args.rel_tol,
                 signed: args.signed,
                 coherence: false,
                 best_first: false,
             };
-            let p = query::proximity(&a, &pose_a, &b, &pose_b, &mut st, &opts);
+            let p = pair.distance_with(&pose_a, &pose_b, &opts);
             let secs = t0.elapsed().as_secs_f64();
             (
                 json!({
@@ -119,14 +117,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             )
         }
         Kind::Contact => {
-            let q = query::distance_traversal(
-                &a,
-                &pose_a,
-                &b,
-                &pose_b,
-                &mut st,
-                &ContactOptions { safe_motion: false },
-            );
+            let q = pair.contact(&pose_a, &pose_b);
             let secs = t0.elapsed().as_secs_f64();
             (
                 json!({
@@ -165,21 +156,22 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 safe_motion: false,
                 tracking: false,
             };
-            let m = query::multipoint(&a, &pose_a, &b, &pose_b, &mut st, &opts);
+            let m = pair.multipoint(&pose_a, &pose_b, &opts);
             let secs = t0.elapsed().as_secs_f64();
-            let mut s = format!("{} contacts", m.contacts.len());
-            for c in m.contacts {
+            let contacts = pair.contacts();
+            let mut s = format!("{} contacts", m.count);
+            for c in contacts {
                 s += &format!("\n  {:?} depth {:.6}", v3(c.point), c.depth);
             }
-            if m.contacts.is_empty() {
+            if contacts.is_empty() {
                 s += &format!(", separated by at least {:.6}", m.distance);
             }
             (
                 json!({
                     "query": "multipoint",
-                    "contact": !m.contacts.is_empty(),
+                    "contact": !contacts.is_empty(),
                     "distance": m.distance,
-                    "contacts": m.contacts,
+                    "contacts": contacts,
                     "visits": m.visits,
                     "seconds": secs,
                 }),
@@ -192,7 +184,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 safe_motion: false,
                 ..Default::default()
             };
-            let p = query::penetration(&a, &pose_a, &b, &pose_b, &mut st, &opts);
+            let p = pair.penetration_with(&pose_a, &pose_b, &opts);
+            let patches = pair.patches();
             let secs = t0.elapsed().as_secs_f64();
             let mut s = format!(
                 "volume {:.6e} over {} leaf pairs (deepest {:.6}), force on B {:?}, torque on B {:?}, on A {:?}",
@@ -203,7 +196,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 v3(p.torque_b),
                 v3(p.torque_a)
             );
-            for q in p.patches {
+            for q in patches {
                 s += &format!(
                     "\n  patch at {:?} normal {:?} depth {:.6} volume {:.6e}",
                     v3(q.point),
@@ -228,7 +221,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                     "torque": v3(p.torque_b),
                     "torque_a": v3(p.torque_a),
                     "torque_b": v3(p.torque_b),
-                    "patches": p.patches,
+                    "patches": patches,
                     "visits": p.visits,
                     "seconds": secs,
                 }),

@@ -58,8 +58,8 @@ enum Kind {
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     anyhow::ensure!(args.every >= 1, "--every must be at least 1");
-    let a = innersphere::tree::file::load(&args.a)?;
-    let b = innersphere::tree::file::load(&args.b)?;
+    let a = innersphere::SharedTree::new(innersphere::tree::file::load(&args.a)?);
+    let b = innersphere::SharedTree::new(innersphere::tree::file::load(&args.b)?);
     crate::warn_if_stale(&args.a, &a);
     crate::warn_if_stale(&args.b, &b);
     let motion = innersphere_eval::motion::Motion::load(&args.motion)?;

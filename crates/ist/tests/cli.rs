@@ -3,8 +3,8 @@
 //! tree and its mesh, 1 on a tree against another mesh), `query`, and exit code 2 on errors.
 
 use innersphere::glam::DVec3;
-use innersphere::query::{self, PairState, Pose, ProximityOptions};
 use innersphere::shapes;
+use innersphere::{DistanceOptions, Pair, Pose};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -197,13 +197,13 @@ fn query_gives_the_distance_of_the_posed_trees() {
     );
     // The same query through the library, with the pose parsed from the same text.
     let library = |pose: &str, b: &innersphere::SphereTree| {
-        let mut st = PairState::new(&a, b);
-        let opts = ProximityOptions {
+        let mut pair = Pair::new(a.clone(), b.clone());
+        let opts = DistanceOptions {
             coherence: false,
             ..Default::default()
         };
         let pose: Pose = pose.parse().unwrap();
-        query::proximity(&a, &Pose::IDENTITY, b, &pose, &mut st, &opts).distance
+        pair.distance_with(&Pose::IDENTITY, &pose, &opts).distance
     };
     // The ball 3 along x: its surface is 1 from the box's +x face; the inner spheres lie
     // inside both meshes, less than a voxel diagonal (0.17) from their surfaces.

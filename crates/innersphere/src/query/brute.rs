@@ -1,7 +1,7 @@
 //! Brute-force references over all leaf pairs (O(leaves_a × leaves_b)), with the same f32
 //! transform and leaf predicates as the queries, for tests and checks on small trees.
 
-use super::geometry::{overlaps, sphere_distance, Rel32};
+use super::kernel::geometry::{overlaps, sphere_distance, Rel32};
 use super::penetration::Sums;
 use crate::Pose;
 use crate::SphereTree;
@@ -98,7 +98,7 @@ pub struct BrutePenetration {
     pub torque_b: DVec3,
 }
 
-/// [`super::penetration`] by brute force.
+/// [`Pair::penetration`](crate::Pair::penetration) by brute force.
 pub fn penetration(
     a: &SphereTree,
     pose_a: &Pose,

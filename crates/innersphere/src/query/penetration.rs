@@ -1,18 +1,40 @@
-//! Penetration volume, force, torque and contact patches (beyond the paper), and its
-//! time-critical variant.
+//! Penetration volume, force, torque and contact patches (beyond the paper).
 //!
 //! Leaves within one tree are disjoint, so the sum of the lens volumes of all overlapping
 //! leaf pairs is exactly the volume of the intersection of the two sphere unions.
 
-use super::geometry::{direction, lens};
-use super::heap::Entry;
-use super::state::{expand_larger, safe_separation, Item, PairState};
-use super::traversal::{blocked, overlap_pairs_dispatch, TItem};
-use crate::Pose;
-use crate::SphereTree;
+use super::kernel::block::TItem;
+use super::kernel::geometry::{direction, lens};
+use super::kernel::info::TreeInfo;
+use super::kernel::separation::{record, safe_separation, SeparationRecord};
+use super::kernel::{expand_larger, Ctx, Item};
+use super::search::descent::{blocked, overlap_pairs_dispatch, Descent};
+use super::search::front::Front;
 use glam::DVec3;
 
-/// Options of [`penetration`].
+/// Patches reserved per pair: `max_patches` up to this allocates nothing.
+pub(crate) const RESERVED_PATCHES: usize = 64;
+
+/// The scratch of penetration: the patches being summed and the finished ones.
+#[derive(Debug)]
+pub(crate) struct PenetrationScratch {
+    /// The finished patches of the last query (world frame).
+    pub patches: Vec<Patch>,
+    /// Running sums of the patches.
+    pub patch_acc: Vec<PatchAcc>,
+}
+
+impl PenetrationScratch {
+    /// Reserved for up to [`RESERVED_PATCHES`] patches.
+    pub(crate) fn new() -> PenetrationScratch {
+        PenetrationScratch {
+            patches: Vec::with_capacity(RESERVED_PATCHES),
+            patch_acc: Vec::with_capacity(RESERVED_PATCHES),
+        }
+    }
+}
+
+/// Options of [`Pair::penetration`](crate::Pair::penetration).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PenetrationOptions {
     /// Force per unit of penetration volume (force = stiffness × volume).
@@ -41,7 +63,7 @@ impl Default for PenetrationOptions {
     }
 }
 
-/// How [`penetration`] finds the overlapping leaf pairs. Same result either way.
+/// How [`Pair::penetration`](crate::Pair::penetration) finds the overlapping leaf pairs. Same result either way.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Tracking {
     /// The front for trees of up to [`AUTO_FRONT_NODES`] nodes together, else the traversal.
@@ -86,9 +108,10 @@ pub(crate) struct PatchAcc {
     pairs: u32,
 }
 
-/// Result of [`penetration`]; the patches are borrowed from the [`PairState`].
+/// Result of [`Pair::penetration`](crate::Pair::penetration). The patches themselves stay in
+/// the pair until its next query: [`Pair::patches`](crate::Pair::patches).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Penetration<'s> {
+pub struct Penetration {
     /// Volume of the intersection of the two inner-sphere unions: the sum of the lens
     /// volumes of all overlapping leaf pairs.
     pub volume: f64,
@@ -105,8 +128,8 @@ pub struct Penetration<'s> {
     pub torque_a: DVec3,
     /// Torque on B about B's centre of mass (world).
     pub torque_b: DVec3,
-    /// Contact patches.
-    pub patches: &'s [Patch],
+    /// Number of contact patches.
+    pub patch_count: usize,
     /// 0 with penetration; otherwise a proved lower bound on the separation.
     pub distance: f64,
     /// Node pairs tested.
@@ -223,28 +246,31 @@ fn assign_patch(
 ///
 /// Depth-first over the overlapping node pairs (larger sphere refined first), summing the
 /// exact lens volume of every overlapping leaf pair.
-pub fn penetration<'s>(
-    a: &SphereTree,
-    pose_a: &Pose,
-    b: &SphereTree,
-    pose_b: &Pose,
-    st: &'s mut PairState,
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn penetration(
+    ctx: &Ctx,
+    ia: &TreeInfo,
+    ib: &TreeInfo,
+    desc: &mut Descent,
+    front: &mut Front,
+    sep: &mut Option<SeparationRecord>,
+    s: &mut PenetrationScratch,
     opts: &PenetrationOptions,
-) -> Penetration<'s> {
-    let (ctx, s, ia, ib) = st.begin(a, pose_a, b, pose_b);
+) -> Penetration {
+    let pose_a = &ctx.pose_a;
     s.patch_acc.clear();
     s.patches.clear();
     let mut visits = 0u64;
     let mut min_sep = f32::INFINITY;
     let mut sums = Sums::default();
     let mut skipped = false;
-    let front = match opts.tracking {
+    let use_front = match opts.tracking {
         Tracking::Front => true,
         Tracking::Traversal => false,
         Tracking::Auto => ia.nodes + ib.nodes <= AUTO_FRONT_NODES,
     };
-    let safe = if opts.safe_motion && !front {
-        safe_separation(ia, ib, s.separation, &ctx.rel).filter(|&d| d > 0.0)
+    let safe = if opts.safe_motion && !use_front {
+        safe_separation(ia, ib, *sep, &ctx.rel).filter(|&d| d > 0.0)
     } else {
         None
     };
@@ -265,42 +291,42 @@ pub fn penetration<'s>(
         };
         let maxp = opts.max_patches;
         let (na, nb) = (ctx.a, ctx.b);
-        if front {
-            visits = s.front.update(&ctx, ib);
-            for h in &s.front.hits {
+        if use_front {
+            visits = front.update(ctx, ib);
+            for h in &front.hits {
                 let n = &na[h.a as usize];
                 let (v, p, u, depth) = sums.add([n.x, n.y, n.z], n.r, h.c, nb[h.b as usize].r);
                 assign_patch(&mut s.patch_acc, maxp, r2, v, p, u, depth);
             }
-            if s.front.hits.is_empty() {
-                min_sep = s.front.margin().max(0.0) as f32;
+            if front.hits.is_empty() {
+                min_sep = front.margin().max(0.0) as f32;
             }
         } else if !ov {
             min_sep = lbr;
         } else if na[0].is_leaf() && nb[0].is_leaf() {
             let (v, p, u, depth) = sums.add([na[0].x, na[0].y, na[0].z], na[0].r, c0, nb[0].r);
             assign_patch(&mut s.patch_acc, maxp, r2, v, p, u, depth);
-        } else if blocked(&ctx) {
+        } else if blocked(ctx) {
             // Fan-outs ≤ 4: blocked steps (4×4 child pairs at a time).
-            let stack = &mut s.tstack;
+            let stack = &mut desc.tstack;
             stack.clear();
-            stack.push(TItem::new(&ctx, 0, 0, c0, 0));
+            stack.push(TItem::new(ctx, 0, 0, c0, 0));
             let patch_acc = &mut s.patch_acc;
             let mut leaf = |i: u32, j: u32, cb: [f32; 3]| {
                 let n = &na[i as usize];
                 let (v, p, u, depth) = sums.add([n.x, n.y, n.z], n.r, cb, nb[j as usize].r);
                 assign_patch(patch_acc, maxp, r2, v, p, u, depth);
             };
-            overlap_pairs_dispatch(&ctx, stack, &mut min_sep, &mut visits, &mut leaf);
+            overlap_pairs_dispatch(ctx, stack, &mut min_sep, &mut visits, &mut leaf);
         } else {
-            s.stack.clear();
-            s.stack.push(Item {
+            desc.stack.clear();
+            desc.stack.push(Item {
                 a: 0,
                 b: 0,
                 c: c0,
                 depth: 0,
             });
-            let stack = &mut s.stack;
+            let stack = &mut desc.stack;
             let patch_acc = &mut s.patch_acc;
             while let Some(e) = stack.pop() {
                 let visit = |i: u32, j: u32, cb: [f32; 3], d2: f32, sr: f32, leafs: bool| {
@@ -327,7 +353,7 @@ pub fn penetration<'s>(
                         }
                     }
                 };
-                expand_larger(&ctx, e.a, e.b, e.c, visit);
+                expand_larger(ctx, e.a, e.b, e.c, visit);
             }
         }
     }
@@ -350,13 +376,13 @@ pub fn penetration<'s>(
     }
     let distance = if sums.pairs > 0 {
         if !skipped {
-            s.separation = None;
+            *sep = None;
         }
         0.0
     } else {
         let d = min_sep.max(0.0) as f64;
         if !skipped {
-            s.record_separation(&ctx, d);
+            record(sep, ctx, d);
         }
         d
     };
@@ -368,118 +394,9 @@ pub fn penetration<'s>(
         force: rot(f),
         torque_a: rot(ta),
         torque_b: rot(tb),
-        patches: &s.patches,
+        patch_count: s.patches.len(),
         distance,
         visits,
         skipped,
-    }
-}
-
-/// Result of [`penetration_budgeted`].
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct BudgetedVolume {
-    /// Sum of the lens volumes of the overlapping leaf pairs found (≤ the exact volume).
-    pub volume: f64,
-    /// Proved upper bound on the exact volume (= `volume` when complete).
-    pub upper_bound: f64,
-    /// Node pairs tested (the budget may be exceeded by less than one refinement).
-    pub visits: u64,
-    /// True when every overlapping pair was refined: `volume` is exact.
-    pub complete: bool,
-}
-
-/// Time-critical penetration volume: refines node pairs in order of an upper bound of the
-/// volume still hidden below them, `min(lens of the node spheres, leaf volume below A's node,
-/// leaf volume below B's node)`, until `budget` node-pair tests are spent; returns the volume
-/// found so far and `found + Σ bounds of the unrefined pairs` as an upper bound. With an
-/// unlimited budget (`u64::MAX`) the volume is the exact one of [`penetration`].
-///
-/// Choosing the budget: a node-pair test costs up to about 75 ns here (a priority-queue
-/// pop per refinement and a lens bound per overlapping child; measured on the jaw trees on a
-/// 2-core cloud machine), so 8 000 visits keep a frame under about 0.6 ms and 20 000 do not
-/// fit a 1 ms haptic frame. For the fastest exact answer use [`penetration`] instead, whose
-/// kinetic front is several times cheaper per frame than any useful budget.
-pub fn penetration_budgeted(
-    a: &SphereTree,
-    pose_a: &Pose,
-    b: &SphereTree,
-    pose_b: &Pose,
-    st: &mut PairState,
-    budget: u64,
-) -> BudgetedVolume {
-    let (ctx, s, ia, ib) = st.begin(a, pose_a, b, pose_b);
-    let heap = &mut s.heap;
-    heap.clear();
-    let mut visits = 1u64;
-    let mut found = 0.0f64;
-    let c0 = ctx.xf(0);
-    let (ov, _) = ctx.test(0, 0, c0);
-    let va = &ia.subtree_volume;
-    let vb = &ib.subtree_volume;
-    let (na, nb) = (ctx.a, ctx.b);
-    let h = 0.5 * ctx.slack as f64;
-    let bound = |i: u32, j: u32, d2: f32| -> f32 {
-        let (ra, rb) = (na[i as usize].r as f64 + h, nb[j as usize].r as f64 + h);
-        let (l, _) = lens(ra, rb, (d2 as f64).sqrt());
-        let ub = (l * (1.0 + 1e-6))
-            .min(va[i as usize] as f64)
-            .min(vb[j as usize] as f64);
-        let f = ub as f32;
-        if (f as f64) < ub {
-            f32::from_bits(f.to_bits() + 1)
-        } else {
-            f
-        }
-    };
-    let leaf_volume = |i: u32, j: u32, cb: [f32; 3]| -> f64 {
-        let n = &na[i as usize];
-        let mut s = Sums::default();
-        s.add([n.x, n.y, n.z], n.r, cb, nb[j as usize].r);
-        s.volume
-    };
-    if ov {
-        if na[0].is_leaf() && nb[0].is_leaf() {
-            found = leaf_volume(0, 0, c0);
-        } else {
-            let dx = na[0].x - c0[0];
-            let dy = na[0].y - c0[1];
-            let dz = na[0].z - c0[2];
-            heap.push(Entry {
-                key: -bound(0, 0, dx * dx + dy * dy + dz * dz),
-                a: 0,
-                b: 0,
-                c: c0,
-            });
-        }
-    }
-    while visits < budget {
-        let Some(e) = heap.pop() else { break };
-        expand_larger(&ctx, e.a, e.b, e.c, |i, j, c, d2, sr, leafs| {
-            visits += 1;
-            if d2 < sr * sr {
-                if leafs {
-                    found += leaf_volume(i, j, c);
-                } else {
-                    heap.push(Entry {
-                        key: -bound(i, j, d2),
-                        a: i,
-                        b: j,
-                        c,
-                    });
-                }
-            }
-        });
-    }
-    let rest: f64 = heap.entries().iter().map(|e| -e.key as f64).sum();
-    let complete = heap.len() == 0;
-    BudgetedVolume {
-        volume: found,
-        upper_bound: if complete {
-            found
-        } else {
-            found + rest * (1.0 + 1e-12)
-        },
-        visits,
-        complete,
     }
 }

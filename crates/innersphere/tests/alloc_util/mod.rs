@@ -6,12 +6,10 @@
 //! `INNERSPHERE_ALLOC_TRACE=1` prints a backtrace of every counted allocation.
 #![allow(dead_code)]
 
-use innersphere::query::{
-    backtracking, contact, distance_traversal, multipoint, penetration, penetration_budgeted,
-    proximity, ContactOptions, MultipointOptions, PairState, PenetrationOptions, Pose,
-    ProximityOptions, Tracking,
+use innersphere::query::TraversalOptions;
+use innersphere::{
+    DistanceOptions, MultipointOptions, Pair, PenetrationOptions, Pose, SharedTree, Tracking,
 };
-use innersphere::SphereTree;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -77,10 +75,11 @@ pub fn counted<R>(f: impl FnOnce() -> R) -> (u64, u64, R) {
 /// One query kind with its options.
 #[derive(Debug, Clone, Copy)]
 pub enum Kind {
-    Proximity(ProximityOptions),
-    Distance(ContactOptions),
-    Backtracking(ContactOptions),
-    Contact(ContactOptions),
+    Distance(DistanceOptions),
+    DistanceTraversal(TraversalOptions),
+    Backtracking(TraversalOptions),
+    /// [`Pair::contact`] takes no options.
+    Contact,
     Multipoint(MultipointOptions),
     Penetration(PenetrationOptions),
     Budgeted(u64),
@@ -93,7 +92,7 @@ pub fn kinds() -> Vec<Kind> {
     for best_first in [false, true] {
         for coherence in [true, false] {
             for signed in [false, true] {
-                v.push(Kind::Proximity(ProximityOptions {
+                v.push(Kind::Distance(DistanceOptions {
                     best_first,
                     coherence,
                     signed,
@@ -102,7 +101,7 @@ pub fn kinds() -> Vec<Kind> {
             }
         }
         for (rel_tolerance, abs_tolerance) in [(0.1, 0.0), (0.0, 0.01), (0.1, 0.01)] {
-            v.push(Kind::Proximity(ProximityOptions {
+            v.push(Kind::Distance(DistanceOptions {
                 best_first,
                 rel_tolerance,
                 abs_tolerance,
@@ -111,9 +110,10 @@ pub fn kinds() -> Vec<Kind> {
         }
     }
     for safe_motion in [true, false] {
-        let o = ContactOptions { safe_motion };
-        v.extend([Kind::Distance(o), Kind::Backtracking(o), Kind::Contact(o)]);
+        let o = TraversalOptions { safe_motion };
+        v.extend([Kind::DistanceTraversal(o), Kind::Backtracking(o)]);
     }
+    v.push(Kind::Contact);
     for tracking in [false, true] {
         for k in [1, 16, 256] {
             for split_depth in [0, 2, 5, 9, 40] {
@@ -154,36 +154,31 @@ pub fn kinds() -> Vec<Kind> {
     v
 }
 
-/// Runs query `kind` once; a checksum of its answer, so that nothing is optimized away.
-pub fn run(
-    kind: &Kind,
-    a: &SphereTree,
-    pa: &Pose,
-    b: &SphereTree,
-    pb: &Pose,
-    st: &mut PairState,
-) -> f64 {
+/// Runs query `kind` once on `pair`; a checksum of its answer, so that nothing is optimized
+/// away.
+pub fn run(kind: &Kind, pair: &mut Pair, pa: &Pose, pb: &Pose) -> f64 {
     match kind {
-        Kind::Proximity(o) => {
-            let p = proximity(a, pa, b, pb, st, o);
+        Kind::Distance(o) => {
+            let p = pair.distance_with(pa, pb, o);
             p.distance + p.lower_bound + p.leaf_a as f64
         }
-        Kind::Distance(o) => distance_traversal(a, pa, b, pb, st, o).distance,
-        Kind::Backtracking(o) => backtracking(a, pa, b, pb, st, o).distance,
-        Kind::Contact(o) => {
-            let c = contact(a, pa, b, pb, st, o);
+        Kind::DistanceTraversal(o) => pair.paper().distance_traversal(pa, pb, o).distance,
+        Kind::Backtracking(o) => pair.paper().backtracking(pa, pb, o).distance,
+        Kind::Contact => {
+            let c = pair.contact(pa, pb);
             c.distance + c.contact.map_or(0.0, |c| c.depth)
         }
         Kind::Multipoint(o) => {
-            let m = multipoint(a, pa, b, pb, st, o);
-            m.contacts.len() as f64 + m.distance + m.contacts.last().map_or(0.0, |c| c.depth)
+            let m = pair.multipoint(pa, pb, o);
+            let contacts = pair.contacts();
+            contacts.len() as f64 + m.distance + contacts.last().map_or(0.0, |c| c.depth)
         }
         Kind::Penetration(o) => {
-            let p = penetration(a, pa, b, pb, st, o);
-            p.volume + p.distance + p.patches.len() as f64 + p.torque_a.x
+            let p = pair.penetration_with(pa, pb, o);
+            p.volume + p.distance + pair.patches().len() as f64 + p.torque_a.x
         }
         Kind::Budgeted(budget) => {
-            let r = penetration_budgeted(a, pa, b, pb, st, *budget);
+            let r = pair.penetration_within(pa, pb, *budget);
             r.volume + r.upper_bound
         }
     }
@@ -192,7 +187,7 @@ pub fn run(
 /// Allocations of one query kind along two motions.
 #[derive(Debug, Default, Clone, Copy)]
 pub struct Counts {
-    /// The first frame of a fresh state.
+    /// The first frame of a fresh pair.
     pub first: u64,
     /// The rest of the first motion.
     pub cold: u64,
@@ -206,31 +201,32 @@ impl Counts {
     }
 }
 
-/// Counts the allocations of `kind` on a fresh state along `m1` and then `m2`.
+/// Counts the allocations of `kind` on a fresh pair of `a` and `b` along `m1` and then `m2`.
 pub fn count_kind(
     kind: &Kind,
-    a: &SphereTree,
-    b: &SphereTree,
+    a: &SharedTree,
+    b: &SharedTree,
     m1: &[(Pose, Pose)],
     m2: &[(Pose, Pose)],
 ) -> Counts {
-    let mut st = PairState::new(a, b);
-    let along = |st: &mut PairState, m: &[(Pose, Pose)]| -> f64 {
-        m.iter().map(|(pa, pb)| run(kind, a, pa, b, pb, st)).sum()
+    let mut pair = Pair::new(a, b);
+    let along = |pair: &mut Pair, m: &[(Pose, Pose)]| -> f64 {
+        m.iter().map(|(pa, pb)| run(kind, pair, pa, pb)).sum()
     };
-    let (first, _, x) = counted(|| along(&mut st, &m1[..1]));
-    let (cold, _, y) = counted(|| along(&mut st, &m1[1..]));
-    let (warm, _, z) = counted(|| along(&mut st, m2));
+    let (first, _, x) = counted(|| along(&mut pair, &m1[..1]));
+    let (cold, _, y) = counted(|| along(&mut pair, &m1[1..]));
+    let (warm, _, z) = counted(|| along(&mut pair, m2));
     assert!(!(x + y + z).is_nan());
     Counts { first, cold, warm }
 }
 
-/// Asserts that every query kind allocates nothing along `m1` from a fresh state and along
-/// `m2` after it, and along `m2` from a fresh state and `m1` after it.
+/// Asserts that every query kind allocates nothing along `m1` from a fresh pair and along
+/// `m2` after it, and along `m2` from a fresh pair and `m1` after it (a fresh [`Pair`] of
+/// `a` and `b` per kind and order).
 pub fn assert_allocation_free(
     label: &str,
-    a: &SphereTree,
-    b: &SphereTree,
+    a: &SharedTree,
+    b: &SharedTree,
     m1: &[(Pose, Pose)],
     m2: &[(Pose, Pose)],
 ) {

@@ -7,8 +7,8 @@ use innersphere::field::{DistanceField, VoxelGrid};
 use innersphere::hierarchy::{self, HierarchyOptions};
 use innersphere::packing::{self, PackingOptions};
 use innersphere::progress::Silent;
-use innersphere::query::Pose;
 use innersphere::tree::{SphereTree, TreeMeta};
+use innersphere::{Pair, Pose};
 use std::sync::OnceLock;
 
 /// The tree of an analytic solid given by its signed distance (positive inside), sampled on
@@ -93,6 +93,11 @@ pub fn trees() -> &'static [SphereTree] {
             ),
         ]
     })
+}
+
+/// A fresh [`Pair`] of copies of `a` and `b`.
+pub fn pair(a: &SphereTree, b: &SphereTree) -> Pair {
+    Pair::new(a.clone(), b.clone())
 }
 
 /// A unit quaternion from four numbers (normalized; identity when all are ~0).

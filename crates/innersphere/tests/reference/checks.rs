@@ -3,29 +3,26 @@
 
 use super::{ancestor_at, dv, norm, RefPair};
 use glam::DVec3;
-use innersphere::query::{
-    backtracking, contact, distance_traversal, multipoint, penetration, penetration_budgeted,
-    proximity, ContactOptions, ContactQuery, MultipointOptions, PairState, PenetrationOptions,
-    Pose, ProximityOptions, Tracking,
+use innersphere::query::TraversalOptions;
+use innersphere::{
+    ContactResult, DistanceOptions, MultipointOptions, Pair, PenetrationOptions, Pose, SharedTree,
+    SphereTree, Tracking,
 };
-use innersphere::SphereTree;
 use proptest::prelude::*;
 use std::collections::BTreeSet;
 
-pub const NO_SKIP: ContactOptions = ContactOptions { safe_motion: false };
+pub const NO_SKIP: TraversalOptions = TraversalOptions { safe_motion: false };
 
 pub fn near(x: DVec3, y: DVec3, tol: f64) -> bool {
     (x - y).length() <= tol
 }
 
-/// Exact proximity, every option, against the reference's minimum gap and closest points.
+/// Exact distance, every option, against the reference's minimum gap and closest points.
 pub fn check_proximity(
-    a: &SphereTree,
+    pair: &mut Pair,
     pa: &Pose,
-    b: &SphereTree,
     pb: &Pose,
     r: &RefPair,
-    st: &mut PairState,
 ) -> Result<(), TestCaseError> {
     let (g, _, _) = r.min_gap();
     let eps = r.eps;
@@ -36,13 +33,13 @@ pub fn check_proximity(
         (true, false, false),
         (true, true, true),
     ] {
-        let opts = ProximityOptions {
+        let opts = DistanceOptions {
             signed,
             coherence,
             best_first,
             ..Default::default()
         };
-        let p = proximity(a, pa, b, pb, st, &opts);
+        let p = pair.distance_with(pa, pb, &opts);
         let want = if signed { g } else { g.max(0.0) };
         prop_assert!(
             (p.distance - want).abs() <= eps,
@@ -84,7 +81,7 @@ pub fn check_proximity(
 /// A first-contact answer against the reference: contact exactly when a leaf pair overlaps
 /// (outside the rounding band); the contact is a real overlapping pair with the reference's
 /// point, normal and depth; without contact a lower bound on the gap.
-pub fn check_contact(q: &ContactQuery, r: &RefPair, what: &str) -> Result<(), TestCaseError> {
+pub fn check_contact(q: &ContactResult, r: &RefPair, what: &str) -> Result<(), TestCaseError> {
     let (g, _, _) = r.min_gap();
     let eps = r.eps;
     if g < -eps {
@@ -125,23 +122,22 @@ pub fn check_contact(q: &ContactQuery, r: &RefPair, what: &str) -> Result<(), Te
 
 /// Multipoint against the reference: every contact a real overlapping pair with the
 /// reference's point, at most one per split-depth pair, none missed while fewer than `k`.
-#[allow(clippy::too_many_arguments)]
 pub fn check_multipoint(
-    a: &SphereTree,
+    pair: &mut Pair,
     pa: &Pose,
-    b: &SphereTree,
     pb: &Pose,
     r: &RefPair,
-    st: &mut PairState,
     opts: &MultipointOptions,
 ) -> Result<(), TestCaseError> {
     let split = opts.split_depth;
-    let region = |(la, lb): (u32, u32)| (ancestor_at(a, la, split), ancestor_at(b, lb, split));
+    let (a, b) = (pair.tree_a().tree().clone(), pair.tree_b().tree().clone());
+    let region = |(la, lb): (u32, u32)| (ancestor_at(&a, la, split), ancestor_at(&b, lb, split));
     let sure: BTreeSet<_> = r.overlapping(-r.eps).into_iter().map(region).collect();
     let possible: BTreeSet<_> = r.overlapping(r.eps).into_iter().map(region).collect();
-    let m = multipoint(a, pa, b, pb, st, opts);
+    pair.multipoint(pa, pb, opts);
+    let contacts = pair.contacts();
     let mut seen = BTreeSet::new();
-    for c in m.contacts {
+    for c in contacts {
         let pg = super::gap(r.leaf_a(c.leaf_a), r.leaf_b(c.leaf_b));
         prop_assert!(pg < r.eps, "multipoint contact with gap {}", pg);
         let (p, depth) = r.contact_point(c.leaf_a, c.leaf_b);
@@ -152,15 +148,15 @@ pub fn check_multipoint(
             "two contacts below one split pair"
         );
     }
-    prop_assert!(m.contacts.len() <= opts.k);
+    prop_assert!(contacts.len() <= opts.k);
     prop_assert!(
-        m.contacts.len() >= opts.k.min(sure.len()),
+        contacts.len() >= opts.k.min(sure.len()),
         "{} contacts, {} regions overlap",
-        m.contacts.len(),
+        contacts.len(),
         sure.len()
     );
-    prop_assert!(m.contacts.len() <= possible.len());
-    if m.contacts.len() < opts.k {
+    prop_assert!(contacts.len() <= possible.len());
+    if contacts.len() < opts.k {
         for key in &sure {
             prop_assert!(
                 seen.contains(key),
@@ -175,12 +171,10 @@ pub fn check_multipoint(
 /// Penetration against the reference: pairs, volume, deepest overlap, normal, force, both
 /// torques, and the patches' points (their volume-weighted sum is the volume's moment).
 pub fn check_penetration(
-    a: &SphereTree,
+    pair: &mut Pair,
     pa: &Pose,
-    b: &SphereTree,
     pb: &Pose,
     r: &RefPair,
-    st: &mut PairState,
     opts: &PenetrationOptions,
 ) -> Result<(), TestCaseError> {
     let k = opts.stiffness;
@@ -188,7 +182,8 @@ pub fn check_penetration(
     let sure = r.penetration(k, -r.eps).pairs;
     let possible = r.penetration(k, r.eps).pairs;
     let tol_v = r.volume_tolerance();
-    let p = penetration(a, pa, b, pb, st, opts);
+    let p = pair.penetration_with(pa, pb, opts);
+    let patches = pair.patches();
     prop_assert!(
         p.pairs >= sure && p.pairs <= possible,
         "{} pairs, reference {}..{}",
@@ -206,7 +201,7 @@ pub fn check_penetration(
     prop_assert!((p.max_depth - want.max_depth).abs() <= 2.0 * r.eps);
     if want.pairs == 0 && sure == possible {
         prop_assert_eq!(p.volume, 0.0);
-        prop_assert!(p.patches.is_empty());
+        prop_assert!(patches.is_empty());
         return Ok(());
     }
     // How far the sums may move: every pair's volume and direction within rounding.
@@ -262,9 +257,8 @@ pub fn check_penetration(
         tol_t
     );
     if opts.max_patches > 0 {
-        prop_assert!(!p.patches.is_empty() && p.patches.len() <= opts.max_patches);
-        let moment = p
-            .patches
+        prop_assert!(!patches.is_empty() && patches.len() <= opts.max_patches);
+        let moment = patches
             .iter()
             .fold(DVec3::ZERO, |s, q| s + q.point * q.volume);
         prop_assert!(
@@ -273,16 +267,16 @@ pub fn check_penetration(
             moment,
             want.moment
         );
-        let pairs: u32 = p.patches.iter().map(|q| q.pairs).sum();
+        let pairs: u32 = patches.iter().map(|q| q.pairs).sum();
         prop_assert_eq!(pairs as usize, p.pairs);
-        for q in p.patches {
+        for q in patches {
             prop_assert!(q.depth > -r.eps && q.depth <= p.max_depth);
         }
     }
     Ok(())
 }
 
-/// Every query kind and option at one pose, each with a fresh state.
+/// Every query kind and option at one pose, each with a fresh pair.
 pub fn check_all(
     a: &SphereTree,
     pa: &Pose,
@@ -291,24 +285,22 @@ pub fn check_all(
     split: u32,
 ) -> Result<(), TestCaseError> {
     let r = RefPair::new(a, pa, b, pb);
-    check_proximity(a, pa, b, pb, &r, &mut PairState::new(a, b))?;
+    let (sa, sb) = (SharedTree::new(a.clone()), SharedTree::new(b.clone()));
+    let fresh = || Pair::new(&sa, &sb);
+    check_proximity(&mut fresh(), pa, pb, &r)?;
     for safe_motion in [false, true] {
-        let o = ContactOptions { safe_motion };
+        let o = TraversalOptions { safe_motion };
         check_contact(
-            &distance_traversal(a, pa, b, pb, &mut PairState::new(a, b), &o),
+            &fresh().paper().distance_traversal(pa, pb, &o),
             &r,
             "distance traversal",
         )?;
         check_contact(
-            &backtracking(a, pa, b, pb, &mut PairState::new(a, b), &o),
+            &fresh().paper().backtracking(pa, pb, &o),
             &r,
             "backtracking",
         )?;
-        check_contact(
-            &contact(a, pa, b, pb, &mut PairState::new(a, b), &o),
-            &r,
-            "contact",
-        )?;
+        check_contact(&fresh().contact(pa, pb), &r, "contact")?;
     }
     for tracking in [false, true] {
         for k in [1, 3, 16, 1000] {
@@ -319,7 +311,7 @@ pub fn check_all(
                 reuse: true,
                 safe_motion: false,
             };
-            check_multipoint(a, pa, b, pb, &r, &mut PairState::new(a, b), &opts)?;
+            check_multipoint(&mut fresh(), pa, pb, &r, &opts)?;
         }
     }
     for tracking in [Tracking::Auto, Tracking::Front, Tracking::Traversal] {
@@ -331,7 +323,7 @@ pub fn check_all(
                 safe_motion: false,
                 tracking,
             };
-            check_penetration(a, pa, b, pb, &r, &mut PairState::new(a, b), &opts)?;
+            check_penetration(&mut fresh(), pa, pb, &r, &opts)?;
         }
     }
     // One patch: its point is the centroid of the whole intersection.
@@ -340,10 +332,10 @@ pub fn check_all(
         safe_motion: false,
         ..Default::default()
     };
-    let mut st = PairState::new(a, b);
-    let p = penetration(a, pa, b, pb, &mut st, &opts);
+    let mut pair = fresh();
+    pair.penetration_with(pa, pb, &opts);
     let want = r.penetration(1.0, 0.0);
-    if let [q] = p.patches {
+    if let [q] = pair.patches() {
         if want.volume > 1e3 * r.volume_tolerance() {
             let g = dv(want.moment) / want.volume;
             prop_assert!(
@@ -357,7 +349,7 @@ pub fn check_all(
     // The time-critical volume brackets the reference's.
     let tol_v = r.volume_tolerance();
     for budget in [1u64, 16, 256, u64::MAX] {
-        let v = penetration_budgeted(a, pa, b, pb, &mut PairState::new(a, b), budget);
+        let v = fresh().penetration_within(pa, pb, budget);
         prop_assert!(
             v.volume <= want.volume + tol_v,
             "budget {}: found {} > {}",

@@ -15,7 +15,7 @@
 pub mod checks;
 
 use glam::DVec3;
-use innersphere::query::Pose;
+use innersphere::Pose;
 use innersphere::SphereTree;
 
 /// A 3-vector as plain numbers.

@@ -42,10 +42,11 @@
 //! pair needed a second slow frame when the contact had ended, and deepest first cut
 //! `contact`'s p99 along the chew by about a third in the same process.
 
-use super::front::motion_bound;
-use super::info::{TreeInfo, LANES};
-use super::state::Ctx;
-use super::traversal::{block_gaps, inner_gaps, sides, TItem, B_LEAF};
+use crate::query::kernel::block::{block_gaps, inner_gaps, sides, TItem, B_LEAF};
+use crate::query::kernel::info::{TreeInfo, LANES};
+use crate::query::kernel::separation::motion_bound;
+use crate::query::kernel::simd;
+use crate::query::kernel::Ctx;
 use crate::Pose;
 
 const NONE: u32 = u32::MAX;
@@ -265,10 +266,7 @@ impl BlockFront {
     /// has it (the expiry scan and the 4×4 steps are vectorised).
     fn run(&mut self, ctx: &Ctx, deepest_first: bool, stop: bool, budget: usize) -> u64 {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("popcnt")
-            && std::arch::is_x86_feature_detected!("bmi1")
-        {
+        if simd::avx2() {
             // With `popcnt` and `bmi1` the bit counts of the masks are one instruction each
             // (without, `count_ones` was ≈ a tenth of a step's instructions under cachegrind).
             #[target_feature(enable = "avx2,popcnt,bmi1")]
@@ -590,7 +588,7 @@ const CHUNK: usize = 8;
 #[inline(always)]
 fn due_entries(expiry: &[f64], chunks: &[u32], moved: f64, due: &mut Vec<u32>) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if simd::avx2() {
         // SAFETY: the CPU has AVX2 (checked just above).
         unsafe { due_entries_avx2(expiry, chunks, moved, due) };
         return;
@@ -740,7 +738,7 @@ mod tests {
             due_entries_portable(&v, &chunks, moved, &mut p);
             prop_assert_eq!(&p, &want);
             #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
+            if simd::avx2() {
                 let mut a = vec![7];
                 // SAFETY: the CPU has AVX2 (checked just above).
                 unsafe { due_entries_avx2(&v, &chunks, moved, &mut a) };

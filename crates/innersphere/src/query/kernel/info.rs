@@ -84,7 +84,7 @@ impl Block {
 }
 
 /// Query-side facts about one tree, computed once ([`TreeInfo::new`], O(nodes)) and shared
-/// by every [`PairState`](super::PairState) that involves the tree.
+/// by every [`Pair`](crate::Pair) that involves the tree (through a [`SharedTree`](crate::SharedTree)).
 #[derive(Debug, Clone)]
 pub struct TreeInfo {
     /// Number of nodes of the tree it was made for.

@@ -21,11 +21,11 @@
 //! (with a floor of 2¹⁴ the jaw chew rebuilt as contact began: worst penetration frame
 //! 578 → 342–374 µs in that phase, p99 unchanged).
 
-use super::buckets::{Buckets, Sep};
-use super::info::TreeInfo;
-use super::state::{expand_larger, Ctx, Item};
+use crate::query::kernel::buckets::{Buckets, Sep};
+use crate::query::kernel::info::TreeInfo;
+use crate::query::kernel::separation::motion_bound;
+use crate::query::kernel::{expand_larger, Ctx, Item};
 use crate::Pose;
-use glam::DVec3;
 
 /// How far ahead the re-test loops prefetch the nodes of the pairs they will test (the pairs
 /// lie scattered over both trees, so every test would otherwise wait for two cache misses).
@@ -79,16 +79,6 @@ pub(crate) struct Front {
     last: Option<Pose>,
     /// Front size after the last rebuild.
     built: usize,
-}
-
-/// Upper bound on the displacement of any point of B between two relative poses.
-pub(crate) fn motion_bound(ib: &TreeInfo, from: &Pose, to: &Pose) -> f64 {
-    let c = ib.root_center;
-    let dc = (to.transform_point(c) - from.transform_point(c)).length();
-    let dq = to.rotation * from.rotation.conjugate();
-    let v = DVec3::new(dq.x, dq.y, dq.z).length();
-    let angle = 2.0 * v.atan2(dq.w.abs());
-    (dc + angle * ib.radius) * (1.0 + 1e-9)
 }
 
 impl Front {

@@ -1,17 +1,28 @@
-//! Exact proximity of the two inner-sphere packings: branch and bound over both trees.
+//! Exact distance of the two inner-sphere packings: branch and bound over both trees.
 
-use super::geometry::{direction, leaf_pair};
-use super::heap::Entry;
-use super::info::{Block, TreeInfo, LANES};
-use super::lanes;
-use super::state::{expand_larger, prefetch, Ctx, PairState};
-use crate::Pose;
-use crate::SphereTree;
+use super::kernel::geometry::{direction, leaf_pair};
+use super::kernel::heap::{Entry, PairHeap};
+use super::kernel::info::{Block, TreeInfo, LANES};
+use super::kernel::lanes;
+use super::kernel::separation::{record, SeparationRecord};
+use super::kernel::simd;
+use super::kernel::{expand_larger, prefetch, Ctx};
 use glam::DVec3;
 
-/// Options of [`proximity`].
+/// The scratch and coherence of the distance query.
+#[derive(Debug)]
+pub(crate) struct DistanceScratch {
+    /// Depth-first stack of keyed pairs (fan-outs over 4).
+    pub pstack: Vec<Entry>,
+    /// Depth-first stack of the 4×4 search (fan-outs ≤ 4).
+    pub bstack: Vec<BlockEntry>,
+    /// Leaf pair of the last answer (the first upper bound of the next query).
+    pub last: Option<(u32, u32)>,
+}
+
+/// Options of [`Pair::distance_with`](crate::Pair::distance_with).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ProximityOptions {
+pub struct DistanceOptions {
     /// Stop once the answer is proved within this absolute distance of the minimum (as PQP
     /// and FCL offer); 0 = exact.
     pub abs_tolerance: f64,
@@ -31,9 +42,9 @@ pub struct ProximityOptions {
     pub best_first: bool,
 }
 
-impl Default for ProximityOptions {
+impl Default for DistanceOptions {
     fn default() -> Self {
-        ProximityOptions {
+        DistanceOptions {
             abs_tolerance: 0.0,
             rel_tolerance: 0.0,
             signed: false,
@@ -43,12 +54,12 @@ impl Default for ProximityOptions {
     }
 }
 
-/// Result of [`proximity`].
+/// Result of [`Pair::distance`](crate::Pair::distance).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Proximity {
+pub struct Distance {
     /// Minimum distance between the two inner-sphere packings (the unions of the leaf
     /// spheres): `min |cb − ca| − ra − rb` over all leaf pairs. When the packings overlap it
-    /// is 0, or with [`ProximityOptions::signed`] minus the deepest leaf-pair overlap. With
+    /// is 0, or with [`DistanceOptions::signed`] minus the deepest leaf-pair overlap. With
     /// tolerances: `true ≤ distance ≤ true + max(abs, rel·true)`.
     pub distance: f64,
     /// `|cb − ca| − ra − rb` of the reported leaf pair (negative when it overlaps).
@@ -76,17 +87,19 @@ pub struct Proximity {
 ///
 /// Branch and bound over node pairs with the lower bound `|ca − cb| − ra − rb`, refining the
 /// larger sphere first and pruning pairs that cannot beat the best leaf pair so far (seeded
-/// with last query's pair); best first or depth first ([`ProximityOptions::best_first`]).
+/// with last query's pair); best first or depth first ([`DistanceOptions::best_first`]).
 /// Records the proved separation for the safe-motion skip of the contact queries.
-pub fn proximity(
-    a: &SphereTree,
-    pose_a: &Pose,
-    b: &SphereTree,
-    pose_b: &Pose,
-    st: &mut PairState,
-    opts: &ProximityOptions,
-) -> Proximity {
-    let (ctx, s, ia, ib) = st.begin(a, pose_a, b, pose_b);
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn distance(
+    ctx: &Ctx,
+    ia: &TreeInfo,
+    ib: &TreeInfo,
+    heap: &mut PairHeap,
+    sep: &mut Option<SeparationRecord>,
+    s: &mut DistanceScratch,
+    opts: &DistanceOptions,
+) -> Distance {
+    let pose_a = &ctx.pose_a;
     let abs = opts.abs_tolerance.max(0.0) as f32;
     let rel = opts.rel_tolerance.max(0.0) as f32;
     let signed = opts.signed;
@@ -97,7 +110,7 @@ pub fn proximity(
     let mut best = (0u32, 0u32);
     let mut visits = 0u64;
     if opts.coherence {
-        if let Some((la, lb)) = s.prox_pair {
+        if let Some((la, lb)) = s.last {
             let (_, d) = ctx.test(la, lb, ctx.xf(lb));
             ub = d;
             best = (la, lb);
@@ -123,7 +136,6 @@ pub fn proximity(
         // In the non-signed mode overlapping pairs are all "distance 0"; among them the
         // smallest spheres go first, so that the search dives to an overlapping leaf pair.
         let key_of = |d: f32, s: f32| if signed || d > 0.0 { d } else { -1.0 / s };
-        let heap = &mut s.heap;
         heap.clear();
         if !done(clamp(root_lb), ub) {
             let sr = ctx.a[0].r + ctx.b[0].r + ctx.slack;
@@ -143,7 +155,7 @@ pub fn proximity(
                 lower = lower.min(elb);
                 break;
             }
-            expand_larger(&ctx, e.a, e.b, e.c, |i, j, c, d2, sr, leafs| {
+            expand_larger(ctx, e.a, e.b, e.c, |i, j, c, d2, sr, leafs| {
                 visits += 1;
                 let d = d2.sqrt() - sr;
                 if leafs {
@@ -167,11 +179,11 @@ pub fn proximity(
         let prune = Prune { abs, rel, signed };
         let mut f = Found { ub, best, visits };
         if f.ub == f32::INFINITY {
-            dive(&ctx, c0, &mut f);
+            dive(ctx, c0, &mut f);
         }
         if !ia.blocks.is_empty() && !ib.blocks.is_empty() {
-            let root = root_entry(&ctx, c0);
-            depth_first_blocks_dispatch(&ctx, ia, ib, root, &mut s.bstack, prune, &mut f);
+            let root = root_entry(ctx, c0);
+            depth_first_blocks_dispatch(ctx, ia, ib, root, &mut s.bstack, prune, &mut f);
         } else {
             let stack = &mut s.pstack;
             stack.clear();
@@ -180,7 +192,7 @@ pub fn proximity(
                 key: dx * dx + dy * dy + dz * dz,
                 ..root
             });
-            depth_first_nodes(&ctx, stack, prune, &mut f);
+            depth_first_nodes(ctx, stack, prune, &mut f);
         }
         (ub, best, visits) = (f.ub, f.best, f.visits);
         // Pruned pairs all had bounds ≥ the threshold of their time, so the final threshold
@@ -192,7 +204,7 @@ pub fn proximity(
         };
     }
     let lower = lower.min(ub);
-    s.prox_pair = Some(best);
+    s.last = Some(best);
     let (la, lb) = best;
     let cb = ctx.xf(lb);
     let (ca, ra, cbd, rb) = leaf_pair(&ctx.a[la as usize], &ctx.b[lb as usize], cb);
@@ -202,11 +214,11 @@ pub fn proximity(
     }
     let overlapping = ub < 0.0;
     if overlapping {
-        s.separation = None;
+        *sep = None;
     } else {
-        s.record_separation(&ctx, lower as f64);
+        record(sep, ctx, lower as f64);
     }
-    Proximity {
+    Distance {
         distance: clamp(ub) as f64,
         pair_distance: ub as f64,
         lower_bound: clamp(lower) as f64,
@@ -645,7 +657,7 @@ fn depth_first_blocks_dispatch(
     f: &mut Found,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if simd::avx2() {
         #[target_feature(enable = "avx2")]
         fn avx2(
             ctx: &Ctx,
@@ -691,7 +703,8 @@ fn root_entry(ctx: &Ctx, c0: [f32; 3]) -> BlockEntry {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::query::geometry::Rel32;
+    use crate::query::kernel::geometry::Rel32;
+    use crate::Pose;
     use glam::DQuat;
     use proptest::prelude::*;
 
@@ -708,7 +721,7 @@ mod tests {
             t in -5.0f32..30.0,
         ) {
             #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
+            if simd::avx2() {
                 let (ka, kb) = (Block::from_spheres(&va, la, na), Block::from_spheres(&vb, lb, nb));
                 let rot = DQuat::from_xyzw(q[0], q[1], q[2], q[3] + 1.5).normalize();
                 let rel = Pose::new(DVec3::from_array(tr), rot).unwrap();

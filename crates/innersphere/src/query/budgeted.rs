@@ -1,0 +1,114 @@
+//! Time-critical penetration volume (beyond the paper): the volume found within a budget
+//! of node-pair tests, and a proved upper bound on the rest.
+
+use super::kernel::geometry::lens;
+use super::kernel::heap::{Entry, PairHeap};
+use super::kernel::info::TreeInfo;
+use super::kernel::{expand_larger, Ctx};
+use super::penetration::Sums;
+
+/// Result of [`Pair::penetration_within`](crate::Pair::penetration_within).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct BudgetedVolume {
+    /// Sum of the lens volumes of the overlapping leaf pairs found (≤ the exact volume).
+    pub volume: f64,
+    /// Proved upper bound on the exact volume (= `volume` when complete).
+    pub upper_bound: f64,
+    /// Node pairs tested (the budget may be exceeded by less than one refinement).
+    pub visits: u64,
+    /// True when every overlapping pair was refined: `volume` is exact.
+    pub complete: bool,
+}
+
+/// Time-critical penetration volume: refines node pairs in order of an upper bound of the
+/// volume still hidden below them, `min(lens of the node spheres, leaf volume below A's node,
+/// leaf volume below B's node)`, until `budget` node-pair tests are spent; returns the volume
+/// found so far and `found + Σ bounds of the unrefined pairs` as an upper bound. With an
+/// unlimited budget (`u64::MAX`) the volume is the exact one of [`Pair::penetration`](crate::Pair::penetration).
+///
+/// Choosing the budget: a node-pair test costs up to about 75 ns here (a priority-queue
+/// pop per refinement and a lens bound per overlapping child; measured on the jaw trees on a
+/// 2-core cloud machine), so 8 000 visits keep a frame under about 0.6 ms and 20 000 do not
+/// fit a 1 ms haptic frame. For the fastest exact answer use [`Pair::penetration`](crate::Pair::penetration) instead, whose
+/// kinetic front is several times cheaper per frame than any useful budget.
+pub(crate) fn penetration_within(
+    ctx: &Ctx,
+    ia: &TreeInfo,
+    ib: &TreeInfo,
+    heap: &mut PairHeap,
+    budget: u64,
+) -> BudgetedVolume {
+    heap.clear();
+    let mut visits = 1u64;
+    let mut found = 0.0f64;
+    let c0 = ctx.xf(0);
+    let (ov, _) = ctx.test(0, 0, c0);
+    let va = &ia.subtree_volume;
+    let vb = &ib.subtree_volume;
+    let (na, nb) = (ctx.a, ctx.b);
+    let h = 0.5 * ctx.slack as f64;
+    let bound = |i: u32, j: u32, d2: f32| -> f32 {
+        let (ra, rb) = (na[i as usize].r as f64 + h, nb[j as usize].r as f64 + h);
+        let (l, _) = lens(ra, rb, (d2 as f64).sqrt());
+        let ub = (l * (1.0 + 1e-6))
+            .min(va[i as usize] as f64)
+            .min(vb[j as usize] as f64);
+        let f = ub as f32;
+        if (f as f64) < ub {
+            f32::from_bits(f.to_bits() + 1)
+        } else {
+            f
+        }
+    };
+    let leaf_volume = |i: u32, j: u32, cb: [f32; 3]| -> f64 {
+        let n = &na[i as usize];
+        let mut s = Sums::default();
+        s.add([n.x, n.y, n.z], n.r, cb, nb[j as usize].r);
+        s.volume
+    };
+    if ov {
+        if na[0].is_leaf() && nb[0].is_leaf() {
+            found = leaf_volume(0, 0, c0);
+        } else {
+            let dx = na[0].x - c0[0];
+            let dy = na[0].y - c0[1];
+            let dz = na[0].z - c0[2];
+            heap.push(Entry {
+                key: -bound(0, 0, dx * dx + dy * dy + dz * dz),
+                a: 0,
+                b: 0,
+                c: c0,
+            });
+        }
+    }
+    while visits < budget {
+        let Some(e) = heap.pop() else { break };
+        expand_larger(ctx, e.a, e.b, e.c, |i, j, c, d2, sr, leafs| {
+            visits += 1;
+            if d2 < sr * sr {
+                if leafs {
+                    found += leaf_volume(i, j, c);
+                } else {
+                    heap.push(Entry {
+                        key: -bound(i, j, d2),
+                        a: i,
+                        b: j,
+                        c,
+                    });
+                }
+            }
+        });
+    }
+    let rest: f64 = heap.entries().iter().map(|e| -e.key as f64).sum();
+    let complete = heap.len() == 0;
+    BudgetedVolume {
+        volume: found,
+        upper_bound: if complete {
+            found
+        } else {
+            found + rest * (1.0 + 1e-12)
+        },
+        visits,
+        complete,
+    }
+}

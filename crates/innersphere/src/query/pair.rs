@@ -1,0 +1,431 @@
+//! The pair: two shared trees and everything their queries keep from frame to frame. The
+//! top of `query/`: it owns every query kind's scratch and is the only public way to query.
+
+use super::budgeted::{self, BudgetedVolume};
+use super::contact::{self, ContactResult};
+use super::distance::{self, Distance, DistanceOptions, DistanceScratch};
+use super::kernel::geometry::{pruning_slack, Contact, Rel32};
+use super::kernel::heap::PairHeap;
+use super::kernel::info::TreeInfo;
+use super::kernel::separation::{safe_separation, SeparationRecord};
+use super::kernel::Ctx;
+use super::multipoint::{self, Multipoint, MultipointOptions, MultipointScratch};
+use super::paper::{self, TraversalOptions};
+use super::penetration::{self, Patch, Penetration, PenetrationOptions, PenetrationScratch};
+use super::search::block_front::BlockFront;
+use super::search::descent::Descent;
+use super::search::front::Front;
+use crate::{Pose, SphereTree};
+use std::sync::Arc;
+
+/// A tree ready for queries: the tree and its query-side facts ([`TreeInfo`], computed once
+/// in O(nodes)), both shared read-only. Clone it (two reference counts) to give the same
+/// tree to many [`Pair`]s and threads without computing its facts again.
+#[derive(Debug, Clone)]
+pub struct SharedTree {
+    tree: Arc<SphereTree>,
+    info: Arc<TreeInfo>,
+}
+
+impl SharedTree {
+    /// Shares `tree` and computes its query-side facts.
+    pub fn new(tree: impl Into<Arc<SphereTree>>) -> SharedTree {
+        let tree = tree.into();
+        let info = Arc::new(TreeInfo::new(&tree));
+        SharedTree { tree, info }
+    }
+
+    /// The tree.
+    pub fn tree(&self) -> &Arc<SphereTree> {
+        &self.tree
+    }
+
+    /// Its query-side facts.
+    pub fn info(&self) -> &Arc<TreeInfo> {
+        &self.info
+    }
+}
+
+/// A shared tree reads as its tree.
+impl std::ops::Deref for SharedTree {
+    type Target = SphereTree;
+    fn deref(&self) -> &SphereTree {
+        &self.tree
+    }
+}
+
+impl From<SphereTree> for SharedTree {
+    fn from(tree: SphereTree) -> SharedTree {
+        SharedTree::new(tree)
+    }
+}
+
+impl From<Arc<SphereTree>> for SharedTree {
+    fn from(tree: Arc<SphereTree>) -> SharedTree {
+        SharedTree::new(tree)
+    }
+}
+
+impl From<&SharedTree> for SharedTree {
+    fn from(t: &SharedTree) -> SharedTree {
+        t.clone()
+    }
+}
+
+/// Two trees and all per-pair state of their queries: what temporal coherence needs (last
+/// contact pairs, last proved separation, the kinetic fronts) and all scratch memory,
+/// reserved from the tree sizes when the pair is made, so that queries allocate nothing from
+/// the first frame on (see [`Pair::new`] for what is reserved and what may still grow).
+///
+/// Every query takes the world poses of A and B (`p' = R p + t` applied to each tree's model
+/// coordinates; [`Pose::IDENTITY`] for a body that does not move) and answers in the world
+/// frame. Queries of every kind may be mixed on one pair; they share what one proves (a
+/// separation proved by [`Pair::distance`] lets the next contact query skip its traversal).
+/// A pair is `Send`: query many pairs from many threads, one thread per pair at a time; the
+/// trees are shared read-only.
+#[derive(Debug)]
+pub struct Pair {
+    a: SharedTree,
+    b: SharedTree,
+    /// The last proved separation (a lower bound at a relative pose).
+    sep: Option<SeparationRecord>,
+    descent: Descent,
+    heap: PairHeap,
+    front: Front,
+    bfront: BlockFront,
+    distance: DistanceScratch,
+    /// Leaf pair of the last backtracking contact.
+    backtrack: Option<(u32, u32)>,
+    multipoint: MultipointScratch,
+    penetration: PenetrationScratch,
+}
+
+impl Pair {
+    /// The pair of trees `a` (body A) and `b` (body B): a [`SphereTree`], an
+    /// `Arc<SphereTree>` or a [`SharedTree`] each.
+    ///
+    /// Reserves, from the trees' depths `d`, largest fan-outs `f`, node counts `n` and leaf
+    /// counts `l` (A's and B's):
+    /// * every depth-first stack to its bound: a pair is at most `d_A + d_B` refinements
+    ///   below the roots and a refinement pushes at most `f_A · f_B` pairs (16 on blocks);
+    ///   ancestor chains `d + 1`;
+    /// * the kinetic front ([`Pair::contact`] on fan-outs over 4, [`Pair::penetration`] with
+    ///   the front, [`Pair::multipoint`] with tracking) for `(l_A + l_B) / 3` node pairs,
+    ///   within 2¹³ ..= 2¹⁷ (its rebuild floor): along the jaw chew and grind it held at most
+    ///   ≈ 0.2 × (l_A + l_B) pairs (0.1 and 0.3 mm voxels);
+    /// * the block front of [`Pair::contact`] (fan-outs ≤ 4) for `(l_A + l_B) / 16` entries,
+    ///   within 2¹¹ ..= 2¹⁶ (the jaw used at most ≈ 6,700);
+    /// * the priority queue of best-first [`Pair::distance_with`] and of
+    ///   [`Pair::penetration_within`] for `(n_A + n_B) / 8` pairs, within 2¹² ..= 2¹⁸ (the
+    ///   jaw used at most 8,192);
+    /// * [`Pair::multipoint`] for `k` up to 1024 contacts and [`Pair::penetration`] for up
+    ///   to 64 patches.
+    ///
+    /// On the jaw arches at a 0.3 mm voxel (300k nodes, 200k leaves) that is 9.5 MiB (their
+    /// two [`TreeInfo`]s: 26 MiB), reserved but not written: pages no query reaches need not
+    /// become resident; on small trees the floors make it ≈ 5 MiB. What may still grow,
+    /// once, to a high-water mark that is then kept: a front or queue in a deep overlap
+    /// beyond its reservation (each is bounded, see the fronts' docs), the queue of
+    /// [`Pair::penetration_within`] with a larger budget (at most the budget plus a
+    /// fan-out), `k` over 1024 (at most `k` contacts, `2k` keys) and `max_patches` over 64
+    /// (at most `max_patches`).
+    pub fn new(a: impl Into<SharedTree>, b: impl Into<SharedTree>) -> Pair {
+        let (a, b) = (a.into(), b.into());
+        let (ia, ib) = (&a.info, &b.info);
+        let depth = ia.max_depth as usize + ib.max_depth as usize + 2;
+        let (fa, fb) = (ia.max_children.max(1), ib.max_children.max(1));
+        let blocks = !ia.blocks.is_empty() && !ib.blocks.is_empty();
+        // Depth-first stacks (the blocked ones on fan-outs ≤ 4, the others otherwise):
+        // simultaneous descent pushes up to fa·fb pairs per refinement, refining the larger
+        // sphere up to max(fa, fb).
+        let stack = if blocks { 0 } else { depth * fa * fb + 16 };
+        let single = depth * fa.max(fb) + 16;
+        let block_stack = if blocks { depth * 16 + 16 } else { 0 };
+        let leaves = ia.leaves + ib.leaves;
+        let front = (leaves / 3).clamp(1 << 13, 1 << 17);
+        let block_front = if blocks {
+            (leaves / 16).clamp(1 << 11, 1 << 16)
+        } else {
+            0
+        };
+        let heap = ((ia.nodes + ib.nodes) / 8).clamp(1 << 12, 1 << 18);
+        Pair {
+            sep: None,
+            descent: Descent {
+                stack: Vec::with_capacity(stack),
+                tstack: Vec::with_capacity(block_stack),
+                anc_a: Vec::with_capacity(ia.max_depth as usize + 1),
+                anc_b: Vec::with_capacity(ib.max_depth as usize + 1),
+            },
+            heap: PairHeap::with_capacity(heap),
+            front: Front::with_capacity(front, single),
+            bfront: BlockFront::with_capacity(block_front, block_stack),
+            distance: DistanceScratch {
+                pstack: Vec::with_capacity(if blocks { 0 } else { single }),
+                bstack: Vec::with_capacity(block_stack),
+                last: None,
+            },
+            backtrack: None,
+            multipoint: MultipointScratch::new(),
+            penetration: PenetrationScratch::new(),
+            a,
+            b,
+        }
+    }
+
+    /// Tree A.
+    pub fn tree_a(&self) -> &SharedTree {
+        &self.a
+    }
+
+    /// Tree B.
+    pub fn tree_b(&self) -> &SharedTree {
+        &self.b
+    }
+
+    /// Exact minimum distance between the two inner-sphere packings at the world poses, with
+    /// the closest points and the leaf pair ([`DistanceOptions::default`]: exact, unsigned,
+    /// coherent, depth first).
+    ///
+    /// Branch and bound over node pairs with the lower bound `|ca − cb| − ra − rb`, refining
+    /// the larger sphere first and pruning pairs that cannot beat the best leaf pair so far
+    /// (seeded with last query's pair). Records the proved separation for the safe-motion
+    /// skip of the other queries.
+    pub fn distance(&mut self, pose_a: &Pose, pose_b: &Pose) -> Distance {
+        self.distance_with(pose_a, pose_b, &DistanceOptions::default())
+    }
+
+    /// [`Pair::distance`] with options: tolerances, signed distance, coherence, search
+    /// order.
+    pub fn distance_with(
+        &mut self,
+        pose_a: &Pose,
+        pose_b: &Pose,
+        opts: &DistanceOptions,
+    ) -> Distance {
+        let ctx = ctx(&self.a.info, &self.b.info, pose_a, pose_b);
+        distance::distance(
+            &ctx,
+            &self.a.info,
+            &self.b.info,
+            &mut self.heap,
+            &mut self.sep,
+            &mut self.distance,
+            opts,
+        )
+    }
+
+    /// First contact (ours): whether the packings overlap, with one overlapping leaf pair,
+    /// or a proved lower bound on their separation. The paper's contact answer on every
+    /// frame (its traversals are under [`Pair::paper`]), from a kinetic front that re-tests
+    /// only what the motion since the last query could change.
+    pub fn contact(&mut self, pose_a: &Pose, pose_b: &Pose) -> ContactResult {
+        let ctx = ctx(&self.a.info, &self.b.info, pose_a, pose_b);
+        contact::contact(&ctx, &self.b.info, &mut self.front, &mut self.bfront)
+    }
+
+    /// Up to `opts.k` contacts, at most one below each node pair at the split depth (the
+    /// paper's multipoint traversal, III-C, reusing last frame's contacts; or ours, picked
+    /// from the kinetic front, with [`MultipointOptions::tracking`]). The contacts are
+    /// [`Pair::contacts`] until the next query.
+    pub fn multipoint(
+        &mut self,
+        pose_a: &Pose,
+        pose_b: &Pose,
+        opts: &MultipointOptions,
+    ) -> Multipoint {
+        let ctx = ctx(&self.a.info, &self.b.info, pose_a, pose_b);
+        multipoint::multipoint(
+            &ctx,
+            &self.a.info,
+            &self.b.info,
+            &mut self.descent,
+            &mut self.front,
+            &mut self.sep,
+            &mut self.multipoint,
+            opts,
+        )
+    }
+
+    /// The contacts found by the last [`Pair::multipoint`] (world frame), reused ones first;
+    /// other query kinds leave them as they are.
+    pub fn contacts(&self) -> &[Contact] {
+        &self.multipoint.contacts
+    }
+
+    /// Penetration volume (the volume of the intersection of the two sphere unions, exact),
+    /// with the contact normal, the penalty force, the torques about both centres of mass
+    /// and the contact patches ([`PenetrationOptions::default`]). The patches are
+    /// [`Pair::patches`] until the next query.
+    pub fn penetration(&mut self, pose_a: &Pose, pose_b: &Pose) -> Penetration {
+        self.penetration_with(pose_a, pose_b, &PenetrationOptions::default())
+    }
+
+    /// [`Pair::penetration`] with options: stiffness, patches, how pairs are found.
+    pub fn penetration_with(
+        &mut self,
+        pose_a: &Pose,
+        pose_b: &Pose,
+        opts: &PenetrationOptions,
+    ) -> Penetration {
+        let ctx = ctx(&self.a.info, &self.b.info, pose_a, pose_b);
+        penetration::penetration(
+            &ctx,
+            &self.a.info,
+            &self.b.info,
+            &mut self.descent,
+            &mut self.front,
+            &mut self.sep,
+            &mut self.penetration,
+            opts,
+        )
+    }
+
+    /// The contact patches of the last [`Pair::penetration`] (world frame); other query
+    /// kinds leave them as they are.
+    pub fn patches(&self) -> &[Patch] {
+        &self.penetration.patches
+    }
+
+    /// Time-critical penetration volume: the volume found within `budget` node-pair tests
+    /// and a proved upper bound on the exact one (see [`BudgetedVolume`] for choosing the
+    /// budget). With `u64::MAX` the volume is [`Pair::penetration`]'s.
+    pub fn penetration_within(
+        &mut self,
+        pose_a: &Pose,
+        pose_b: &Pose,
+        budget: u64,
+    ) -> BudgetedVolume {
+        let ctx = ctx(&self.a.info, &self.b.info, pose_a, pose_b);
+        budgeted::penetration_within(&ctx, &self.a.info, &self.b.info, &mut self.heap, budget)
+    }
+
+    /// The paper's traversals on this pair (its baselines: same contact answers as
+    /// [`Pair::contact`], slower).
+    pub fn paper(&mut self) -> Paper<'_> {
+        Paper(self)
+    }
+
+    /// Forgets all temporal coherence (previous contacts, closest pair, separation record,
+    /// fronts); the next queries start from scratch. Keeps the reserved memory.
+    pub fn reset(&mut self) {
+        self.distance.last = None;
+        self.backtrack = None;
+        self.multipoint.prev.clear();
+        self.sep = None;
+        self.front.reset();
+        self.bfront.reset();
+    }
+
+    /// Size of the kinetic front: (separated node pairs on it, overlapping leaf pairs).
+    pub fn front_size(&self) -> (usize, usize) {
+        self.front.size()
+    }
+
+    /// Size of the block front of [`Pair::contact`]: (live entries, allocated slots,
+    /// overlapping leaf pairs).
+    pub fn block_front_size(&self) -> (usize, usize, usize) {
+        self.bfront.size()
+    }
+
+    /// The last separation bound recorded by a query, if any.
+    pub fn separation_record(&self) -> Option<SeparationRecord> {
+        self.sep
+    }
+
+    /// A guaranteed lower bound on the current separation of the two sphere sets at the
+    /// world poses `pose_a`, `pose_b`, from the last recorded separation and the relative
+    /// motion since: `d − (|Δc| + θ·ρ)`, where `Δc` is the displacement of B's root-sphere
+    /// centre in A's frame, θ the rotation angle of B's relative rotation since then and ρ
+    /// B's radius about its root centre ([`TreeInfo::radius`]), less the f32 rounding slack.
+    /// Positive means no query can find a contact; `None` when no separation is recorded.
+    pub fn safe_separation(&self, pose_a: &Pose, pose_b: &Pose) -> Option<f64> {
+        safe_separation(
+            &self.a.info,
+            &self.b.info,
+            self.sep,
+            &Pose::relative(pose_a, pose_b),
+        )
+    }
+}
+
+/// The paper's traversals on a [`Pair`] (section III), kept as the baselines our queries are
+/// measured against; from [`Pair::paper`].
+#[derive(Debug)]
+pub struct Paper<'p>(&'p mut Pair);
+
+impl Paper<'_> {
+    /// The paper's distance traversal (III-A): from the roots, descend while the spheres
+    /// overlap, stop at the first overlapping leaf pair (the contact) or when every branch
+    /// has reached a separated pair (no contact; `distance` = the smallest separation seen
+    /// there, a proved lower bound).
+    pub fn distance_traversal(
+        &mut self,
+        pose_a: &Pose,
+        pose_b: &Pose,
+        opts: &TraversalOptions,
+    ) -> ContactResult {
+        let p = &mut *self.0;
+        let ctx = ctx(&p.a.info, &p.b.info, pose_a, pose_b);
+        paper::distance_traversal(&ctx, &p.a.info, &p.b.info, &mut p.descent, &mut p.sep, opts)
+    }
+
+    /// The paper's backtracking traversal (III-B, Algorithms 1–2): restart from the previous
+    /// frame's contact pair; if it no longer overlaps, search the traversal pair above it,
+    /// then climb toward the root, each time skipping the subtree pair already searched.
+    /// Without a previous contact it is the full distance traversal. Same contact answer as
+    /// [`Paper::distance_traversal`] on every frame.
+    pub fn backtracking(
+        &mut self,
+        pose_a: &Pose,
+        pose_b: &Pose,
+        opts: &TraversalOptions,
+    ) -> ContactResult {
+        let p = &mut *self.0;
+        let ctx = ctx(&p.a.info, &p.b.info, pose_a, pose_b);
+        paper::backtracking(
+            &ctx,
+            &p.a.info,
+            &p.b.info,
+            &mut p.descent,
+            &mut p.sep,
+            &mut p.backtrack,
+            opts,
+        )
+    }
+}
+
+/// The context of one query at world poses `pose_a`, `pose_b`: B's pose in A's frame, in
+/// f64 and in f32, and the pruning slack of that f32 transform.
+#[inline]
+fn ctx<'t>(ia: &'t TreeInfo, ib: &'t TreeInfo, pose_a: &Pose, pose_b: &Pose) -> Ctx<'t> {
+    let rel = Pose::relative(pose_a, pose_b);
+    let rel32 = Rel32::new(&rel);
+    let slack = pruning_slack(ia.extent, ib.extent, &rel32);
+    Ctx {
+        a: &ia.packed,
+        b: &ib.packed,
+        blocks_a: &ia.blocks,
+        blocks_b: &ib.blocks,
+        block_of_a: &ia.block_of,
+        block_of_b: &ib.block_of,
+        pose_a: *pose_a,
+        rel,
+        rel32,
+        slack,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Pairs move between threads; shared trees are read from many at once.
+    #[test]
+    fn pairs_are_send_and_shared_trees_send_and_sync() {
+        fn send<T: Send>() {}
+        fn sync<T: Send + Sync>() {}
+        send::<Pair>();
+        sync::<SharedTree>();
+    }
+}

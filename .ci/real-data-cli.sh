@@ -1,20 +1,32 @@
 #!/usr/bin/env bash
 # The `ist` binary on every real model: closed meshes build and pass `ist check`; every bad
 # input gives a tree with a warning or a clear error, never a panic (exit code 101).
+# Honours CARGO_TARGET_DIR like cargo does (relative to the repository root).
 set -euo pipefail
-DATA="$1"
-IST=target/release/ist
+DATA="$(cd "$1" && pwd)"
+cd "$(dirname "$0")/.."
+IST="${CARGO_TARGET_DIR:-target}/release/ist"
 cargo build --release -q -p ist
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
 
 for f in "$DATA"/small/*.stl "$DATA"/classic/*.stl "$DATA"/jaw/*molar.stl; do
   name=$(basename "$f")
+  "$IST" inspect "$f" | tail -1 | grep -q "^verdict: closed and consistently oriented" || {
+    echo "FAILED: ist inspect's verdict on $name"; "$IST" inspect "$f" | tail -1; exit 1; }
   "$IST" build "$f" -o "$OUT/$name.ist" --resolution 96 --quiet > /dev/null
   "$IST" check "$OUT/$name.ist" --mesh "$f" --json > "$OUT/check.json" || {
     echo "FAILED: ist check on $name"; cat "$OUT/check.json"; exit 1; }
   echo "ok: $name"
 done
+
+# A real molar with the jaw preset (0.1 mm voxels, 0.05 mm minimum radius, 8 refinement steps).
+f="$DATA/jaw/ofj_p26_tooth03_upper_first_molar.stl"
+"$IST" build "$f" -o "$OUT/molar.ist" --preset jaw --quiet --json > "$OUT/molar.json"
+grep -q '"preset": "jaw"' "$OUT/molar.json" || { echo "FAILED: --preset jaw"; cat "$OUT/molar.json"; exit 1; }
+"$IST" check "$OUT/molar.ist" --mesh "$f" --json > "$OUT/check.json" || {
+  echo "FAILED: ist check on the molar built with --preset jaw"; cat "$OUT/check.json"; exit 1; }
+echo "ok: molar with --preset jaw"
 
 # One real jaw arch at the issue's voxel size.
 f="$DATA/jaw/ofj_p26_mandible_teeth.stl.gz"
@@ -27,6 +39,7 @@ echo "ok: mandible arch"
 for f in "$DATA"/bad/*.stl; do
   name=$(basename "$f")
   set +e
+  "$IST" inspect "$f" | tail -1 | grep -q "^verdict: " || { echo "FAILED: no verdict from ist inspect on $name"; exit 1; }
   "$IST" build "$f" -o "$OUT/$name.ist" --resolution 64 --quiet > "$OUT/out.txt" 2> "$OUT/err.txt"
   code=$?
   set -e

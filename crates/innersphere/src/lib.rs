@@ -35,6 +35,7 @@ pub mod query;
 pub mod shapes;
 pub mod tree;
 
+pub use build::{BuildOptions, BuildReport, Resolution};
 pub use error::{Error, Result};
 pub use glam;
 pub use mesh::Mesh;

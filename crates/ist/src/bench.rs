@@ -71,8 +71,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             json,
         } => {
             use innersphere_eval::paper::{run, PaperOptions};
-            let ma = innersphere::mesh::io::load(&a)?;
-            let mb = innersphere::mesh::io::load(&b)?;
+            let ma = crate::load_mesh(&a)?;
+            let mb = crate::load_mesh(&b)?;
             let m = innersphere_eval::motion::Motion::load(&motion)?;
             let size = [ma.bbox(), mb.bbox()]
                 .iter()
@@ -83,22 +83,17 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             if !sweep.is_empty() {
                 po.voxel_sizes = sweep;
             }
-            if opts.voxel_size.is_some() || opts.resolution.is_some() {
-                po.main = opts.options();
-            } else {
-                let r = po.main.resolution;
-                po.main = opts.options();
-                po.main.resolution = r;
-            }
+            // The given flags override the paper defaults' fields (voxel = longest / 384).
+            po.main = opts.apply(po.main);
             innersphere::build::validate_options(&po.main)?;
             let s = run(&ma, &mb, &m, &po, &out, &mut |line| eprintln!("{line}"))?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&s)?);
+                crate::print_json(&s)?;
             } else {
                 println!("machine: {}", innersphere_eval::sysinfo::cpu_description());
                 println!("wrote {} files to {}", s.files.len(), out.display());
                 println!(
-                    "main trees {} + {} leaves: proximity p99 (1 pass, all frames) {:.1} µs vs exact mesh distance p99 (1 pass, every {} frames, each warm-started from the previous compared frame) {:.1} µs ({:.1}x); backtracking {:.1}x faster than the full traversal in contact (best of 2); distance error p95 {:.4}",
+                    "main trees {} + {} leaves: proximity p99 (1 pass, all frames) {:.1} µs vs exact mesh distance p99 (1 pass, every {} frames, each warm-started from the previous compared frame) {:.1} µs ({:.1}x); backtracking {:.1}x faster than the full traversal in contact (best of 2); distance error p95 {:.4} units (model units, mm for the jaw scans)",
                     s.main_leaves.0,
                     s.main_leaves.1,
                     s.proximity_p99_us,
@@ -122,7 +117,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             let mut rows = Vec::new();
             if !json {
                 println!("machine: {}", innersphere_eval::sysinfo::cpu_description());
-                println!("| mesh | triangles | voxel | inside voxels | spheres | depth | coverage | load s | field s | packing s | hierarchy s | total s (min–max) | peak MiB |");
+                println!("{}", crate::UNITS);
+                println!("| mesh | triangles | voxel (units) | inside voxels | spheres | depth | coverage | load s | field s | packing s | hierarchy s | total s (min–max) | peak MiB |");
                 println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
             }
             for m in &meshes {
@@ -139,7 +135,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 rows.push(r);
             }
             if json {
-                println!("{}", serde_json::to_string_pretty(&rows)?);
+                crate::print_json(&rows)?;
             }
             Ok(0)
         }

@@ -17,14 +17,14 @@ pub struct Args {
 
 /// Runs the subcommand; returns the process exit code (1 when not ok).
 pub fn run(args: Args) -> anyhow::Result<i32> {
-    let tree = innersphere::tree::file::load(&args.tree)?;
-    let mesh = innersphere::mesh::io::load(&args.mesh)?;
+    let tree = crate::load_tree(&args.tree)?;
+    let mesh = crate::load_mesh(&args.mesh)?;
     let report = innersphere::tree::check::check(&tree, &mesh)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        crate::print_json(&report)?;
     } else {
         println!(
-            "{}: {} spheres, {} nodes, max protrusion {:.3e}, max overlap {:.3e}, {} enclosure violations, {} centres outside (tolerance {:.1e})",
+            "{}: {} spheres, {} nodes, max protrusion {:.3e} units, max overlap {:.3e} units, {} enclosure violations, {} centres outside (tolerance {:.1e} units; model units, mm for the jaw scans)",
             if report.ok { "ok" } else { "FAILED" },
             report.spheres,
             report.nodes,

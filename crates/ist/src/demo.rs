@@ -8,7 +8,7 @@ use crate::progress::Bars;
 pub struct Args {
     #[command(flatten)]
     opts: BuildArgs,
-    /// No progress bars.
+    /// No progress on stderr (neither bars on a terminal nor stage lines otherwise).
     #[arg(short, long)]
     quiet: bool,
     /// Print JSON.
@@ -28,15 +28,15 @@ pub struct Args {
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     let opts = args.opts.options();
-    let bars = Bars::new(args.quiet || args.json);
+    let bars = Bars::new(args.quiet);
     anyhow::ensure!(
         args.seconds.is_finite() && (0.0..=600.0).contains(&args.seconds),
         "--seconds must be between 0 and 600"
     );
     let pair = match (&args.a, &args.b) {
         (Some(a), Some(b)) => innersphere_eval::demo::build_pair_from(
-            innersphere::mesh::io::load(a)?,
-            innersphere::mesh::io::load(b)?,
+            crate::load_mesh(a)?,
+            crate::load_mesh(b)?,
             &opts,
             &bars,
         )?,
@@ -48,22 +48,24 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         None
     };
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(
-                &serde_json::json!({ "a": pair.a.2, "b": pair.b.2, "replay": replay })
-            )?
-        );
+        crate::print_json(&serde_json::json!({ "a": pair.a.2, "b": pair.b.2, "replay": replay }))?;
         return Ok(0);
     }
-    match (&args.a, &args.b) {
-        (Some(a), Some(b)) => println!(
-            "innersphere demo: {} (A) and {} (B)",
-            a.display(),
-            b.display()
-        ),
-        _ => println!("innersphere demo: two generated interlocking tooth-like bodies"),
-    }
+    let unit = match (&args.a, &args.b) {
+        (Some(a), Some(b)) => {
+            println!(
+                "innersphere demo: {} (A) and {} (B); {}",
+                a.display(),
+                b.display(),
+                crate::UNITS
+            );
+            "units"
+        }
+        _ => {
+            println!("innersphere demo: two generated interlocking tooth-like bodies, in mm");
+            "mm"
+        }
+    };
     println!("| body | triangles | inside voxels | spheres | nodes | depth | coverage | build s |");
     println!("|---|---|---|---|---|---|---|---|");
     for (name, (_, _, r)) in [("A (upper)", &pair.a), ("B (lower)", &pair.b)] {
@@ -93,7 +95,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         }
         if let Some(acc) = &rep.accuracy {
             println!(
-                "distance error against the exact mesh distance ({} separated frames): p50 {:.4}, p95 {:.4}, max {:.4}; missed contacts {} ({} deeper than 0.1), false contacts {}",
+                "distance error against the exact mesh distance ({} separated frames): p50 {:.4}, p95 {:.4}, max {:.4} {unit}; missed contacts {} ({} deeper than 0.1 {unit}), false contacts {}",
                 acc.separated_frames, acc.abs_err_p50, acc.abs_err_p95, acc.abs_err_max,
                 acc.missed_contacts, acc.missed_contacts_deep, acc.false_contacts
             );

@@ -29,7 +29,7 @@ enum Format {
 
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
-    let tree = innersphere::tree::file::load(&args.tree)?;
+    let tree = crate::load_tree(&args.tree)?;
     let which = if args.all_nodes {
         Which::All
     } else {

@@ -33,7 +33,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1000.0)]
     rate: f64,
     /// Touch threshold of the phase labels in model units (default 0.1 × the pair's scale,
-    /// i.e. 0.1 mm for a human jaw).
+    /// i.e. 0.1 mm for a human jaw in mm).
     #[arg(long)]
     touch: Option<f64>,
     /// About how many vertices of each body the clearance estimate samples (plus as many
@@ -49,10 +49,9 @@ fn parse_scenario(s: &str) -> Result<Scenario, String> {
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     let start = Instant::now();
-    let a = innersphere::mesh::io::load(&args.a)
-        .with_context(|| format!("loading body A from {}", args.a.display()))?;
-    let b = innersphere::mesh::io::load(&args.b)
-        .with_context(|| format!("loading body B from {}", args.b.display()))?;
+    // The library's errors name the file; the context says which body it was.
+    let a = crate::load_mesh(&args.a).context("loading body A (--a)")?;
+    let b = crate::load_mesh(&args.b).context("loading body B (--b)")?;
     let opts = GenerateOptions {
         rate: args.rate,
         touch: args.touch,
@@ -63,9 +62,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         ..GenerateOptions::default()
     };
     let g = generate_with(args.scenario, args.seconds, args.seed, &a, &b, &opts)?;
-    g.motion
-        .save(&args.output)
-        .with_context(|| format!("writing {}", args.output.display()))?;
+    g.motion.save(&args.output).context("writing the motion")?;
     if let Some(path) = &args.labels {
         std::fs::write(path, g.labels_csv())
             .with_context(|| format!("writing {}", path.display()))?;
@@ -73,7 +70,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let c = g.counts();
     println!(
         "{}: {} frames at {} Hz ({} s, {}, seed {}): {} separated, {} touching, {} interpenetrating \
-         (clearance estimate from {} samples, touch threshold {:.3}; bite clearance {:.3}; {:.1} s)",
+         (clearance estimate from {} samples, touch threshold {:.3} units; bite clearance {:.3} units; {:.1} s; model units, mm for the jaw scans)",
         args.output.display(),
         g.motion.len(),
         args.rate,

@@ -25,34 +25,42 @@ pub struct Args {
     a: PathBuf,
     /// Tree file of body B.
     b: PathBuf,
-    /// Pose of B in A's frame, "tx ty tz qw qx qy qz" (p' = R(q)·p + t; q is normalized).
+    /// Pose of B in A's frame, "tx ty tz qw qx qy qz" (p' = R(q)·p + t; t in model units,
+    /// mm for the jaw scans; q is normalized).
     #[arg(long, default_value = "0 0 0 1 0 0 0", allow_hyphen_values = true)]
     pose_b: String,
     /// The query.
     #[arg(long, value_enum, default_value_t = Kind::Distance)]
     query: Kind,
-    /// Multipoint: most contacts to report.
-    #[arg(long, default_value_t = 4)]
+    /// Multipoint: most contacts to report (the same default as `ist replay --k`: the
+    /// benchmarks' and the issue-3 bar's k = 16).
+    #[arg(long, default_value_t = 16)]
     k: usize,
     /// Multipoint: at most one contact below each pair of nodes at this depth.
     #[arg(long, default_value_t = 4)]
     split_depth: u32,
-    /// Penetration: force per unit of penetration volume.
+    /// Penetration: force per unit of penetration volume, in your force unit per model
+    /// unit³ (e.g. N/mm³ for the jaw scans in mm, giving forces in N). Force on B =
+    /// stiffness × volume along the contact normal; the default 1 makes the force's magnitude
+    /// equal to the penetration volume.
     #[arg(long, default_value_t = 1.0)]
     stiffness: f64,
     /// Distance: report minus the deepest leaf overlap instead of 0 when overlapping.
     #[arg(long)]
     signed: bool,
-    /// Distance: absolute error tolerance.
+    /// Distance: absolute error tolerance, in model units.
     #[arg(long, default_value_t = 0.0)]
     abs_tol: f64,
-    /// Distance: relative error tolerance.
+    /// Distance: relative error tolerance (a fraction of the distance).
     #[arg(long, default_value_t = 0.0)]
     rel_tol: f64,
     /// Print JSON.
     #[arg(long)]
     json: bool,
 }
+
+/// Why the "separated by at least" of contact, multipoint and penetration is not the distance.
+const SEPARATION_NOTE: &str = "(a proved lower bound, not the distance: these queries only look for overlap, so they stop descending wherever two node spheres are apart and report the smallest such gap between enclosing spheres; `--query distance` descends to the inner spheres and gives the exact distance of the sphere packings, which is at least this)";
 
 fn v3(v: innersphere::glam::DVec3) -> [f64; 3] {
     v.to_array()
@@ -70,10 +78,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     if !(args.abs_tol >= 0.0 && args.rel_tol >= 0.0) {
         anyhow::bail!("--abs-tol and --rel-tol must be ≥ 0");
     }
-    let a = innersphere::tree::file::load(&args.a)
-        .with_context(|| format!("loading {}", args.a.display()))?;
-    let b = innersphere::tree::file::load(&args.b)
-        .with_context(|| format!("loading {}", args.b.display()))?;
+    let a = crate::load_tree(&args.a)?;
+    let b = crate::load_tree(&args.b)?;
     crate::warn_if_stale(&args.a, &a);
     crate::warn_if_stale(&args.b, &b);
     let pose_a = Pose::IDENTITY;
@@ -93,6 +99,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             (
                 json!({
                     "query": "distance",
+                    "distance_is_lower_bound": false,
                     "distance": p.distance,
                     "contact": p.overlapping,
                     "lower_bound": p.lower_bound,
@@ -105,14 +112,15 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                     "seconds": secs,
                 }),
                 format!(
-                    "distance {:.6} ({}), closest points A {:?} B {:?}, leaves {}/{}, {} node pairs",
+                    "distance {:.6} units ({}), closest points A {:?} B {:?} (units), leaves {}/{}, {} node pairs, {:.1} µs",
                     p.distance,
                     if p.overlapping { "overlapping" } else { "separated" },
                     v3(p.point_a),
                     v3(p.point_b),
                     p.leaf_a,
                     p.leaf_b,
-                    p.visits
+                    p.visits,
+                    secs * 1e6
                 ),
             )
         }
@@ -122,6 +130,9 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             (
                 json!({
                     "query": "contact",
+                    // "distance" here is a proved lower bound, not the distance (see
+                    // SEPARATION_NOTE); said in the JSON too, for scripts.
+                    "distance_is_lower_bound": true,
                     "contact": q.in_contact(),
                     "distance": q.distance,
                     "point": q.contact.map(|c| v3(c.point)),
@@ -134,16 +145,19 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 }),
                 match q.contact {
                     Some(c) => format!(
-                        "contact at {:?} (depth {:.6}, leaves {}/{}), {} node pairs",
+                        "contact at {:?} units (depth {:.6} units, leaves {}/{}), {} node pairs, {:.1} µs",
                         v3(c.point),
                         c.depth,
                         c.leaf_a,
                         c.leaf_b,
-                        q.visits
+                        q.visits,
+                        secs * 1e6
                     ),
                     None => format!(
-                        "no contact, separated by at least {:.6}, {} node pairs",
-                        q.distance, q.visits
+                        "no contact, separated by at least {:.6} units, {} node pairs, {:.1} µs\n{SEPARATION_NOTE}",
+                        q.distance,
+                        q.visits,
+                        secs * 1e6
                     ),
                 },
             )
@@ -159,16 +173,27 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             let m = pair.multipoint(&pose_a, &pose_b, &opts);
             let secs = t0.elapsed().as_secs_f64();
             let contacts = pair.contacts();
-            let mut s = format!("{} contacts", m.count);
+            let mut s = format!(
+                "{} contacts (k = {}, split depth {}), {} node pairs, {:.1} µs",
+                m.count,
+                args.k,
+                args.split_depth,
+                m.visits,
+                secs * 1e6
+            );
             for c in contacts {
-                s += &format!("\n  {:?} depth {:.6}", v3(c.point), c.depth);
+                s += &format!("\n  at {:?} units, depth {:.6} units", v3(c.point), c.depth);
             }
             if contacts.is_empty() {
-                s += &format!(", separated by at least {:.6}", m.distance);
+                s += &format!(
+                    "; separated by at least {:.6} units\n{SEPARATION_NOTE}",
+                    m.distance
+                );
             }
             (
                 json!({
                     "query": "multipoint",
+                    "distance_is_lower_bound": true,
                     "contact": !contacts.is_empty(),
                     "distance": m.distance,
                     "contacts": contacts,
@@ -188,17 +213,22 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             let patches = pair.patches();
             let secs = t0.elapsed().as_secs_f64();
             let mut s = format!(
-                "volume {:.6e} over {} leaf pairs (deepest {:.6}), force on B {:?}, torque on B {:?}, on A {:?}",
+                "penetration volume {:.6e} units³ over {} leaf pairs (deepest {:.6} units), {} node pairs, {:.1} µs\n\
+                 force on B {:?}, torque on B {:?}, torque on A {:?}\n\
+                 (force = stiffness {} × volume, in the force unit of --stiffness: N for N/mm³ on mm meshes; torques in that unit × units, each about its body's centre of mass)",
                 p.volume,
                 p.pairs,
                 p.max_depth,
+                p.visits,
+                secs * 1e6,
                 v3(p.force),
                 v3(p.torque_b),
-                v3(p.torque_a)
+                v3(p.torque_a),
+                args.stiffness
             );
             for q in patches {
                 s += &format!(
-                    "\n  patch at {:?} normal {:?} depth {:.6} volume {:.6e}",
+                    "\n  patch at {:?} units, normal {:?}, depth {:.6} units, volume {:.6e} units³",
                     v3(q.point),
                     v3(q.normal),
                     q.depth,
@@ -206,11 +236,15 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 );
             }
             if p.pairs == 0 {
-                s += &format!("\nno contact, separated by at least {:.6}", p.distance);
+                s += &format!(
+                    "\nno contact, separated by at least {:.6} units\n{SEPARATION_NOTE}",
+                    p.distance
+                );
             }
             (
                 json!({
                     "query": "penetration",
+                    "distance_is_lower_bound": true,
                     "contact": p.pairs > 0,
                     "distance": p.distance,
                     "volume": p.volume,
@@ -230,7 +264,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         }
     };
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        crate::print_json(&out)?;
     } else {
         println!("{summary}");
     }

@@ -1,6 +1,9 @@
 //! The `ist` binary end to end on meshes the tests write themselves (an ASCII STL box and an
 //! OBJ ball, in a fresh temporary folder): `inspect`, `build`, `check` (exit code 0 on a
-//! tree and its mesh, 1 on a tree against another mesh), `query`, and exit code 2 on errors.
+//! tree and its mesh, 1 on a tree against another mesh), `query`, and exit code 2 on errors;
+//! then the edges a user meets: presets, the inspect verdict, errors that name the file once
+//! and say what to do, JSON that ends with a newline, progress on stderr when piped, and the
+//! same defaults for the same option in `query` and `replay`.
 
 use innersphere::glam::DVec3;
 use innersphere::shapes;
@@ -48,6 +51,10 @@ fn code(out: &Output) -> i32 {
 
 fn stdout(out: &Output) -> String {
     String::from_utf8(out.stdout.clone()).unwrap()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8(out.stderr.clone()).unwrap()
 }
 
 /// Runs `ist` with `args`, asserts exit code `want`, parses stdout as JSON.
@@ -266,4 +273,454 @@ fn errors_exit_with_code_2() {
     assert_eq!(code(&out), 2);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("expected 7 numbers"), "{err}");
+}
+
+/// Writes `mesh` as an OBJ (the library's writer; the box and ball above are written by hand).
+fn write_obj(mesh: &innersphere::Mesh, path: &Path) {
+    innersphere::mesh::save_obj(mesh, path).unwrap();
+}
+
+#[test]
+fn a_mesh_where_a_tree_belongs_and_a_tree_where_a_mesh_belongs_say_so() {
+    let dir = fixture("hints");
+    let (box_stl, box_ist) = (dir.path("box.stl"), dir.path("box.ist"));
+    // A mesh given as a tree, in every subcommand that reads trees.
+    for args in [
+        vec!["query", s(&box_stl), s(&box_ist)],
+        vec!["query", s(&box_ist), s(&box_stl)],
+        vec!["check", s(&box_stl), "--mesh", s(&box_stl)],
+        vec!["export", s(&box_stl)],
+    ] {
+        let out = ist(&args);
+        assert_eq!(code(&out), 2, "{args:?}");
+        let err = stderr(&out);
+        assert!(
+            err.starts_with(&format!(
+                "error: {} is a mesh, not a tree file: run `ist build` on it first",
+                s(&box_stl)
+            )),
+            "{args:?}: {err}"
+        );
+        assert_eq!(
+            err.matches(s(&box_stl)).count(),
+            1,
+            "the file named once: {err}"
+        );
+    }
+    // A tree given as a mesh.
+    let not_written = dir.path("x.ist");
+    for args in [
+        vec!["inspect", s(&box_ist)],
+        vec!["build", s(&box_ist), "-o", s(&not_written)],
+        vec!["check", s(&box_ist), "--mesh", s(&box_ist)],
+    ] {
+        let out = ist(&args);
+        assert_eq!(code(&out), 2, "{args:?}");
+        let err = stderr(&out);
+        assert!(
+            err.starts_with(&format!(
+                "error: {} is an Inner Sphere Tree file, not a mesh: give a mesh file here",
+                s(&box_ist)
+            )),
+            "{args:?}: {err}"
+        );
+        assert_eq!(err.matches(s(&box_ist)).count(), 1, "{err}");
+    }
+    // A missing file: named once, with the operating system's reason once.
+    let missing = dir.path("missing.ist");
+    let err = stderr(&ist(&["check", s(&missing), "--mesh", s(&box_stl)]));
+    assert_eq!(err.matches(s(&missing)).count(), 1, "{err}");
+    assert_eq!(err.matches("os error").count(), 1, "{err}");
+    assert!(!not_written.exists());
+}
+
+#[test]
+fn inspect_ends_with_a_verdict_that_matches_what_build_does() {
+    let dir = TempDir::new("verdict");
+    let closed = shapes::cuboid(HALF);
+    let mut inward = closed.clone();
+    inward.flip();
+    let mut open = shapes::icosphere(2);
+    open.triangles.truncate(open.triangles.len() - 3);
+    let soup = innersphere::Mesh::from_soup(
+        &(0..30)
+            .map(|i| {
+                let o = DVec3::splat(i as f64 * 2.0);
+                [o, o + DVec3::X, o + DVec3::Y]
+            })
+            .collect::<Vec<_>>(),
+    );
+    for (name, mesh, verdict, line_start, builds) in [
+        (
+            "closed",
+            &closed,
+            "closed",
+            "verdict: closed and consistently oriented: build uses the exact inside test",
+            true,
+        ),
+        (
+            "inward",
+            &inward,
+            "closed_inward",
+            "verdict: closed but facing inward",
+            true,
+        ),
+        ("open", &open, "open", "verdict: open (", true),
+        ("soup", &soup, "soup", "verdict: a triangle soup (", false),
+    ] {
+        let path = dir.path(&format!("{name}.obj"));
+        write_obj(mesh, &path);
+        let out = ist(&["inspect", s(&path)]);
+        assert_eq!(code(&out), 0);
+        let text = stdout(&out);
+        let last = text.lines().last().unwrap();
+        assert!(last.starts_with(line_start), "{name}: {last}");
+        let r = ist_json(&["inspect", s(&path), "--json"], 0);
+        assert_eq!(r["verdict"], verdict, "{name}: {r}");
+        assert_eq!(
+            format!("verdict: {}", r["verdict_text"].as_str().unwrap()),
+            last
+        );
+        // What the verdict promises is what build does.
+        let tree = dir.path(&format!("{name}.ist"));
+        let out = ist(&[
+            "build",
+            s(&path),
+            "-o",
+            s(&tree),
+            "--resolution",
+            "16",
+            "--json",
+        ]);
+        assert_eq!(code(&out) == 0, builds, "{name}: {}", stderr(&out));
+        if builds {
+            let r: Value = serde_json::from_str(&stdout(&out)).unwrap();
+            let method = if name == "open" {
+                "winding_number"
+            } else {
+                "closed_exact"
+            };
+            assert_eq!(r["inside_method"], method, "{name}");
+            let warned_flip = r["warnings"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|w| w.as_str().unwrap().contains("flipped"));
+            assert_eq!(warned_flip, name == "inward", "{name}: {r}");
+        } else {
+            assert!(
+                stderr(&out).contains("encloses no volume"),
+                "{}",
+                stderr(&out)
+            );
+        }
+    }
+}
+
+/// The build options `ist build` reports in its JSON.
+fn built_options(mesh: &Path, tree: &Path, extra: &[&str]) -> Value {
+    let mut args = vec!["build", s(mesh), "-o", s(tree), "--json", "--quiet"];
+    args.extend_from_slice(extra);
+    ist_json(&args, 0)["options"].clone()
+}
+
+#[test]
+fn presets_are_computed_from_the_mesh_and_flags_override_their_fields() {
+    let dir = TempDir::new("preset");
+    let (stl, tree) = (dir.path("box.stl"), dir.path("box.ist"));
+    write_box_stl(&stl); // 2 x 1.2 x 0.8: read as millimetres, a small tooth
+                         // The jaw preset: absolute millimetres.
+    let o = built_options(&stl, &tree, &["--preset", "jaw"]);
+    assert_eq!(o["preset"], "jaw", "{o}");
+    assert_eq!(o["voxel_size"], 0.1);
+    assert_eq!(o["min_radius"], 0.05);
+    assert_eq!(o["refine_steps"], 8);
+    assert_eq!(o["fanout"], 4);
+    let o = built_options(&stl, &tree, &["--preset", "jaw-fast"]);
+    assert_eq!(
+        (o["voxel_size"].as_f64(), o["min_radius"].as_f64()),
+        (Some(0.15), Some(0.05))
+    );
+    // An explicit flag replaces that one field and keeps the others.
+    let o = built_options(
+        &stl,
+        &tree,
+        &["--preset", "jaw", "--refine-steps", "2", "--fanout", "8"],
+    );
+    assert_eq!(o["voxel_size"], 0.1);
+    assert_eq!(o["min_radius"], 0.05);
+    assert_eq!(o["refine_steps"], 2);
+    assert_eq!(o["fanout"], 8);
+    // The unit-free fine preset scales with the mesh: voxel = longest side / 384; with
+    // --resolution the grid is the flag's, the minimum radius still the preset's.
+    let o = built_options(&stl, &tree, &["--preset", "fine", "--resolution", "20"]);
+    assert_eq!(o["preset"], "fine");
+    assert_eq!(o["resolution"], 20);
+    assert_eq!(o["voxel_size"], Value::Null);
+    assert_eq!(
+        o["min_radius"].as_f64().unwrap(),
+        2.0 * HALF.x / 384.0 / 2.0
+    );
+    assert_eq!(o["refine_steps"], 8);
+    let o = built_options(&stl, &tree, &["--preset", "fast"]);
+    assert_eq!(o["resolution"], 64);
+    assert_eq!(
+        (o["min_radius"].as_f64(), o["refine_steps"].as_u64()),
+        (Some(0.0), Some(0))
+    );
+    // Without a preset: the defaults, and no preset named.
+    let o = built_options(&stl, &tree, &["--resolution", "20"]);
+    assert_eq!(o["preset"], Value::Null);
+    assert_eq!(o["refine_steps"], 0);
+    // The same box in metres is refused by the millimetre presets, with the reason.
+    let tiny = dir.path("tiny.obj");
+    let mut m = shapes::cuboid(HALF);
+    m.vertices.iter_mut().for_each(|v| *v *= 1e-3);
+    write_obj(&m, &tiny);
+    let out = ist(&["build", s(&tiny), "-o", s(&tree), "--preset", "jaw"]);
+    assert_eq!(code(&out), 2);
+    let err = stderr(&out);
+    assert!(err.contains("preset jaw is in millimetres"), "{err}");
+    assert_eq!(err.matches(s(&tiny)).count(), 1, "{err}");
+    // An unknown preset is a usage error listing the names.
+    let out = ist(&["build", s(&stl), "-o", s(&tree), "--preset", "coarse"]);
+    assert_eq!(code(&out), 2);
+    assert!(stderr(&out).contains("jaw-fast"), "{}", stderr(&out));
+}
+
+#[test]
+fn build_reports_its_stages_on_stderr_when_not_on_a_terminal() {
+    let dir = TempDir::new("stages");
+    let (stl, tree) = (dir.path("box.stl"), dir.path("box.ist"));
+    write_box_stl(&stl);
+    // The test captures stdout and stderr through pipes: no terminal.
+    let out = ist(&["build", s(&stl), "-o", s(&tree), "--resolution", "20"]);
+    assert_eq!(code(&out), 0);
+    let err = stderr(&out);
+    for stage in ["distance field", "packing spheres", "clustering (BNG)"] {
+        assert!(err.contains(&format!("] {stage} ...")), "{stage}: {err}");
+        assert!(
+            err.contains(&format!("] {stage}: done in ")),
+            "{stage}: {err}"
+        );
+    }
+    assert!(!err.contains('\r'), "no bar drawing in a log: {err:?}");
+    assert!(
+        stdout(&out).contains("spheres"),
+        "the report stays on stdout"
+    );
+    // With --json the report is on stdout and the stages still on stderr.
+    let out = ist(&[
+        "build",
+        s(&stl),
+        "-o",
+        s(&tree),
+        "--resolution",
+        "20",
+        "--json",
+    ]);
+    assert!(stderr(&out).contains("packing spheres"));
+    serde_json::from_str::<Value>(&stdout(&out)).unwrap();
+    // --quiet: nothing at all on stderr for a clean mesh.
+    let out = ist(&[
+        "build",
+        s(&stl),
+        "-o",
+        s(&tree),
+        "--resolution",
+        "20",
+        "--quiet",
+    ]);
+    assert_eq!(code(&out), 0);
+    assert_eq!(stderr(&out), "");
+}
+
+#[test]
+fn every_json_output_ends_with_a_newline() {
+    let dir = fixture("json");
+    let (box_stl, box_ist, ball_obj, ball_ist) = (
+        dir.path("box.stl"),
+        dir.path("box.ist"),
+        dir.path("ball.obj"),
+        dir.path("ball.ist"),
+    );
+    let motion = dir.path("m.csv");
+    let out = ist(&[
+        "motion",
+        "--a",
+        s(&box_stl),
+        "--b",
+        s(&ball_obj),
+        "-o",
+        s(&motion),
+        "--seconds",
+        "0.05",
+    ]);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    let tree2 = dir.path("again.ist");
+    let runs: Vec<Vec<&str>> = vec![
+        vec!["inspect", s(&box_stl)],
+        vec![
+            "build",
+            s(&box_stl),
+            "-o",
+            s(&tree2),
+            "--resolution",
+            "12",
+            "--quiet",
+        ],
+        vec!["check", s(&box_ist), "--mesh", s(&box_stl)],
+        vec!["query", s(&box_ist), s(&ball_ist), "--query", "distance"],
+        vec!["query", s(&box_ist), s(&ball_ist), "--query", "contact"],
+        vec!["query", s(&box_ist), s(&ball_ist), "--query", "multipoint"],
+        vec!["query", s(&box_ist), s(&ball_ist), "--query", "penetration"],
+        vec!["replay", s(&box_ist), s(&ball_ist), "--motion", s(&motion)],
+        vec!["bench", "build", s(&box_stl), "--resolution", "12"],
+        vec!["demo", "--resolution", "12", "--seconds", "0", "--quiet"],
+    ];
+    for mut args in runs {
+        args.push("--json");
+        let out = ist(&args);
+        assert_eq!(code(&out), 0, "{args:?}: {}", stderr(&out));
+        let text = stdout(&out);
+        assert!(
+            text.ends_with("}\n") || text.ends_with("]\n"),
+            "{args:?}: {text:?}"
+        );
+        assert!(!text.ends_with("\n\n"), "{args:?}");
+        serde_json::from_str::<Value>(&text).unwrap_or_else(|e| panic!("{args:?}: {e}"));
+    }
+}
+
+/// The default of `--option` in `ist SUBCOMMAND --help`.
+fn default_of(subcommand: &[&str], option: &str) -> String {
+    let mut args = subcommand.to_vec();
+    args.push("--help");
+    let help = stdout(&ist(&args));
+    let start = help
+        .find(&format!("--{option} <"))
+        .unwrap_or_else(|| panic!("{subcommand:?} has no --{option}: {help}"));
+    let rest = &help[start..];
+    let end = rest.find("\n  -").unwrap_or(rest.len());
+    let entry = &rest[..end];
+    let d = entry
+        .find("[default: ")
+        .unwrap_or_else(|| panic!("--{option} shows no default: {entry}"));
+    entry[d + 10..].split(']').next().unwrap().to_string()
+}
+
+#[test]
+fn query_and_replay_share_their_defaults() {
+    for option in ["k", "split-depth"] {
+        assert_eq!(
+            default_of(&["query"], option),
+            default_of(&["replay"], option),
+            "--{option}"
+        );
+    }
+    // The benchmarks' k = 16.
+    assert_eq!(default_of(&["query"], "k"), "16");
+    // And the default is what runs: the box against itself touches everywhere.
+    let dir = fixture("k");
+    let box_ist = dir.path("box.ist");
+    let r = ist_json(
+        &[
+            "query",
+            s(&box_ist),
+            s(&box_ist),
+            "--query",
+            "multipoint",
+            "--json",
+        ],
+        0,
+    );
+    assert_eq!(r["contacts"].as_array().unwrap().len(), 16, "{r}");
+}
+
+#[test]
+fn printed_numbers_say_their_units() {
+    let dir = fixture("units");
+    let (box_stl, box_ist, ball_ist) = (
+        dir.path("box.stl"),
+        dir.path("box.ist"),
+        dir.path("ball.ist"),
+    );
+    let out = stdout(&ist(&[
+        "build",
+        s(&box_stl),
+        "-o",
+        s(&dir.path("b.ist")),
+        "--resolution",
+        "12",
+    ]));
+    assert!(out.contains("model units"), "{out}");
+    assert!(out.contains(" units³"), "{out}");
+    assert!(out.contains("cells of 0.166667 units"), "{out}");
+    let out = stdout(&ist(&[
+        "query",
+        s(&box_ist),
+        s(&ball_ist),
+        "--pose-b",
+        "3 0 0 1 0 0 0",
+    ]));
+    assert!(
+        out.starts_with("distance 1.") && out.contains(" units (separated)") && out.contains(" µs"),
+        "{out}"
+    );
+    let out = stdout(&ist(&[
+        "query",
+        s(&box_ist),
+        s(&ball_ist),
+        "--pose-b",
+        "3 0 0 1 0 0 0",
+        "--query",
+        "contact",
+    ]));
+    assert!(out.contains("separated by at least"), "{out}");
+    assert!(
+        out.contains("a proved lower bound, not the distance"),
+        "{out}"
+    );
+    for (kind, lower) in [
+        ("distance", false),
+        ("contact", true),
+        ("multipoint", true),
+        ("penetration", true),
+    ] {
+        let r = ist_json(
+            &[
+                "query",
+                s(&box_ist),
+                s(&ball_ist),
+                "--pose-b",
+                "3 0 0 1 0 0 0",
+                "--query",
+                kind,
+                "--json",
+            ],
+            0,
+        );
+        assert_eq!(r["distance_is_lower_bound"], lower, "{kind}: {r}");
+        assert!(r["distance"].as_f64().unwrap() > 0.5, "{kind}: {r}");
+    }
+    let out = stdout(&ist(&[
+        "query",
+        s(&box_ist),
+        s(&ball_ist),
+        "--query",
+        "penetration",
+    ]));
+    assert!(
+        out.starts_with("penetration volume ") && out.contains(" units³"),
+        "{out}"
+    );
+    assert!(out.contains("N for N/mm³"), "{out}");
+    let help = stdout(&ist(&["query", "--help"]));
+    assert!(
+        help.contains("force per unit of penetration volume"),
+        "{help}"
+    );
+    assert!(help.contains("N/mm³"), "{help}");
+    let help = stdout(&ist(&["build", "--help"]));
+    assert!(help.contains("mm for the jaw scans"), "{help}");
 }

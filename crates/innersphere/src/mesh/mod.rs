@@ -24,6 +24,13 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// Loads a mesh file: STL (binary or ASCII), OBJ, PLY or OFF by its extension, optionally
+    /// gzip-compressed (`.stl.gz`, ...); welded and validated (see [`io::load`]). Coordinates
+    /// are kept in the file's own unit (the library is unit-agnostic).
+    pub fn load(path: impl AsRef<std::path::Path>) -> crate::Result<Mesh> {
+        io::load(path.as_ref())
+    }
+
     /// The three corners of triangle `t`.
     #[inline]
     pub fn triangle(&self, t: usize) -> [DVec3; 3] {

@@ -50,7 +50,7 @@ pub struct MultipointOptions {
     /// motion changed): last frame's contacts that still overlap first, then the others in
     /// front order, at most one per split-depth pair. Same guarantees.
     pub tracking: bool,
-    /// At most this many contacts (no cap).
+    /// At most this many contacts (no cap; default 16, the same as `ist query` and `ist replay`).
     pub k: usize,
     /// At most one contact below each traversal pair at this depth (pairs of nodes at this
     /// depth; a contact at a shallower leaf pair stands for itself).
@@ -65,7 +65,7 @@ impl Default for MultipointOptions {
     fn default() -> Self {
         MultipointOptions {
             tracking: false,
-            k: 4,
+            k: 16,
             split_depth: 4,
             reuse: true,
             safe_motion: true,

@@ -159,12 +159,14 @@ pub fn load(path: &Path) -> Result<SphereTree> {
 }
 
 impl SphereTree {
-    /// Reads a tree file (see [`load`]).
-    pub fn load(path: &Path) -> Result<SphereTree> {
-        load(path)
+    /// Reads a tree file written by [`SphereTree::save`] (or `ist build`), checking its size,
+    /// checksum and structure (see [`load`]). Takes anything path-like (`&str`, `&Path`,
+    /// `PathBuf`, ...).
+    pub fn load(path: impl AsRef<Path>) -> Result<SphereTree> {
+        load(path.as_ref())
     }
-    /// Writes a tree file (see [`save`]).
-    pub fn save(&self, path: &Path) -> Result<()> {
-        save(self, path)
+    /// Writes the tree file (see [`save`]; the same tree always gives the same bytes).
+    pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
+        save(self, path.as_ref())
     }
 }

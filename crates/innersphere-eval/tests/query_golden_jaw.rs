@@ -188,18 +188,38 @@ fn query(
 /// Digests recorded before the reorganisation: (kind, answers, work).
 const RECORDED: [(&str, u64, u64); 13] = [
     ("proximity", 0x27a28e9c1598773c, 0x3b91f149fdeca5dc),
-    ("proximity best first", 0xbd08b69e5c85e665, 0xd745af7258a44d14),
+    (
+        "proximity best first",
+        0xbd08b69e5c85e665,
+        0xd745af7258a44d14,
+    ),
     ("proximity signed", 0xa4e9f899a7ccafcd, 0x70e43f13146c5bca),
     ("distance traversal", 0x421bcdc79afd6a2e, 0x01baab2a731dfa5b),
     ("backtracking", 0xf3717a5a38497a93, 0x74f884d44954fe63),
     ("contact", 0xc664ba1f71d6654d, 0x7253fd73242436e9),
     ("multipoint k=16", 0x976e55c1f49258e7, 0x23f341c019a98ea9),
-    ("multipoint k=16 tracking", 0xd311b6d223070bd1, 0x7773e70fa20b8cea),
+    (
+        "multipoint k=16 tracking",
+        0xd311b6d223070bd1,
+        0x7773e70fa20b8cea,
+    ),
     ("penetration", 0xb831f2dc0833959e, 0x4c159414d85aeb33),
-    ("penetration traversal", 0x39fe732ab99acc51, 0x3d21625a022a6a99),
+    (
+        "penetration traversal",
+        0x39fe732ab99acc51,
+        0x3d21625a022a6a99,
+    ),
     ("penetration front", 0xb831f2dc0833959e, 0x4c159414d85aeb33),
-    ("penetration budget 8000", 0xccf1be038fe83115, 0x6a2947013d11895b),
-    ("all kinds on one state", 0x444301c2b7ab54ce, 0x6e76ff9b5ec80e8c),
+    (
+        "penetration budget 8000",
+        0xccf1be038fe83115,
+        0x6a2947013d11895b,
+    ),
+    (
+        "all kinds on one state",
+        0x444301c2b7ab54ce,
+        0x6e76ff9b5ec80e8c,
+    ),
 ];
 
 #[test]

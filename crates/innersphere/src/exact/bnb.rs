@@ -1,4 +1,4 @@
-//! The best-first branch and bound over node pairs of [`distance`](super::distance): the
+//! The best-first branch and bound over node pairs of [`distance`](fn@super::distance): the
 //! best pair so far, the queue, and the triangle pairs of two leaves.
 
 use super::frame::{size_sq, tri_box, Frame};
@@ -137,7 +137,7 @@ impl Ord for HeapItem {
     }
 }
 
-/// Best-first branch and bound of [`distance`](super::distance): node pairs in the order of
+/// Best-first branch and bound of [`distance`](fn@super::distance): node pairs in the order of
 /// their lower bounds ([`bound::lower_bound_sq`](super::bound::lower_bound_sq)), except that
 /// the nearer child pair is taken at once while no queued pair is nearer (which saves most
 /// queue operations without changing the order).

@@ -31,6 +31,10 @@
 //!
 //! No input panics: meshes are validated by [`ExactMesh::new`], degenerate triangles are
 //! handled, and a non-finite pose gives a NaN distance, no intersection and depth 0.
+//!
+//! [`distance`]: fn@distance
+//! [`intersects`]: fn@intersects
+//! [`penetration`]: fn@penetration
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x < y)` is deliberate: true for NaN too.
 

@@ -1,6 +1,6 @@
 //! The depth-first traversal of the node pairs whose bounds overlap, down to the triangle
-//! pairs whose boxes overlap: phase one of [`distance`](super::distance), all of
-//! [`intersects`](super::intersects), and the crossings of the penetration depth.
+//! pairs whose boxes overlap: phase one of [`distance`](fn@super::distance), all of
+//! [`intersects`](fn@super::intersects), and the crossings of the penetration depth.
 
 use super::frame::{size_sq, tri_box, Frame};
 use super::mesh::ExactMesh;

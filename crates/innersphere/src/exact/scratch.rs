@@ -10,10 +10,10 @@ use super::penetration;
 pub struct ExactScratch {
     pub(super) stack: Vec<(u32, u32, f64)>,
     pub(super) heap: std::collections::BinaryHeap<HeapItem>,
-    /// Closest pair of the last [`distance`](super::distance) (BVH slots), tried first next
+    /// Closest pair of the last [`distance`](fn@super::distance) (BVH slots), tried first next
     /// time.
     pub(super) last_pair: Option<(u32, u32)>,
-    /// Crossing pair of the last [`intersects`](super::intersects), tried first next time.
+    /// Crossing pair of the last [`intersects`](fn@super::intersects), tried first next time.
     pub(super) last_hit: Option<(u32, u32)>,
     pub(super) warm_start: bool,
     pub(super) stats: ExactStats,

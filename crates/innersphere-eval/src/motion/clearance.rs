@@ -19,8 +19,6 @@
 //! of the jaw pair costs some tens of closest-point queries.
 
 use glam::{DQuat, DVec3};
-use innersphere::mesh::bvh::{TriangleBvh, MAX_DEPTH};
-use innersphere::mesh::closest::closest_point_on_triangle;
 use innersphere::mesh::winding::FastWinding;
 use innersphere::Mesh;
 use innersphere::Pose;
@@ -236,15 +234,16 @@ impl Side {
         let bvh = self.surface.bvh();
         // (distance, slot, side by the closest triangle's normal when the closest point lies
         // inside the triangle — then the offset runs along the normal), or a lower bound.
-        let found = match closest_within(bvh, p, bound * bound, hint) {
-            Ok((dist_sq, point, slot)) => {
-                let d = dist_sq.sqrt();
-                let [ta, tb, tc] = bvh.tris[slot as usize];
+        let upper = (bound * bound).min(bvh.slot_distance_sq(p, hint));
+        let found = match bvh.closest_point_or_bound(p, upper) {
+            Ok(c) => {
+                let d = c.dist_sq.sqrt();
+                let [ta, tb, tc] = bvh.tris[c.slot as usize];
                 let n = (tb - ta).cross(tc - ta);
-                let along = (p - point).dot(n);
+                let along = (p - c.point).dot(n);
                 let by_normal =
                     (along.abs() >= 0.9999 * d * n.length() && d > 0.0).then_some(along < 0.0);
-                Ok((d, slot, by_normal))
+                Ok((d, c.slot, by_normal))
             }
             Err(lower_sq) => Err(lower_sq.sqrt()),
         };
@@ -430,107 +429,6 @@ impl Side {
                 }
             })
             .collect();
-    }
-}
-
-/// The closest point of the tree's triangles to `p` when one is within `sqrt(bound_sq)`:
-/// `(dist_sq, point, slot)`; otherwise a lower bound of the squared distance (at least
-/// `bound_sq`, often more: the nearest box or triangle that was pruned). `hint` is the slot
-/// of a triangle likely to be close (`u32::MAX` for none).
-fn closest_within(
-    bvh: &TriangleBvh,
-    p: DVec3,
-    bound_sq: f64,
-    hint: u32,
-) -> Result<(f64, DVec3, u32), f64> {
-    let mut best = bound_sq;
-    let mut found: Option<(DVec3, u32)> = None;
-    if let Some(&[a, b, c]) = bvh.tris.get(hint as usize) {
-        let q = closest_point_on_triangle(p, a, b, c);
-        let d = (p - q).length_squared();
-        if d <= best {
-            best = d;
-            found = Some((q, hint));
-        }
-    }
-    let mut pruned = f64::INFINITY;
-    let Some(root) = bvh.nodes.first() else {
-        return Err(f64::INFINITY);
-    };
-    let d = root.dist_sq(p);
-    if d.is_nan() || d > best {
-        return match found {
-            Some((q, slot)) => Ok((best, q, slot)),
-            None => Err(if d.is_nan() { bound_sq } else { d }),
-        };
-    }
-    let mut stack = [(0u32, 0.0f64); MAX_DEPTH + 2];
-    let mut sp = 0usize;
-    let mut node = 0usize;
-    loop {
-        let n = &bvh.nodes[node];
-        let mut next = None;
-        if n.is_leaf() {
-            let s = n.start as usize;
-            for (k, &[a, b, c]) in bvh.tris[s..s + n.count as usize].iter().enumerate() {
-                let lo = a.min(b).min(c);
-                let hi = a.max(b).max(c);
-                let bd = (lo - p).max(p - hi).max(DVec3::ZERO).length_squared();
-                if bd > best {
-                    pruned = pruned.min(bd);
-                    continue;
-                }
-                let q = closest_point_on_triangle(p, a, b, c);
-                let d = (p - q).length_squared();
-                if d < best || (found.is_none() && d <= best) {
-                    if found.is_none() {
-                        pruned = pruned.min(best);
-                    }
-                    best = d;
-                    found = Some((q, (s + k) as u32));
-                } else {
-                    pruned = pruned.min(d);
-                }
-            }
-        } else {
-            let (l, r) = (node + 1, n.start as usize);
-            let dl = bvh.nodes[l].dist_sq(p);
-            let dr = bvh.nodes[r].dist_sq(p);
-            let (near, dn, far, df) = if dl <= dr {
-                (l, dl, r, dr)
-            } else {
-                (r, dr, l, dl)
-            };
-            if df <= best {
-                stack[sp] = (far as u32, df);
-                sp += 1;
-            } else {
-                pruned = pruned.min(df);
-            }
-            if dn <= best {
-                next = Some(near);
-            } else {
-                pruned = pruned.min(dn);
-            }
-        }
-        match next {
-            Some(nx) => node = nx,
-            None => loop {
-                if sp == 0 {
-                    return match found {
-                        Some((q, slot)) => Ok((best, q, slot)),
-                        None => Err(pruned.max(bound_sq)),
-                    };
-                }
-                sp -= 1;
-                let (idx, d) = stack[sp];
-                if d <= best {
-                    node = idx as usize;
-                    break;
-                }
-                pruned = pruned.min(d);
-            },
-        }
     }
 }
 

@@ -209,12 +209,32 @@ impl TriangleBvh {
     /// [`closest_point_on_triangle`], bit for bit, whatever the bound; ties keep the first
     /// triangle found.
     pub fn closest_point(&self, p: DVec3, upper_bound_sq: f64) -> Option<Closest> {
+        self.search::<false>(p, upper_bound_sq).ok()
+    }
+
+    /// [`closest_point`](Self::closest_point), but when no triangle is within the bound it
+    /// returns a lower bound of the squared distance instead: at least `upper_bound_sq`, and
+    /// often more (the nearest box, slab or triangle that the search pruned). The same
+    /// search; only the pruned bounds are kept.
+    pub fn closest_point_or_bound(&self, p: DVec3, upper_bound_sq: f64) -> Result<Closest, f64> {
+        self.search::<true>(p, upper_bound_sq)
+    }
+
+    /// The search of [`closest_point`](Self::closest_point). With `BOUND` a miss returns the
+    /// smallest squared distance that was pruned (at least `upper_bound_sq`); without, the
+    /// pruned distances are not tracked.
+    #[inline(always)]
+    fn search<const BOUND: bool>(&self, p: DVec3, upper_bound_sq: f64) -> Result<Closest, f64> {
         let mut best = upper_bound_sq;
         let mut found: Option<(usize, DVec3)> = None;
-        let root = self.nodes.first()?;
+        // The smallest squared distance that was pruned (kept only with `BOUND`).
+        let mut pruned = f64::INFINITY;
+        let Some(root) = self.nodes.first() else {
+            return Err(f64::INFINITY);
+        };
         let d = root.dist_sq(p);
         if d.is_nan() || d > best {
-            return None;
+            return Err(if d.is_nan() { upper_bound_sq } else { d });
         }
         let mut stack = [(0u32, 0.0f64); MAX_DEPTH + 2];
         let mut sp = 0usize;
@@ -228,7 +248,11 @@ impl TriangleBvh {
                     // The triangle's own box first: a cheap, exactly conservative bound.
                     let lo = a.min(b).min(c);
                     let hi = a.max(b).max(c);
-                    if (lo - p).max(p - hi).max(DVec3::ZERO).length_squared() > best {
+                    let bd = (lo - p).max(p - hi).max(DVec3::ZERO).length_squared();
+                    if bd > best {
+                        if BOUND {
+                            pruned = pruned.min(bd);
+                        }
                         continue;
                     }
                     let q = closest_point_on_triangle(p, a, b, c);
@@ -236,6 +260,8 @@ impl TriangleBvh {
                     if d < best || (found.is_none() && d <= best) {
                         best = d;
                         found = Some((s + slot, q));
+                    } else if BOUND {
+                        pruned = pruned.min(d);
                     }
                 }
             } else {
@@ -250,21 +276,28 @@ impl TriangleBvh {
                 if df <= best {
                     stack[sp] = (far as u32, df);
                     sp += 1;
+                } else if BOUND {
+                    pruned = pruned.min(df);
                 }
                 if dn <= best {
                     next = Some(near);
+                } else if BOUND {
+                    pruned = pruned.min(dn);
                 }
             }
             match next {
                 Some(nx) => node = nx,
                 None => loop {
                     if sp == 0 {
-                        return found.map(|(slot, point)| Closest {
-                            dist_sq: best,
-                            point,
-                            triangle: self.order[slot],
-                            slot: slot as u32,
-                        });
+                        return match found {
+                            Some((slot, point)) => Ok(Closest {
+                                dist_sq: best,
+                                point,
+                                triangle: self.order[slot],
+                                slot: slot as u32,
+                            }),
+                            None => Err(pruned.max(upper_bound_sq)),
+                        };
                     }
                     sp -= 1;
                     let (idx, d) = stack[sp];
@@ -641,6 +674,19 @@ mod tests {
             check_structure(&bvh, tris.len());
             for &p in &pts {
                 let r = brute(&tris, p);
+                // The bound-returning search finds the same, or a lower bound on a miss.
+                match bvh.closest_point_or_bound(p, bound) {
+                    Ok(c) => prop_assert_eq!(Some(c), bvh.closest_point(p, bound)),
+                    Err(lower) => {
+                        prop_assert!(bvh.closest_point(p, bound).is_none());
+                        prop_assert!(
+                            lower >= bound && lower <= r.max(bound) * (1.0 + 1e-12),
+                            "{} vs {}",
+                            lower,
+                            r
+                        );
+                    }
+                }
                 match bvh.closest_point(p, bound) {
                     Some(c) => {
                         prop_assert!(c.dist_sq <= bound);

@@ -3,6 +3,27 @@
 //! Collision detection, proximity and penetration volume between highly complex rigid
 //! 3D models at haptic rates (1 kHz and more), built on **Inner Sphere Trees** (IST).
 //!
+//! Build a tree per model once, share the trees, make a [`Pair`] per pair of bodies and ask
+//! it every frame, with the world pose of each body:
+//!
+//! ```
+//! use innersphere::{shapes, BuildOptions, Pair, Pose, SphereTree};
+//!
+//! // Two generated molars whose cusps meet at the identity pose (a mesh file: Mesh::load).
+//! let (upper, lower) = shapes::tooth_pair(3);
+//! let opts = BuildOptions::default();
+//! let mut pair = Pair::new(SphereTree::build(&upper, &opts)?, SphereTree::build(&lower, &opts)?);
+//! let apart = Pose::from_translation([0.0, 0.0, -3.0].into());
+//! assert!(pair.distance(&Pose::IDENTITY, &apart).distance > 0.0);
+//! let bite = pair.penetration(&Pose::IDENTITY, &Pose::IDENTITY);
+//! assert!(bite.volume > 0.0 && pair.contact(&Pose::IDENTITY, &Pose::IDENTITY).in_contact());
+//! # Ok::<(), innersphere::Error>(())
+//! ```
+//!
+//! Queries allocate nothing and take no lock from the first frame; a [`Pair`] is `Send` and
+//! its trees ([`SharedTree`]) are shared read-only between pairs and threads. The module
+//! [`query`] lists every query kind; `docs/ARCHITECTURE.md` maps the source.
+//!
 //! The pipeline, one module per stage:
 //!
 //! ```text
@@ -11,13 +32,13 @@
 //! packing/    greedy packing of non-overlapping inner spheres
 //! hierarchy/  batch neural gas clustering, minimal enclosing spheres, flat layout
 //! tree/       the finished tree (structure of arrays) and its file format
+//! build.rs    the whole build, its options and presets ([`SphereTree::build`])
 //! pose.rs     rigid poses: from quaternions, rotation matrices, 4×4 matrices, text
-//! query/      per-pair state and one file per query kind
+//! query/      the Pair and one file per query kind, over a kernel and the fronts
 //! exact/      exact mesh-mesh distance, intersection and penetration depth (also the
 //!             accuracy reference of the sphere queries)
 //! ```
 //!
-//! [`build::build_tree`] runs the whole build; [`tree::SphereTree`] is what queries use.
 //! Motion files, replay, benchmarks and the paper's figures are the `innersphere-eval` crate.
 
 #![deny(missing_docs)]
@@ -45,3 +66,8 @@ pub use query::{
     MultipointOptions, Pair, Patch, Penetration, PenetrationOptions, SharedTree, Tracking,
 };
 pub use tree::SphereTree;
+
+/// The README's examples, compiled as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../../../README.md")]
+struct ReadmeDoctests;

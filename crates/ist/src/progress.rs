@@ -2,7 +2,7 @@
 //! stage lines otherwise, nothing with `--quiet`.
 //!
 //! Why plain lines: indicatif draws nothing when stderr is not a terminal, so a build run
-//! from a script, CI or `ist build ... 2> build.log` used to be silent for minutes. A line
+//! from a script, CI or `ist build ... 2> build.log` would be silent for minutes. A line
 //! when each stage starts and ends (with the seconds since the command started) tells a
 //! log reader where a slow or stuck build is, without the carriage-return noise of bars.
 

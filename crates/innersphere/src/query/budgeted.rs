@@ -112,3 +112,13 @@ pub(crate) fn penetration_within(
         complete,
     }
 }
+
+/// The answer at a far pose ([`far`](super::kernel::far)): nothing overlaps.
+pub(crate) fn separated() -> BudgetedVolume {
+    BudgetedVolume {
+        volume: 0.0,
+        upper_bound: 0.0,
+        visits: 1,
+        complete: true,
+    }
+}

@@ -104,3 +104,14 @@ pub(crate) fn contact(
         },
     }
 }
+
+/// The answer at a far pose ([`far`](super::kernel::far)): no contact, the bodies at least
+/// the root spheres' separation apart.
+pub(crate) fn separated(separation: f64) -> ContactResult {
+    ContactResult {
+        contact: None,
+        distance: separation,
+        visits: 1,
+        skipped: false,
+    }
+}

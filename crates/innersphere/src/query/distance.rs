@@ -1,8 +1,9 @@
 //! Exact distance of the two inner-sphere packings: branch and bound over both trees.
 
+use super::kernel::far::{norm, Far};
 use super::kernel::geometry::{direction, leaf_pair};
 use super::kernel::heap::{Entry, PairHeap};
-use super::kernel::info::{Block, TreeInfo, LANES};
+use super::kernel::info::{Block, Node, TreeInfo, LANES};
 use super::kernel::lanes;
 use super::kernel::separation::{record, SeparationRecord};
 use super::kernel::simd;
@@ -229,6 +230,78 @@ pub(crate) fn distance(
         leaf_a: la,
         leaf_b: lb,
         visits,
+    }
+}
+
+/// The distance at a far pose whose tolerance exceeds the trees' size
+/// ([`Far::roots_only`]), in f64: each tree descends greedily toward the other's root centre
+/// to a leaf, and that leaf pair is the answer. The exact distance lies between the root
+/// spheres' separation (the lower bound) and that pair's distance, which are at most
+/// `2(ρ_A + ρ_B)` apart, within the far tolerance.
+pub(crate) fn far_roots(
+    ctx: &Ctx,
+    ia: &TreeInfo,
+    ib: &TreeInfo,
+    far: &Far,
+    s: &mut DistanceScratch,
+) -> Distance {
+    let rel = &ctx.rel;
+    let mut visits = 0u64;
+    let la = dive_toward(ctx.a, rel.transform_point(ib.root_center), &mut visits);
+    let lb = dive_toward(
+        ctx.b,
+        rel.inverse().transform_point(ia.root_center),
+        &mut visits,
+    );
+    let (na, nb) = (&ctx.a[la as usize], &ctx.b[lb as usize]);
+    let ca = DVec3::new(na.x as f64, na.y as f64, na.z as f64);
+    let cb = rel.transform_point(DVec3::new(nb.x as f64, nb.y as f64, nb.z as f64));
+    let delta = cb - ca;
+    let len = norm(delta);
+    let n = if len > 0.0 && len.is_finite() {
+        let m = delta.abs().max_element();
+        (delta / m).normalize()
+    } else {
+        DVec3::X
+    };
+    let (ra, rb) = (na.r as f64, nb.r as f64);
+    let pair = (len - ra - rb).min(f64::MAX);
+    s.last = Some((la, lb));
+    let pose_a = &ctx.pose_a;
+    Distance {
+        distance: pair.max(far.separation),
+        pair_distance: pair,
+        lower_bound: far.separation,
+        overlapping: false,
+        point_a: pose_a.transform_point(ca + n * ra),
+        point_b: pose_a.transform_point(cb - n * rb),
+        normal: pose_a.transform_vector(n),
+        leaf_a: la,
+        leaf_b: lb,
+        visits,
+    }
+}
+
+/// The leaf reached from the root by always entering the child whose sphere comes nearest to
+/// `p` (node frame, f64).
+fn dive_toward(nodes: &[Node], p: DVec3, visits: &mut u64) -> u32 {
+    let mut i = 0u32;
+    loop {
+        let n = &nodes[i as usize];
+        if n.is_leaf() {
+            return i;
+        }
+        let kids = n.first..n.first + n.count;
+        i = kids
+            .min_by(|&x, &y| {
+                let gap = |k: u32| {
+                    let c = &nodes[k as usize];
+                    norm(DVec3::new(c.x as f64, c.y as f64, c.z as f64) - p) - c.r as f64
+                };
+                gap(x).total_cmp(&gap(y))
+            })
+            .unwrap_or(n.first);
+        *visits += n.count as u64;
     }
 }
 

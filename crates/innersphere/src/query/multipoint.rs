@@ -263,3 +263,17 @@ fn multipoint_search(
         }
     }
 }
+
+/// The answer at a far pose ([`far`](super::kernel::far)): no contacts (last frame's are
+/// forgotten), the bodies at least the root spheres' separation apart.
+pub(crate) fn separated(s: &mut MultipointScratch, separation: f64) -> Multipoint {
+    s.contacts.clear();
+    s.prev.clear();
+    Multipoint {
+        count: 0,
+        reused: 0,
+        distance: separation,
+        visits: 1,
+        skipped: false,
+    }
+}

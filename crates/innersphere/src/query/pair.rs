@@ -4,6 +4,7 @@
 use super::budgeted::{self, BudgetedVolume};
 use super::contact::{self, ContactResult};
 use super::distance::{self, Distance, DistanceOptions, DistanceScratch};
+use super::kernel::far::far;
 use super::kernel::geometry::{pruning_slack, Contact, Rel32};
 use super::kernel::heap::PairHeap;
 use super::kernel::info::TreeInfo;
@@ -204,6 +205,19 @@ impl Pair {
         opts: &DistanceOptions,
     ) -> Distance {
         let ctx = ctx(&self.a.info, &self.b.info, pose_a, pose_b);
+        let mut opts = *opts;
+        if let Some(f) = far(&self.a.info, &self.b.info, &ctx.rel) {
+            if f.roots_only {
+                return distance::far_roots(
+                    &ctx,
+                    &self.a.info,
+                    &self.b.info,
+                    &f,
+                    &mut self.distance,
+                );
+            }
+            opts.abs_tolerance = opts.abs_tolerance.max(f.tolerance);
+        }
         distance::distance(
             &ctx,
             &self.a.info,
@@ -211,7 +225,7 @@ impl Pair {
             &mut self.heap,
             &mut self.sep,
             &mut self.distance,
-            opts,
+            &opts,
         )
     }
 
@@ -221,6 +235,9 @@ impl Pair {
     /// only what the motion since the last query could change.
     pub fn contact(&mut self, pose_a: &Pose, pose_b: &Pose) -> ContactResult {
         let ctx = ctx(&self.a.info, &self.b.info, pose_a, pose_b);
+        if let Some(f) = far(&self.a.info, &self.b.info, &ctx.rel) {
+            return contact::separated(f.separation);
+        }
         contact::contact(&ctx, &self.b.info, &mut self.front, &mut self.bfront)
     }
 
@@ -235,6 +252,9 @@ impl Pair {
         opts: &MultipointOptions,
     ) -> Multipoint {
         let ctx = ctx(&self.a.info, &self.b.info, pose_a, pose_b);
+        if let Some(f) = far(&self.a.info, &self.b.info, &ctx.rel) {
+            return multipoint::separated(&mut self.multipoint, f.separation);
+        }
         multipoint::multipoint(
             &ctx,
             &self.a.info,
@@ -269,6 +289,9 @@ impl Pair {
         opts: &PenetrationOptions,
     ) -> Penetration {
         let ctx = ctx(&self.a.info, &self.b.info, pose_a, pose_b);
+        if let Some(f) = far(&self.a.info, &self.b.info, &ctx.rel) {
+            return penetration::separated(&mut self.penetration, f.separation);
+        }
         penetration::penetration(
             &ctx,
             &self.a.info,
@@ -297,6 +320,9 @@ impl Pair {
         budget: u64,
     ) -> BudgetedVolume {
         let ctx = ctx(&self.a.info, &self.b.info, pose_a, pose_b);
+        if far(&self.a.info, &self.b.info, &ctx.rel).is_some() {
+            return budgeted::separated();
+        }
         budgeted::penetration_within(&ctx, &self.a.info, &self.b.info, &mut self.heap, budget)
     }
 
@@ -367,6 +393,9 @@ impl Paper<'_> {
     ) -> ContactResult {
         let p = &mut *self.0;
         let ctx = ctx(&p.a.info, &p.b.info, pose_a, pose_b);
+        if let Some(f) = far(&p.a.info, &p.b.info, &ctx.rel) {
+            return contact::separated(f.separation);
+        }
         paper::distance_traversal(&ctx, &p.a.info, &p.b.info, &mut p.descent, &mut p.sep, opts)
     }
 
@@ -383,6 +412,9 @@ impl Paper<'_> {
     ) -> ContactResult {
         let p = &mut *self.0;
         let ctx = ctx(&p.a.info, &p.b.info, pose_a, pose_b);
+        if let Some(f) = far(&p.a.info, &p.b.info, &ctx.rel) {
+            return contact::separated(f.separation);
+        }
         paper::backtracking(
             &ctx,
             &p.a.info,

@@ -400,3 +400,22 @@ pub(crate) fn penetration(
         skipped,
     }
 }
+
+/// The answer at a far pose ([`far`](super::kernel::far)): no penetration, no patches, the
+/// bodies at least the root spheres' separation apart.
+pub(crate) fn separated(s: &mut PenetrationScratch, separation: f64) -> Penetration {
+    s.patches.clear();
+    Penetration {
+        volume: 0.0,
+        pairs: 0,
+        max_depth: 0.0,
+        normal: DVec3::ZERO,
+        force: DVec3::ZERO,
+        torque_a: DVec3::ZERO,
+        torque_b: DVec3::ZERO,
+        patch_count: 0,
+        distance: separation,
+        visits: 1,
+        skipped: false,
+    }
+}

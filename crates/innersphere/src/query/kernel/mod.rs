@@ -5,6 +5,7 @@
 
 pub(crate) mod block;
 pub(crate) mod buckets;
+pub(crate) mod far;
 pub(crate) mod geometry;
 pub(crate) mod heap;
 pub(crate) mod info;

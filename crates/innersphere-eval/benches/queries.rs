@@ -23,7 +23,8 @@
 //! Environment: `QUERY_BENCH_TREES` (cache folder), `QUERY_BENCH_VOXEL` (voxel size, default
 //! 0.15), `QUERY_BENCH_MIN_RADIUS` and `QUERY_BENCH_REFINE` (packing options, default 0),
 //! `QUERY_BENCH_REBUILD=1` (rebuild cached trees), `QUERY_BENCH_MOTIONS` (comma-separated
-//! subset of `demo,chew,grind,open-close`, default all four), `QUERY_BENCH_SECONDS` and
+//! subset of `demo,chew,grind,open-close,far`, default the first four; `far`: B from 100 to
+//! 10³⁰⁰ units away, see `far_motion`), `QUERY_BENCH_SECONDS` and
 //! `QUERY_BENCH_SEED` (length and seed of the generated motions, default 3 s and 1),
 //! `QUERY_BENCH_MAX_FRAMES` (only the first N frames of each motion), `QUERY_BENCH_MOTION` /
 //! `QUERY_BENCH_PHASES` (one motion file and its labels instead, e.g. from `ist motion
@@ -190,6 +191,10 @@ fn motions(dir: &Path, fa: &Path, fb: &Path, quick: bool) -> Vec<BenchMotion> {
     let mut meshes = None;
     let mut out = Vec::new();
     for name in names {
+        if name == "far" {
+            out.push(far_motion(seed, max_frames.min(3000)));
+            continue;
+        }
         if name == "demo" {
             out.push(from_file(
                 "demo".into(),
@@ -249,6 +254,43 @@ fn motions(dir: &Path, fa: &Path, fb: &Path, quick: bool) -> Vec<BenchMotion> {
         });
     }
     out
+}
+
+/// Far and huge poses: frame `i` of `n` moves B to `10^(2 + 298·i/n)` (model units) along a
+/// pseudo-random direction with a pseudo-random rotation (from `seed`): from just clear of
+/// the jaw (100 mm, beyond the arches' bounding spheres) out to 10³⁰⁰; phases by band.
+fn far_motion(seed: u64, n: usize) -> BenchMotion {
+    let mut x = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+    let mut next = move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    let mut poses = Vec::with_capacity(n);
+    let mut phases = Vec::with_capacity(n);
+    for i in 0..n {
+        let e = 2.0 + 298.0 * i as f64 / n as f64;
+        let dir = innersphere::glam::DVec3::new(next(), next(), next())
+            .normalize_or(innersphere::glam::DVec3::X);
+        let q =
+            innersphere::glam::DQuat::from_xyzw(next(), next(), next(), next() + 2.0).normalize();
+        poses.push(Pose::new(dir * 10f64.powf(e), q).expect("finite pose"));
+        phases.push(
+            match e {
+                e if e < 3.0 => "1e2-1e3",
+                e if e < 10.0 => "1e3-1e10",
+                e if e < 20.0 => "1e10-1e20",
+                _ => "1e20-1e300",
+            }
+            .to_string(),
+        );
+    }
+    BenchMotion {
+        name: "far".into(),
+        poses,
+        phases,
+    }
 }
 
 /// Per-frame nanoseconds → (median, p99, max, mean) in microseconds.

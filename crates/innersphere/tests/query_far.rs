@@ -4,8 +4,7 @@
 
 use innersphere::glam::{DQuat, DVec3};
 use innersphere::{
-    build::Resolution, shapes, BuildOptions, MultipointOptions, Pair, Pose, SharedTree,
-    SphereTree,
+    build::Resolution, shapes, BuildOptions, MultipointOptions, Pair, Pose, SharedTree, SphereTree,
 };
 use proptest::prelude::*;
 
@@ -76,17 +75,26 @@ fn check(pair: &mut Pair, a: &SphereTree, b: &SphereTree, pa: &Pose, pb: &Pose) 
         dist.point_a.is_finite() && dist.point_b.is_finite() && dist.normal.is_finite(),
         "{what}: {dist:?}"
     );
-    assert!((dist.distance - d.max(0.0)).abs() <= tol, "{what}: {dist:?}");
+    assert!(
+        (dist.distance - d.max(0.0)).abs() <= tol,
+        "{what}: {dist:?}"
+    );
     assert!(dist.lower_bound <= d.max(0.0) + tol, "{what}: {dist:?}");
     assert!(dist.visits <= 100_000, "{what}: {} tests", dist.visits);
     let separated = d > tol;
     let c = pair.contact(pa, pb);
-    assert!(c.distance.is_finite() && c.visits <= 100_000, "{what}: {c:?}");
+    assert!(
+        c.distance.is_finite() && c.visits <= 100_000,
+        "{what}: {c:?}"
+    );
     if separated {
         assert!(!c.in_contact() && c.distance <= d + tol, "{what}: {c:?}");
     }
     let m = pair.multipoint(pa, pb, &MultipointOptions::default());
-    assert!(m.distance.is_finite() && m.visits <= 100_000, "{what}: {m:?}");
+    assert!(
+        m.distance.is_finite() && m.visits <= 100_000,
+        "{what}: {m:?}"
+    );
     if separated {
         assert_eq!(m.count, 0, "{what}");
         assert!(pair.contacts().is_empty());
@@ -99,7 +107,10 @@ fn check(pair: &mut Pair, a: &SphereTree, b: &SphereTree, pa: &Pose, pb: &Pose) 
     assert!(p.visits <= 100_000, "{what}: {} tests", p.visits);
     if separated {
         assert_eq!((p.volume, p.patch_count), (0.0, 0), "{what}");
-        assert!(pair.patches().is_empty() && p.distance <= d + tol, "{what}: {p:?}");
+        assert!(
+            pair.patches().is_empty() && p.distance <= d + tol,
+            "{what}: {p:?}"
+        );
     }
     let v = pair.penetration_within(pa, pb, 8_000);
     assert!(v.volume.is_finite() && v.upper_bound.is_finite(), "{what}");
@@ -110,7 +121,10 @@ fn check(pair: &mut Pair, a: &SphereTree, b: &SphereTree, pa: &Pose, pb: &Pose) 
         pair.paper().distance_traversal(pa, pb, &Default::default()),
         pair.paper().backtracking(pa, pb, &Default::default()),
     ] {
-        assert!(q.distance.is_finite() && q.visits <= 100_000, "{what}: {q:?}");
+        assert!(
+            q.distance.is_finite() && q.visits <= 100_000,
+            "{what}: {q:?}"
+        );
         if separated {
             assert!(!q.in_contact() && q.distance <= d + tol, "{what}: {q:?}");
         }

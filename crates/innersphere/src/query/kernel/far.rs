@@ -6,19 +6,20 @@
 //!
 //! A pose is *far* when the rounding slack of its f32 transform, `s = 16·ε₃₂·(e_A + e_B +
 //! |t|)` (the pruning slack of every query, [`pruning_slack`](super::geometry::pruning_slack)),
-//! exceeds [`NEAR_SLACK`] of the smaller tree's smallest leaf radius, and the root spheres
+//! exceeds [`NEAR_SLACK`] of the smaller median leaf radius of the two trees (the scale the
+//! traversals resolve; a few tiny leaves do not make a pose far), and the root spheres
 //! (the balls of radius ρ about the root centres that hold every leaf) are apart by more than
 //! `2s` in f64. Then the sphere sets are separated by at least that root separation, which
 //! is what the contact kinds answer, and the distance query answers within
-//! [`FAR_TOLERANCE_SLACKS`]`·s` of the exact distance. On the jaw trees (smallest leaf
-//! 0.05 mm) a pose is far beyond about 3 m; nothing nearer changes.
+//! [`FAR_TOLERANCE_SLACKS`]`·s` of the exact distance. On the jaw trees a pose is far
+//! beyond several metres; nothing nearer changes.
 
 use super::info::TreeInfo;
 use crate::Pose;
 use glam::DVec3;
 
-/// A pose is near while the f32 rounding slack stays below this fraction of the smallest
-/// leaf radius: the pruning then works as designed.
+/// A pose is near while the f32 rounding slack stays below this fraction of the median leaf
+/// radius: the pruning then works as designed.
 pub(crate) const NEAR_SLACK: f64 = 1.0 / 8.0;
 
 /// The distance query's absolute tolerance at a far pose, in rounding slacks: large enough
@@ -57,7 +58,7 @@ pub(crate) fn far(ia: &TreeInfo, ib: &TreeInfo, rel: &Pose) -> Option<Far> {
     let tlen = norm(rel.translation);
     let slack = (16.0 * f32::EPSILON as f64 * (ia.extent as f64 + ib.extent as f64 + tlen))
         .min(f64::MAX / 4.0);
-    if slack <= NEAR_SLACK * ia.min_leaf_radius.min(ib.min_leaf_radius) {
+    if slack <= NEAR_SLACK * ia.median_leaf_radius.min(ib.median_leaf_radius) {
         return None;
     }
     let cb = rel.transform_point(ib.root_center);

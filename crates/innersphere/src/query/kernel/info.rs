@@ -102,9 +102,9 @@ pub struct TreeInfo {
     pub radius: f64,
     /// Largest `|c| + r` of any node (model frame), for the f32 rounding slack.
     pub extent: f32,
-    /// Smallest leaf radius: the finest scale a query must resolve (far poses, where the f32
-    /// rounding of B's transform approaches it, are answered in f64: `kernel/far.rs`).
-    pub min_leaf_radius: f64,
+    /// Median leaf radius: the scale a traversal resolves (far poses, where the f32 rounding
+    /// of B's transform approaches it, are answered in f64: `kernel/far.rs`).
+    pub median_leaf_radius: f64,
     /// Centre of mass of the mesh (model frame), for torques.
     pub center_of_mass: DVec3,
     /// Total volume of the leaf spheres below each node (rounded up to f32), the
@@ -146,15 +146,21 @@ impl TreeInfo {
         let root_center = root_center.as_dvec3();
         let mut radius = 0.0f64;
         let mut extent = 0.0f32;
-        let mut min_leaf_radius = f64::INFINITY;
+        let mut leaf_radii = Vec::with_capacity(tree.leaf_count());
         for i in 0..n {
             let (c, r) = tree.sphere(i);
             extent = extent.max(c.length() + r);
             if tree.is_leaf(i) {
                 radius = radius.max((c.as_dvec3() - root_center).length() + r as f64);
-                min_leaf_radius = min_leaf_radius.min(r as f64);
+                leaf_radii.push(r);
             }
         }
+        let median_leaf_radius = if leaf_radii.is_empty() {
+            0.0
+        } else {
+            let mid = leaf_radii.len() / 2;
+            *leaf_radii.select_nth_unstable_by(mid, f32::total_cmp).1 as f64
+        };
         let max_children = tree.child_count.iter().copied().max().unwrap_or(0) as usize;
         let (blocks, block_of) = if max_children <= LANES {
             // Block index of every inner node: its rank among the inner nodes.
@@ -199,7 +205,7 @@ impl TreeInfo {
             root_center,
             radius,
             extent,
-            min_leaf_radius,
+            median_leaf_radius,
             center_of_mass: DVec3::from_array(tree.meta.center_of_mass),
             subtree_volume: vol.into_iter().map(f32_up).collect(),
             packed: (0..n)

@@ -3,8 +3,9 @@
 //! Every loader returns a welded [`Mesh`] that has passed [`Mesh::validate`]: vertices with
 //! bit-identical coordinates are merged (the rule of [`Mesh::from_soup`]; `-0.0` and `0.0`
 //! are the same point), vertices that no triangle uses are dropped, and polygons are
-//! triangulated as fans `(v0, vi, vi+1)`. Non-finite coordinates anywhere in a file are a
-//! parse error.
+//! triangulated as fans `(v0, vi, vi+1)`. A coordinate anywhere in a file that is
+//! non-finite or beyond ±[`MAX_COORDINATE`](super::MAX_COORDINATE) is a parse error naming
+//! its line (text formats), triangle (binary STL) or vertex (PLY).
 //!
 //! The four parsers are written here instead of using `tobj` or `ply-rs-bw`, because a
 //! loader for untrusted files must

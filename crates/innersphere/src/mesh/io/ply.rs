@@ -322,8 +322,12 @@ fn ply_body(
                         } else {
                             continue;
                         };
-                        if !v.is_finite() {
-                            return Err(format!("vertex {i} has a non-finite coordinate"));
+                        if let Some(problem) = crate::mesh::coordinate_problem(v) {
+                            return Err(format!(
+                                "{}: vertex {i}: {} coordinate {v:e} {problem}",
+                                src.location(),
+                                ["x", "y", "z"][slot]
+                            ));
                         }
                         p[slot] = v;
                     }

@@ -84,7 +84,16 @@ pub(super) fn parse_stl(b: &[u8]) -> std::result::Result<Mesh, String> {
         b.len()
     );
     if says_solid {
-        stl_ascii(b).map_err(|e| format!("not valid ASCII STL ({e}); {lie}"))
+        stl_ascii(b).map_err(|e| {
+            // A file of text only is no binary STL: its header's "count" is letters.
+            if b.iter()
+                .all(|c| c.is_ascii_graphic() || c.is_ascii_whitespace())
+            {
+                e
+            } else {
+                format!("not valid ASCII STL ({e}); {lie}")
+            }
+        })
     } else {
         Err(lie)
     }
@@ -108,8 +117,13 @@ fn stl_binary(records: &[u8], count: usize) -> std::result::Result<Mesh, String>
                 ]));
             }
             let v = DVec3::from_array(p);
-            if !v.is_finite() {
-                return Err(format!("triangle {t} has a non-finite coordinate ({v})"));
+            for (axis, x) in ["x", "y", "z"].into_iter().zip(p) {
+                if let Some(problem) = crate::mesh::coordinate_problem(x) {
+                    return Err(format!(
+                        "triangle {t} (byte {}), corner {k}: {axis} coordinate {x:e} {problem}",
+                        84 + 50 * t
+                    ));
+                }
             }
             *slot = welder.add(v)?;
         }

@@ -277,9 +277,11 @@ fn read_capped(
     src.take(HEAD_BYTES).read_to_end(&mut out)?;
     let (limit, why) = match declared_limit(format, &out) {
         Some((n, why)) if n <= MAX_DECOMPRESSED_BYTES => (n, why),
-        Some((_, why)) => return Err(ReadFail::Limit(format!(
+        Some((_, why)) => {
+            return Err(ReadFail::Limit(format!(
             "{why}: more than the {MAX_DECOMPRESSED_BYTES} bytes of mesh data accepted (corrupt?)"
-        ))),
+        )))
+        }
         None => (MAX_DECOMPRESSED_BYTES, "the limit on mesh data".to_string()),
     };
     if out.len() as u64 <= limit {

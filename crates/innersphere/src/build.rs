@@ -18,6 +18,7 @@ use crate::packing::{self, PackingOptions};
 use crate::progress::Progress;
 use crate::tree::{BuildStamp, SphereTree, TreeMeta};
 use crate::{Error, Mesh, Result};
+use glam::DVec3;
 use std::time::Instant;
 
 /// How fine the voxel grid is.
@@ -151,6 +152,44 @@ pub const CALIBRATED_REFINE_STEPS: u32 = 8;
 /// Longest bounding-box sides (mm) the jaw presets accept: a single tooth crown to a skull.
 /// Outside it the mesh is almost certainly not in millimetres.
 pub const JAW_PRESET_SIZE_MM: std::ops::RangeInclusive<f64> = 1.0..=500.0;
+
+/// The smallest longest bounding-box side a build accepts (model units). The grid has at most
+/// [`MAX_CELLS`](crate::field::grid::MAX_CELLS) cells, so its voxels are at least
+/// `extent / 6e8` wide; from 1e-6 up, a voxel's squared size (≥ 2.8e-30) stays a normal
+/// `f32` with full precision (below ~1e-31 the queries' squared `f32` distances lose bits,
+/// and at 1e-30 across every answer is measured to be 0: no contact between overlapping
+/// bodies). Rescale smaller meshes (metres to millimetres, ...).
+pub const MIN_EXTENT: f64 = 1e-6;
+
+/// The spacing of `f32` values at magnitude `x` (one unit in the last place).
+fn f32_spacing(x: f64) -> f64 {
+    let f = (x.abs() as f32).min(f32::MAX);
+    let bits = f.to_bits();
+    f64::from(f32::from_bits(bits + 1)) - f64::from(f)
+}
+
+/// Refuses a mesh that is so far from the origin (relative to the voxel size `h`) that
+/// `f32` values there are spaced wider than a quarter voxel: rounding the two centres of a
+/// leaf pair then moves their distance by up to about √3 spacings, which is no longer small
+/// against the packing's own voxel-sized error (measured: 5–27 % wrong distances at a
+/// spacing of one voxel). Warns when the spacing exceeds 1/32 of a voxel (measured: answers
+/// 1–2 % off at 1/8 voxel).
+fn check_f32_fit(lo: DVec3, hi: DVec3, h: f64, warnings: &mut Vec<String>) -> Result<()> {
+    let far = lo.abs().max(hi.abs()).max_element();
+    let spacing = f32_spacing(far);
+    if spacing > h / 4.0 {
+        return Err(Error::InvalidMesh(format!(
+            "the mesh reaches {far:e} model units from the origin, where f32 (the tree's number type) is spaced {spacing:e} apart, more than a quarter of the voxel size {h:e}: the tree cannot hold spheres at this resolution; move the mesh near the origin (subtract its bounding-box centre) or use a voxel size of at least {:e}",
+            4.0 * spacing
+        )));
+    }
+    if spacing > h / 32.0 {
+        warnings.push(format!(
+            "the mesh reaches {far:e} model units from the origin, where f32 (the tree's number type) is spaced {spacing:e} apart, more than 1/32 of the voxel size {h:e}: distances carry rounding errors of about {spacing:e}; the mesh moved near the origin gives a more accurate tree"
+        ));
+    }
+    Ok(())
+}
 
 /// Longest side of the mesh's bounding box, or an error for a mesh without extent.
 fn longest_side(mesh: &Mesh) -> Result<f64> {
@@ -426,10 +465,17 @@ pub fn build_tree(
         ));
     }
     let (lo, hi) = mesh.bbox();
+    let longest = (hi - lo).max_element();
+    if longest < MIN_EXTENT {
+        return Err(Error::InvalidMesh(format!(
+            "the mesh is {longest:e} model units across, less than the supported {MIN_EXTENT:e}: the tree's f32 squared distances would underflow; scale the mesh up (metres to millimetres, ...)"
+        )));
+    }
     let grid = match opts.resolution {
         Resolution::VoxelSize(h) => VoxelGrid::covering(lo, hi, h)?,
         Resolution::Cells(n) => VoxelGrid::with_resolution(lo, hi, n)?,
     };
+    check_f32_fit(lo, hi, grid.h, &mut warnings)?;
     let t_prepare = t0.elapsed().as_secs_f64();
 
     let t1 = Instant::now();
@@ -478,6 +524,8 @@ pub fn build_tree(
         built_by: Some(BuildStamp::current(opts.packing.refine_steps)),
     };
     let (tree, hstats) = hierarchy::build(&spheres, &opts.hierarchy, meta, progress)?;
+    // The tree must read back from its file: never hand out one that `save` would refuse.
+    crate::tree::file::check_writable(&tree)?;
     let t_hier = t3.elapsed().as_secs_f64();
     if hstats.fallback_splits > 0 {
         warnings.push(format!(

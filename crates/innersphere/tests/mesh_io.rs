@@ -327,9 +327,12 @@ fn gzip_round_trips() {
 #[test]
 fn unwritable_meshes_are_refused() {
     let mut m = cube();
-    m.vertices[3].x = 1e300; // finite, but not as f32
+    m.vertices[3].x = 1e300; // finite, but not as f32, and beyond the supported range
     assert!(matches!(to_stl_bytes(&m), Err(Error::InvalidMesh(_))));
-    assert!(to_obj_bytes(&m).is_ok());
+    // Neither format writes what no loader would read back.
+    assert!(matches!(to_obj_bytes(&m), Err(Error::InvalidMesh(_))));
+    m.vertices[3].x = innersphere::mesh::MAX_COORDINATE;
+    assert!(to_obj_bytes(&m).is_ok() && to_stl_bytes(&m).is_ok());
     m.vertices[3].x = f64::NAN;
     assert!(matches!(to_obj_bytes(&m), Err(Error::InvalidMesh(_))));
     m.vertices[3].x = 1.0;

@@ -12,6 +12,36 @@ pub use report::MeshReport;
 
 use glam::DVec3;
 
+/// The largest coordinate magnitude accepted anywhere (model units): every loader refuses a
+/// vertex with `|x| > MAX_COORDINATE` (or a non-finite one), and so do [`Mesh::validate`], the
+/// build and the mesh writers.
+///
+/// Why 1e9: the tree stores centres and radii as `f32`, and the queries compare squared
+/// `f32` distances `|Δ|²`, which overflow to infinity for `|Δ|` above 1.8e19 (measured: a
+/// sphere of radius 1e19 answers distance `inf`, one of 1e18 the right value). Within
+/// ±1e9 the centres, radii (at most √3·2e9) and squared distances inside one model
+/// (at most 12·1e18) stay ten orders of magnitude below that, which leaves room for the
+/// poses' translations, and the `f64` side (volumes, the exact predicates' cubes, 1e27)
+/// is far from `f64` overflow. A finite `f64` such as 1e39 or 1e300 that `f32` cannot hold
+/// at all is refused with the line or vertex that holds it. `docs/RELIABILITY.md` has the
+/// whole list of limits.
+pub const MAX_COORDINATE: f64 = 1e9;
+
+/// Why a coordinate is refused (`None` when it is accepted), for the loaders' messages.
+pub(crate) fn coordinate_problem(x: f64) -> Option<String> {
+    if !x.is_finite() {
+        Some(format!(
+            "is non-finite (coordinates must be finite, within -{MAX_COORDINATE:e} ..= {MAX_COORDINATE:e} model units)"
+        ))
+    } else if x.abs() > MAX_COORDINATE {
+        Some(format!(
+            "is outside the supported range -{MAX_COORDINATE:e} ..= {MAX_COORDINATE:e} model units (the tree stores f32 and squares distances; rescale or recentre the mesh)"
+        ))
+    } else {
+        None
+    }
+}
+
 /// An indexed triangle mesh in f64, with duplicate vertices welded.
 ///
 /// Triangles are counter-clockwise seen from outside when the mesh is outward facing.
@@ -121,18 +151,22 @@ impl Mesh {
         }
     }
 
-    /// Checks that the mesh can be used at all: not empty, finite coordinates, valid indices.
+    /// Checks that the mesh can be used at all: not empty, finite coordinates within
+    /// ±[`MAX_COORDINATE`], valid indices.
     pub fn validate(&self) -> crate::Result<()> {
         if self.triangles.is_empty() {
             return Err(crate::Error::InvalidMesh(
                 "the mesh has no triangles".into(),
             ));
         }
-        if let Some(i) = self.vertices.iter().position(|v| !v.is_finite()) {
-            return Err(crate::Error::InvalidMesh(format!(
-                "vertex {i} has a non-finite coordinate ({:?})",
-                self.vertices[i]
-            )));
+        for (i, v) in self.vertices.iter().enumerate() {
+            for (axis, x) in ["x", "y", "z"].into_iter().zip(v.to_array()) {
+                if let Some(problem) = coordinate_problem(x) {
+                    return Err(crate::Error::InvalidMesh(format!(
+                        "vertex {i} ({v}): its {axis} coordinate {x:e} {problem}"
+                    )));
+                }
+            }
         }
         let n = self.vertices.len() as u32;
         if let Some(t) = self

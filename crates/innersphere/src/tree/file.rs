@@ -17,10 +17,20 @@
 //!
 //! Reading checks the size implied by the header against the real file size *before*
 //! allocating, then the checksum, then the structure ([`SphereTree::validate_structure`]), so a
-//! truncated, corrupted or lying file is a clear error and never a panic.
+//! truncated, corrupted or lying file is a clear error and never a panic. [`load`] reads the
+//! 24-byte header first and then exactly the size it declares: a file that is not a tree
+//! (wrong magic, `/dev/zero`), that declares more than [`MAX_NODES`] nodes, or whose length
+//! differs from the declared size is refused before the rest is read; a source of unknown
+//! length (a pipe) is read only as far as the declared size, so memory follows the bytes that
+//! really arrive.
+//!
+//! Writing ([`save`], [`to_checked_bytes`]) refuses what reading would refuse (a non-finite
+//! sphere or meta value, a broken structure, too many nodes), so a written tree always reads
+//! back.
 
 use super::{SphereTree, TreeMeta};
 use crate::{Error, Result};
+use std::io::Read;
 use std::path::Path;
 
 /// The first eight bytes of every tree file.
@@ -30,8 +40,71 @@ pub const VERSION: u32 = 1;
 const HEADER: usize = 24;
 const BYTES_PER_NODE: usize = 16 + 4 + 1 + 4 + 2;
 const MAX_META: usize = 1 << 20;
+/// The most nodes a tree file may declare (2^31, a 58 GB file). No build comes near it: the
+/// voxel grid has at most [`MAX_CELLS`](crate::field::grid::MAX_CELLS) = 6·10^8 cells, every
+/// inner sphere takes its own inside cell, and a hierarchy of fan-out ≥ 2 has fewer inner
+/// nodes than leaves, so a build makes fewer than 1.2·10^9 nodes. A header beyond it is
+/// refused before anything is read or allocated.
+pub const MAX_NODES: u64 = 1 << 31;
+/// Bytes reserved up front when the length of the source is unknown (a pipe); beyond it the
+/// buffer grows with the bytes that really arrive.
+const UNKNOWN_LENGTH_RESERVE: u64 = 64 << 20;
 
-/// Serializes a tree to bytes (deterministic: the same tree gives the same bytes).
+/// Checks that a tree can be written so that [`from_bytes`] reads it back: at most
+/// [`MAX_NODES`] nodes, the structure of [`SphereTree::validate_structure`] (finite spheres,
+/// consistent links), and finite meta values (JSON has no NaN or infinity: a non-finite volume
+/// would be written as `null`, which no reader accepts).
+pub fn check_writable(tree: &SphereTree) -> Result<()> {
+    if tree.len() as u64 > MAX_NODES {
+        return Err(Error::CorruptTree(format!(
+            "{} nodes are more than a tree file holds ({MAX_NODES})",
+            tree.len()
+        )));
+    }
+    tree.validate_structure()?;
+    let m = &tree.meta;
+    let scalars = [
+        ("voxel_size", m.voxel_size),
+        ("min_radius", m.min_radius),
+        ("mesh_volume", m.mesh_volume),
+        ("coverage", m.coverage),
+    ];
+    let points = [
+        ("center_of_mass", m.center_of_mass),
+        ("bbox_min", m.bbox_min),
+        ("bbox_max", m.bbox_max),
+    ];
+    let values = scalars.into_iter().chain(
+        points
+            .into_iter()
+            .flat_map(|(name, p)| p.into_iter().map(move |x| (name, x))),
+    );
+    for (name, x) in values {
+        if !x.is_finite() {
+            return Err(Error::CorruptTree(format!(
+                "the tree's {name} is {x}, which a tree file cannot hold (a mesh beyond the supported coordinate range?)"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// [`to_bytes`] after [`check_writable`]: the bytes of a tree that reads back.
+pub fn to_checked_bytes(tree: &SphereTree) -> Result<Vec<u8>> {
+    check_writable(tree)?;
+    let bytes = to_bytes(tree);
+    let meta_len = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes")) as usize;
+    if meta_len > MAX_META {
+        return Err(Error::CorruptTree(format!(
+            "meta block of {meta_len} bytes is more than a tree file holds ({MAX_META})"
+        )));
+    }
+    Ok(bytes)
+}
+
+/// Serializes a tree to bytes (deterministic: the same tree gives the same bytes). Checks
+/// nothing, so that tests can write broken trees; [`save`] and [`to_checked_bytes`] refuse a
+/// tree that [`from_bytes`] would refuse.
 pub fn to_bytes(tree: &SphereTree) -> Vec<u8> {
     let meta = serde_json::to_vec(&tree.meta).expect("TreeMeta serializes");
     let n = tree.len();
@@ -61,6 +134,41 @@ pub fn to_bytes(tree: &SphereTree) -> Vec<u8> {
     out
 }
 
+/// The meta length and node count of a header, and the total file size they declare;
+/// refuses a wrong magic number, another version, or implausible sizes.
+fn parse_header(h: &[u8]) -> Result<(usize, u64, u64)> {
+    let bad = |m: String| Err(Error::CorruptTree(m));
+    if h.len() < HEADER {
+        return bad(format!(
+            "file too short ({} bytes) to be a tree file",
+            h.len()
+        ));
+    }
+    if h[..8] != MAGIC {
+        return bad("not an innersphere tree file (wrong magic number)".into());
+    }
+    let u32_at = |o: usize| u32::from_le_bytes(h[o..o + 4].try_into().expect("4 bytes"));
+    let version = u32_at(8);
+    if version != VERSION {
+        return bad(format!(
+            "format version {version} is not supported (this build reads version {VERSION})"
+        ));
+    }
+    let meta_len = u32_at(12) as usize;
+    let n = u64::from_le_bytes(h[16..24].try_into().expect("8 bytes"));
+    if meta_len > MAX_META {
+        return bad(format!("meta block of {meta_len} bytes is implausible"));
+    }
+    if n > MAX_NODES {
+        return bad(format!(
+            "the header declares {n} nodes, more than a tree file may hold ({MAX_NODES})"
+        ));
+    }
+    // At most 2^31 · 27 + 1 MiB + 28: no overflow.
+    let total = n * BYTES_PER_NODE as u64 + (HEADER + meta_len + 4) as u64;
+    Ok((meta_len, n, total))
+}
+
 /// Parses a tree from bytes, verifying size, checksum and structure.
 pub fn from_bytes(bytes: &[u8]) -> Result<SphereTree> {
     let bad = |m: String| Err(Error::CorruptTree(m));
@@ -70,23 +178,8 @@ pub fn from_bytes(bytes: &[u8]) -> Result<SphereTree> {
             bytes.len()
         ));
     }
-    if bytes[..8] != MAGIC {
-        return bad("not an innersphere tree file (wrong magic number)".into());
-    }
-    let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().expect("4 bytes"));
-    let version = u32_at(8);
-    if version != VERSION {
-        return bad(format!(
-            "format version {version} is not supported (this build reads version {VERSION})"
-        ));
-    }
-    let meta_len = u32_at(12) as usize;
-    let n = u64::from_le_bytes(bytes[16..24].try_into().expect("8 bytes"));
-    if meta_len > MAX_META {
-        return bad(format!("meta block of {meta_len} bytes is implausible"));
-    }
-    let expected = (n as u128) * BYTES_PER_NODE as u128 + (HEADER + meta_len + 4) as u128;
-    if expected != bytes.len() as u128 {
+    let (meta_len, n, expected) = parse_header(&bytes[..HEADER])?;
+    if expected != bytes.len() as u64 {
         return bad(format!(
             "the header promises {n} nodes ({expected} bytes) but the file has {} bytes (truncated or corrupted)",
             bytes.len()
@@ -144,18 +237,55 @@ pub fn from_bytes(bytes: &[u8]) -> Result<SphereTree> {
     Ok(tree)
 }
 
-/// Writes a tree file.
+/// Writes a tree file; refuses a tree that would not read back (see [`check_writable`]).
 pub fn save(tree: &SphereTree, path: &Path) -> Result<()> {
-    std::fs::write(path, to_bytes(tree)).map_err(|e| Error::io(path, e))
+    let bytes = to_checked_bytes(tree)?;
+    std::fs::write(path, bytes).map_err(|e| Error::io(path, e))
 }
 
-/// Reads a tree file.
+/// Reads a tree file: the header first, then exactly the size it declares (see the module
+/// documentation), so that a file that is no tree, or lies about its size, is refused before
+/// its bytes are read.
 pub fn load(path: &Path) -> Result<SphereTree> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    from_bytes(&bytes).map_err(|e| match e {
+    let named = |e: Error| match e {
         Error::CorruptTree(m) => Error::CorruptTree(format!("{}: {m}", path.display())),
         other => other,
-    })
+    };
+    let io = |e: std::io::Error| Error::io(path, e);
+    let file = std::fs::File::open(path).map_err(io)?;
+    // The length of a regular file; none for a pipe or a device such as /dev/zero.
+    let known_len = file
+        .metadata()
+        .ok()
+        .filter(|m| m.is_file())
+        .map(|m| m.len());
+    let mut bytes = Vec::with_capacity(HEADER);
+    let mut file = file;
+    (&mut file)
+        .take(HEADER as u64)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    let (_, n, expected) = parse_header(&bytes).map_err(named)?;
+    if let Some(len) = known_len.filter(|&len| len != expected) {
+        return Err(named(Error::CorruptTree(format!(
+            "the header promises {n} nodes ({expected} bytes) but the file has {len} bytes (truncated or corrupted)"
+        ))));
+    }
+    let reserve = match known_len {
+        Some(_) => expected,
+        None => expected.min(UNKNOWN_LENGTH_RESERVE),
+    };
+    let reserve = usize::try_from(reserve).unwrap_or(usize::MAX) - HEADER;
+    bytes.try_reserve_exact(reserve).map_err(|_| {
+        named(Error::CorruptTree(format!(
+            "not enough memory to read a tree of {n} nodes ({expected} bytes)"
+        )))
+    })?;
+    // One byte more than declared, so that a longer source is noticed by `from_bytes`.
+    file.take(expected + 1 - HEADER as u64)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    from_bytes(&bytes).map_err(named)
 }
 
 impl SphereTree {

@@ -237,6 +237,39 @@ impl PlySource for PlyAscii<'_> {
     }
 }
 
+/// The most bytes a binary PLY file can have, from its header in `head`: the header plus,
+/// per element, its count times the largest record its properties allow (a list's length is
+/// bounded by its count type: 255 items for `uchar`, 65535 for `ushort`). `None` for ASCII,
+/// a header not complete in `head`, or a list counted by a 32-bit type (no useful bound).
+pub(super) fn max_len(head: &[u8]) -> Option<u64> {
+    let header = ply_header(head).ok()?;
+    if header.encoding == PlyEncoding::Ascii {
+        return None;
+    }
+    let mut total = header.body as u64;
+    for el in &header.elements {
+        let mut record: u64 = 0;
+        for p in &el.props {
+            let size = match p.list {
+                None => p.ty.size() as u64,
+                Some(count) => {
+                    let most: u64 = match count {
+                        Scalar::U8 => 255,
+                        Scalar::I8 => 127,
+                        Scalar::U16 => 65535,
+                        Scalar::I16 => 32767,
+                        _ => return None,
+                    };
+                    count.size() as u64 + most * p.ty.size() as u64
+                }
+            };
+            record += size;
+        }
+        total = total.checked_add(el.count.checked_mul(record)?)?;
+    }
+    Some(total)
+}
+
 /// Parses a PLY file (any of the three encodings).
 pub(super) fn parse_ply(b: &[u8]) -> std::result::Result<Mesh, String> {
     let header = ply_header(b)?;
@@ -322,8 +355,12 @@ fn ply_body(
                         } else {
                             continue;
                         };
-                        if !v.is_finite() {
-                            return Err(format!("vertex {i} has a non-finite coordinate"));
+                        if let Some(problem) = crate::mesh::coordinate_problem(v) {
+                            return Err(format!(
+                                "{}: vertex {i}: {} coordinate {v:e} {problem}",
+                                src.location(),
+                                ["x", "y", "z"][slot]
+                            ));
                         }
                         p[slot] = v;
                     }

@@ -45,6 +45,29 @@ pub fn to_stl_bytes(mesh: &Mesh) -> Result<Vec<u8>> {
     Ok(out)
 }
 
+/// Whether the first non-blank bytes are `solid` (any case).
+fn says_solid(b: &[u8]) -> bool {
+    let start = b
+        .iter()
+        .position(|c| !c.is_ascii_whitespace())
+        .unwrap_or(b.len());
+    b[start..]
+        .get(..5)
+        .is_some_and(|s| s.eq_ignore_ascii_case(b"solid"))
+}
+
+/// The exact length `84 + 50 · count` of a file that must be binary STL (it does not start
+/// with `solid`), and the `count` its header declares, from its first 84 bytes or more;
+/// `None` when the file may be ASCII or `head` is shorter than the header.
+pub(super) fn declared_len(head: &[u8]) -> Option<(u64, u32)> {
+    let count_bytes: [u8; 4] = head.get(80..84)?.try_into().ok()?;
+    if says_solid(head) {
+        return None;
+    }
+    let count = u32::from_le_bytes(count_bytes);
+    Some((84 + 50 * u64::from(count), count))
+}
+
 /// Binary when the length is exactly `84 + 50 * count` or the file does not start with
 /// `solid`; ASCII otherwise. Many binary exporters write `solid` into the 80-byte header,
 /// so the prefix alone decides nothing; the length rule is what real readers use.
@@ -52,13 +75,7 @@ pub(super) fn parse_stl(b: &[u8]) -> std::result::Result<Mesh, String> {
     if b.is_empty() {
         return Err("the file is empty".into());
     }
-    let start = b
-        .iter()
-        .position(|c| !c.is_ascii_whitespace())
-        .unwrap_or(b.len());
-    let says_solid = b[start..]
-        .get(..5)
-        .is_some_and(|s| s.eq_ignore_ascii_case(b"solid"));
+    let says_solid = says_solid(b);
     let Some(count_bytes) = b.get(80..84) else {
         return if says_solid {
             stl_ascii(b)
@@ -84,7 +101,16 @@ pub(super) fn parse_stl(b: &[u8]) -> std::result::Result<Mesh, String> {
         b.len()
     );
     if says_solid {
-        stl_ascii(b).map_err(|e| format!("not valid ASCII STL ({e}); {lie}"))
+        stl_ascii(b).map_err(|e| {
+            // A file of text only is no binary STL: its header's "count" is letters.
+            if b.iter()
+                .all(|c| c.is_ascii_graphic() || c.is_ascii_whitespace())
+            {
+                e
+            } else {
+                format!("not valid ASCII STL ({e}); {lie}")
+            }
+        })
     } else {
         Err(lie)
     }
@@ -108,8 +134,13 @@ fn stl_binary(records: &[u8], count: usize) -> std::result::Result<Mesh, String>
                 ]));
             }
             let v = DVec3::from_array(p);
-            if !v.is_finite() {
-                return Err(format!("triangle {t} has a non-finite coordinate ({v})"));
+            for (axis, x) in ["x", "y", "z"].into_iter().zip(p) {
+                if let Some(problem) = crate::mesh::coordinate_problem(x) {
+                    return Err(format!(
+                        "triangle {t} (byte {}), corner {k}: {axis} coordinate {x:e} {problem}",
+                        84 + 50 * t
+                    ));
+                }
             }
             *slot = welder.add(v)?;
         }

@@ -42,7 +42,8 @@ pub(super) fn parse_u64(tok: &[u8]) -> Option<u64> {
     std::str::from_utf8(tok).ok()?.parse().ok()
 }
 
-/// Three coordinates from the first three tokens, which must be finite numbers.
+/// Three coordinates from the first three tokens, which must be finite numbers within
+/// ±[`MAX_COORDINATE`](crate::mesh::MAX_COORDINATE).
 pub(super) fn parse_point<'a>(
     toks: &mut impl Iterator<Item = &'a [u8]>,
     line: usize,
@@ -54,11 +55,8 @@ pub(super) fn parse_point<'a>(
             .ok_or_else(|| format!("line {line}: expected three coordinates"))?;
         *x = parse_f64(tok)
             .ok_or_else(|| format!("line {line}: `{}` is not a number", show(tok)))?;
-        if !x.is_finite() {
-            return Err(format!(
-                "line {line}: non-finite coordinate `{}`",
-                show(tok)
-            ));
+        if let Some(problem) = crate::mesh::coordinate_problem(*x) {
+            return Err(format!("line {line}: coordinate `{}` {problem}", show(tok)));
         }
     }
     Ok(DVec3::from_array(p))

@@ -1,6 +1,5 @@
 //! `ist replay`: run a motion frame by frame through a pair's state, as a haptic loop would.
 
-use anyhow::Context;
 use innersphere::exact::ExactMesh;
 use innersphere_eval::replay::{replay, QueryKind, ReplayOptions};
 use std::io::Write;
@@ -61,6 +60,11 @@ enum Kind {
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     anyhow::ensure!(args.every >= 1, "--every must be at least 1");
+    if let Some(csv) = &args.csv {
+        let mut inputs = vec![args.a.as_path(), args.b.as_path(), args.motion.as_path()];
+        inputs.extend(args.exact.iter().flatten().map(|p| p.as_path()));
+        crate::check_outputs(&[csv], &inputs)?;
+    }
     let a = innersphere::SharedTree::new(crate::load_tree(&args.a)?);
     let b = innersphere::SharedTree::new(crate::load_tree(&args.b)?);
     crate::warn_if_stale(&args.a, &a);
@@ -90,10 +94,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     };
     let report = replay(&a, &b, &motion, exact.as_ref().map(|(x, y)| (x, y)), &opts);
     if let Some(path) = &args.csv {
-        let mut out = std::io::BufWriter::new(
-            std::fs::File::create(path)
-                .with_context(|| format!("cannot create {}", path.display()))?,
-        );
+        let mut text = Vec::new();
+        let out = &mut text;
         // Per kind the first pass's time, then (with more passes) each frame's fastest.
         let best = report.passes > 1;
         let mut names: Vec<String> = Vec::new();
@@ -130,7 +132,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 r.exact_us
             )?;
         }
-        out.flush()?;
+        innersphere::output::write_atomic(path, |w| w.write_all(&text))?;
     }
     if args.json {
         crate::print_json(&report)?;

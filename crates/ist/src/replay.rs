@@ -2,7 +2,6 @@
 
 use innersphere::exact::ExactMesh;
 use innersphere_eval::replay::{replay, QueryKind, ReplayOptions};
-use std::io::Write;
 use std::path::PathBuf;
 
 /// Arguments of `ist replay`.
@@ -94,45 +93,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     };
     let report = replay(&a, &b, &motion, exact.as_ref().map(|(x, y)| (x, y)), &opts);
     if let Some(path) = &args.csv {
-        let mut text = Vec::new();
-        let out = &mut text;
-        // Per kind the first pass's time, then (with more passes) each frame's fastest.
-        let best = report.passes > 1;
-        let mut names: Vec<String> = Vec::new();
-        for k in &opts.kinds {
-            let k = format!("{k:?}").to_lowercase();
-            names.push(format!("{k}_us_1pass"));
-            if best {
-                names.push(format!("{k}_us_best_of_{}", report.passes));
-            }
-        }
-        writeln!(
-            out,
-            "frame,t,distance,contact,{},exact_distance,exact_intersecting,exact_us_1pass",
-            names.join(",")
-        )?;
-        for r in &report.rows {
-            let mut us: Vec<String> = Vec::new();
-            for slot in 0..opts.kinds.len() {
-                us.push(format!("{:.3}", r.us[slot]));
-                if best {
-                    us.push(format!("{:.3}", r.best_of_passes_us[slot]));
-                }
-            }
-            writeln!(
-                out,
-                "{},{},{},{},{},{},{},{:.3}",
-                r.frame,
-                r.t,
-                r.distance,
-                r.contact,
-                us.join(","),
-                r.exact_distance,
-                r.exact_intersecting,
-                r.exact_us
-            )?;
-        }
-        innersphere::output::write_atomic(path, |w| w.write_all(&text))?;
+        innersphere::output::write_atomic(path, |w| report.write_csv(w))?;
     }
     if args.json {
         crate::print_json(&report)?;

@@ -372,3 +372,57 @@ fn a_failed_or_interrupted_write_leaves_the_old_output_whole() {
         }
     }
 }
+
+/// The CSV cells of `column`.
+fn column(csv: &str, name: &str) -> Vec<String> {
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let i = head
+        .iter()
+        .position(|h| *h == name)
+        .unwrap_or_else(|| panic!("no column {name} in {head:?}"));
+    lines
+        .map(|l| l.split(',').nth(i).unwrap().to_string())
+        .collect()
+}
+
+/// Issue 25 (5): `replay --query contact --csv` wrote `distance=0,contact=false` on every
+/// frame, overlapping ones included; each kind now writes its own answer.
+#[test]
+fn replay_csv_rows_hold_each_kinds_own_answer() {
+    let dir = fixture("replay-csv");
+    let (box_ist, ball_ist, m, csv) = (
+        dir.path("box.ist"),
+        dir.path("ball.ist"),
+        dir.path("m.csv"),
+        dir.path("rows.csv"),
+    );
+    let overlapping = [true, true, true, false, false];
+    for kind in ["contact", "multipoint", "penetration", "distance"] {
+        run(
+            &[
+                "replay",
+                s(&box_ist),
+                s(&ball_ist),
+                "--motion",
+                s(&m),
+                "--query",
+                kind,
+                "--csv",
+                s(&csv),
+            ],
+            0,
+        );
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let head = text.lines().next().unwrap();
+        // Only the kind that ran has answer columns.
+        for other in ["contact", "multipoint", "penetration", "distance"] {
+            let has = head.split(',').any(|h| h == format!("{other}_in_contact"));
+            assert_eq!(has, other == kind, "{kind}: {head}");
+        }
+        let verdict = column(&text, &format!("{kind}_in_contact"));
+        for (i, &want) in overlapping.iter().enumerate() {
+            assert_eq!(verdict[i], want.to_string(), "{kind} frame {i}: {text}");
+        }
+    }
+}

@@ -26,8 +26,8 @@ pub struct Args {
     /// frame (K frames back).
     #[arg(long, default_value_t = 1)]
     every: usize,
-    /// Multipoint: most contacts per frame (the same default as `ist query --k`: the
-    /// benchmarks' and the issue-3 bar's k = 16).
+    /// Multipoint: most contacts per frame, at least 1 (the same default as `ist query
+    /// --k`: the benchmarks' and the issue-3 bar's k = 16).
     #[arg(long, default_value_t = 16)]
     k: usize,
     /// Multipoint: at most one contact below each pair of nodes at this depth (the same
@@ -59,6 +59,10 @@ enum Kind {
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     anyhow::ensure!(args.every >= 1, "--every must be at least 1");
+    anyhow::ensure!(
+        args.k >= 1,
+        "--k must be at least 1 (the most contacts multipoint reports per frame)"
+    );
     if let Some(csv) = &args.csv {
         let mut inputs = vec![args.a.as_path(), args.b.as_path(), args.motion.as_path()];
         inputs.extend(args.exact.iter().flatten().map(|p| p.as_path()));

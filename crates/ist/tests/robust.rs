@@ -426,3 +426,37 @@ fn replay_csv_rows_hold_each_kinds_own_answer() {
         }
     }
 }
+
+/// Issue 25 (5): `query --query multipoint --k 0` said "separated by at least inf" for
+/// overlapping bodies; k = 0 is refused (and in `replay`).
+#[test]
+fn k_zero_is_refused() {
+    let dir = fixture("k0");
+    let (box_ist, ball_ist, m) = (dir.path("box.ist"), dir.path("ball.ist"), dir.path("m.csv"));
+    let err = run(
+        &[
+            "query",
+            s(&box_ist),
+            s(&ball_ist),
+            "--query",
+            "multipoint",
+            "--k",
+            "0",
+        ],
+        2,
+    );
+    assert!(err.contains("--k must be at least 1"), "{err}");
+    let err = run(
+        &[
+            "replay",
+            s(&box_ist),
+            s(&ball_ist),
+            "--motion",
+            s(&m),
+            "--k",
+            "0",
+        ],
+        2,
+    );
+    assert!(err.contains("--k must be at least 1"), "{err}");
+}

@@ -1,9 +1,10 @@
 //! Issue 25, the library's side of the command line's cases: multipoint with `k = 0` claims
-//! no separation.
+//! no separation, a tree knows whether a mesh is the one it was built from.
 
 use innersphere::build::{build_tree, BuildOptions, Resolution};
 use innersphere::glam::DVec3;
 use innersphere::progress::Silent;
+use innersphere::tree::check::{check_built_from, source_mismatch};
 use innersphere::{shapes, Mesh, MultipointOptions, Pair, Pose, SphereTree};
 
 fn box_mesh() -> Mesh {
@@ -54,4 +55,64 @@ fn multipoint_with_k_zero_claims_no_separation() {
         },
     );
     assert_eq!(m.count, 1);
+}
+
+#[test]
+fn a_tree_knows_the_mesh_it_was_built_from() {
+    let mesh = box_mesh();
+    let tree = tree_of(&mesh);
+    assert_eq!(source_mismatch(&tree, &mesh), None);
+    assert!(check_built_from(&tree, &mesh).unwrap().ok);
+    // Coordinates rounded to f32 (an STL) or to 6 significant digits (a text format).
+    let mut rounded = mesh.clone();
+    for v in &mut rounded.vertices {
+        *v = v.as_vec3().as_dvec3();
+    }
+    assert_eq!(source_mismatch(&tree, &rounded), None);
+    let mut printed = mesh.clone();
+    for v in &mut printed.vertices {
+        for c in [&mut v.x, &mut v.y, &mut v.z] {
+            *c = format!("{:.5e}", *c).parse().unwrap();
+        }
+    }
+    assert_eq!(source_mismatch(&tree, &printed), None);
+    // The box moved by 1e-3 of its size, scaled by 1.001, twice as large, and a ball.
+    let mut moved = mesh.clone();
+    for v in &mut moved.vertices {
+        v.x += 2e-3;
+    }
+    let mut scaled = mesh.clone();
+    for v in &mut scaled.vertices {
+        *v *= 1.001;
+    }
+    let mut big = mesh.clone();
+    for v in &mut big.vertices {
+        *v *= 2.0;
+    }
+    for (name, other) in [
+        ("moved", moved),
+        ("scaled", scaled),
+        ("big", big),
+        ("ball", shapes::icosphere(2)),
+    ] {
+        let why = source_mismatch(&tree, &other).unwrap_or_else(|| panic!("{name} passed"));
+        assert!(why.contains("bounding box"), "{name}: {why}");
+        let e = check_built_from(&tree, &other).unwrap_err().to_string();
+        assert!(
+            e.contains("not the mesh the tree was built from"),
+            "{name}: {e}"
+        );
+    }
+    // The same bounding box, another volume: one corner of the box pushed in along x (the
+    // other corners keep the box).
+    let mut dented = mesh.clone();
+    let corner = dented
+        .vertices
+        .iter()
+        .position(|v| v.x > 0.0 && v.y > 0.0 && v.z > 0.0)
+        .unwrap();
+    dented.vertices[corner].x = 0.99;
+    assert_eq!(dented.bbox(), mesh.bbox());
+    let why = source_mismatch(&tree, &dented).unwrap();
+    assert!(why.contains("volume"), "{why}");
 }

@@ -74,10 +74,22 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     crate::warn_if_stale(&args.b, &b);
     let motion = innersphere_eval::motion::Motion::load(&args.motion)?;
     let exact = match &args.exact {
-        Some(m) => Some((
-            ExactMesh::new(&crate::load_mesh(&m[0])?)?,
-            ExactMesh::new(&crate::load_mesh(&m[1])?)?,
-        )),
+        Some(m) => {
+            let (ma, mb) = (crate::load_mesh(&m[0])?, crate::load_mesh(&m[1])?);
+            // Meshes that are not the trees' own make the accuracy meaningless: say so.
+            for (mesh, path, tree, tree_path) in
+                [(&ma, &m[0], &a, &args.a), (&mb, &m[1], &b, &args.b)]
+            {
+                if let Some(why) = innersphere::tree::check::source_mismatch(tree, mesh) {
+                    eprintln!(
+                        "warning: --exact {} is not the mesh {} was built from ({why}): the accuracy figures compare unrelated shapes",
+                        path.display(),
+                        tree_path.display()
+                    );
+                }
+            }
+            Some((ExactMesh::new(&ma)?, ExactMesh::new(&mb)?))
+        }
         None => None,
     };
     let kinds = match args.query {

@@ -460,3 +460,83 @@ fn k_zero_is_refused() {
     );
     assert!(err.contains("--k must be at least 1"), "{err}");
 }
+
+/// Issue 25 (5): `check --mesh OTHER TREE` said ok for a tree inside a larger mesh; a mesh
+/// whose bounding box or volume is not the tree's source's is an error. The same mesh in
+/// another format (here an ASCII STL) still passes.
+#[test]
+fn check_refuses_a_mesh_the_tree_was_not_built_from() {
+    let dir = fixture("check");
+    let (box_ist, big_obj, ball_obj) = (
+        dir.path("box.ist"),
+        dir.path("big.obj"),
+        dir.path("ball.obj"),
+    );
+    for other in [&big_obj, &ball_obj] {
+        let err = run(&["check", s(&box_ist), "--mesh", s(other)], 2);
+        assert!(
+            err.contains("not the mesh the tree was built from") && err.contains("bounding box"),
+            "{err}"
+        );
+    }
+    // The box as an ASCII STL with f32-rounded coordinates.
+    let m = shapes::cuboid(DVec3::new(1.0, 0.6, 0.4));
+    let mut text = String::from("solid box\n");
+    for t in 0..m.triangles.len() {
+        text += "facet normal 0 0 0\nouter loop\n";
+        for v in m.triangle(t) {
+            text += &format!("vertex {} {} {}\n", v.x as f32, v.y as f32, v.z as f32);
+        }
+        text += "endloop\nendfacet\n";
+    }
+    text += "endsolid box\n";
+    let stl = dir.path("box.stl");
+    std::fs::write(&stl, text).unwrap();
+    let out = ist(&["check", s(&box_ist), "--mesh", s(&stl)]);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    assert!(stdout(&out).starts_with("ok: "));
+}
+
+/// Issue 25 (5): `replay --exact` with meshes that are not the trees' own warns (and still
+/// runs); with the right meshes it does not.
+#[test]
+fn replay_exact_with_unrelated_meshes_warns() {
+    let dir = fixture("exact");
+    let (box_ist, ball_ist, box_obj, ball_obj, big_obj, m) = (
+        dir.path("box.ist"),
+        dir.path("ball.ist"),
+        dir.path("box.obj"),
+        dir.path("ball.obj"),
+        dir.path("big.obj"),
+        dir.path("m.csv"),
+    );
+    let replay = |a: &Path, b: &Path| {
+        run(
+            &[
+                "replay",
+                s(&box_ist),
+                s(&ball_ist),
+                "--motion",
+                s(&m),
+                "--query",
+                "distance",
+                "--exact",
+                s(a),
+                s(b),
+            ],
+            0,
+        )
+    };
+    let err = replay(&box_obj, &ball_obj);
+    assert!(!err.contains("warning"), "{err}");
+    let err = replay(&big_obj, &ball_obj);
+    assert!(
+        err.contains("warning: --exact")
+            && err.contains("big.obj is not the mesh")
+            && err.contains("box.ist"),
+        "{err}"
+    );
+    // Swapped meshes: both warned about.
+    let err = replay(&ball_obj, &box_obj);
+    assert_eq!(err.matches("warning: --exact").count(), 2, "{err}");
+}

@@ -1,5 +1,7 @@
 //! Issue 25, the library's side of the command line's cases: multipoint with `k = 0` claims
-//! no separation, a tree knows whether a mesh is the one it was built from.
+//! no separation, a tree knows whether a mesh is the one it was built from, a huge voxel
+//! blames the voxel size, a tiny quaternion is called too small to normalise. (Outputs never
+//! overwriting inputs and atomic writes: the unit tests of `innersphere::output`.)
 
 use innersphere::build::{build_tree, BuildOptions, Resolution};
 use innersphere::glam::DVec3;
@@ -115,4 +117,54 @@ fn a_tree_knows_the_mesh_it_was_built_from() {
     assert_eq!(dented.bbox(), mesh.bbox());
     let why = source_mismatch(&tree, &dented).unwrap();
     assert!(why.contains("volume"), "{why}");
+}
+
+#[test]
+fn a_voxel_larger_than_the_mesh_blames_the_voxel_size() {
+    for h in [1e300, 1e10, 2.0] {
+        let opts = BuildOptions {
+            resolution: Resolution::VoxelSize(h),
+            ..Default::default()
+        };
+        match build_tree(&box_mesh(), &opts, &Silent) {
+            // A single voxel at the centre may still hold one sphere.
+            Ok(_) => assert!(h < 10.0, "{h}"),
+            Err(e) => {
+                let e = e.to_string();
+                assert!(e.contains("voxel size is too large"), "{h}: {e}");
+                assert!(!e.contains("minimum radius"), "{h}: {e}");
+            }
+        }
+    }
+    // A minimum radius larger than the mesh is still blamed as such.
+    let mut opts = BuildOptions {
+        resolution: Resolution::Cells(16),
+        ..Default::default()
+    };
+    opts.packing.min_radius = 5.0;
+    let e = build_tree(&box_mesh(), &opts, &Silent)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("minimum radius is too large"), "{e}");
+}
+
+#[test]
+fn a_tiny_quaternion_is_too_small_to_normalise() {
+    for text in [
+        "0 0 0 1e-30 0 0 0",
+        "0 0 0 0 0 0 0",
+        "0 0 0 1e-13 1e-13 0 0",
+    ] {
+        let e = text.parse::<Pose>().unwrap_err().to_string();
+        assert!(e.contains("too small to normalise"), "{text}: {e}");
+        assert!(!e.contains("zero"), "{text}: {e}");
+    }
+    let e = "0 0 0 1e200 1e200 0 0"
+        .parse::<Pose>()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cannot be normalised") && e.contains("overflows"),
+        "{e}"
+    );
 }

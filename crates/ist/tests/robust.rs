@@ -1,6 +1,11 @@
-//! Issue 25, the command line's part, on inputs the tests write themselves in a fresh
-//! temporary folder: no subcommand overwrites one of its inputs (the same path, another
-//! spelling, a hard or symbolic link) and every output is written whole or not at all.
+//! Issue 25, the command line's part (items 2, 5 and 6), on inputs the tests write
+//! themselves in a fresh temporary folder: no subcommand overwrites one of its inputs (the
+//! same path, another spelling, a hard or symbolic link) and every output is written whole or
+//! not at all; answers that used to be silently wrong (`replay --query contact --csv`,
+//! `--k 0`, `check` against another mesh, `replay --exact` with unrelated meshes); and error
+//! texts that say what is wrong (the OS error once, the voxel size blamed for a huge voxel, a
+//! tiny quaternion called too small to normalise, `demo` on one mesh twice refused before it
+//! builds). docs/RELIABILITY.md, "Files and outputs", lists the same cases.
 
 use innersphere::glam::DVec3;
 use innersphere::shapes;
@@ -539,4 +544,145 @@ fn replay_exact_with_unrelated_meshes_warns() {
     // Swapped meshes: both warned about.
     let err = replay(&ball_obj, &box_obj);
     assert_eq!(err.matches("warning: --exact").count(), 2, "{err}");
+}
+
+/// Issue 25 (6): the OS error of a missing input appears once, in every subcommand.
+#[test]
+fn a_missing_input_is_named_once_with_its_os_error_once() {
+    let dir = fixture("missing");
+    let (box_obj, box_ist, m) = (dir.path("box.obj"), dir.path("box.ist"), dir.path("m.csv"));
+    let nope_mesh = dir.path("nope.stl");
+    let nope_tree = dir.path("nope.ist");
+    let nope_csv = dir.path("nope.csv");
+    let out_ist = dir.path("x.ist");
+    let out_csv = dir.path("x.csv");
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["build", s(&nope_mesh), "-o", s(&out_ist)],
+        vec!["inspect", s(&nope_mesh)],
+        vec!["check", s(&nope_tree), "--mesh", s(&box_obj)],
+        vec!["check", s(&box_ist), "--mesh", s(&nope_mesh)],
+        vec!["export", s(&nope_tree)],
+        vec!["query", s(&nope_tree), s(&box_ist)],
+        vec![
+            "motion",
+            "--a",
+            s(&nope_mesh),
+            "--b",
+            s(&box_obj),
+            "-o",
+            s(&out_csv),
+        ],
+        vec!["replay", s(&box_ist), s(&box_ist), "--motion", s(&nope_csv)],
+        vec![
+            "replay",
+            s(&box_ist),
+            s(&box_ist),
+            "--motion",
+            s(&m),
+            "--exact",
+            s(&nope_mesh),
+            s(&box_obj),
+        ],
+        vec!["demo", "--a", s(&nope_mesh), "--b", s(&box_obj)],
+        vec!["bench", "build", s(&nope_mesh)],
+    ];
+    let os = std::io::Error::from_raw_os_error(2).to_string();
+    for args in cases {
+        let err = run(&args, 2);
+        assert_eq!(err.matches(&os).count(), 1, "ist {args:?}: {err}");
+        assert!(err.contains("nope."), "ist {args:?}: {err}");
+    }
+}
+
+/// Issue 25 (6): a voxel larger than the mesh used to be reported as "minimum radius too
+/// large" (with the minimum radius 0).
+#[test]
+fn a_huge_voxel_blames_the_voxel_size() {
+    let dir = fixture("voxel");
+    let err = run(
+        &[
+            "build",
+            s(&dir.path("box.obj")),
+            "-o",
+            s(&dir.path("t.ist")),
+            "--voxel-size",
+            "1e300",
+            "-q",
+        ],
+        2,
+    );
+    assert!(
+        err.contains("voxel size 1e300") && err.contains("too large for this mesh"),
+        "{err}"
+    );
+    assert!(!err.contains("minimum radius"), "{err}");
+    assert!(!dir.path("t.ist").exists());
+}
+
+/// Issue 25 (6): a quaternion of length 1e-30 is too small to normalise (not "zero").
+#[test]
+fn a_tiny_quaternion_is_too_small_to_normalise() {
+    let dir = fixture("quat");
+    let t = dir.path("box.ist");
+    let err = run(&["query", s(&t), s(&t), "--pose-b", "0 0 0 1e-30 0 0 0"], 2);
+    assert!(err.contains("too small to normalise"), "{err}");
+    assert!(err.contains("1e-30"), "{err}");
+}
+
+/// Issue 25 (6): `demo --a X --b X` built both trees, then said the bodies never touch
+/// although they coincide. The demo now makes its motion from the meshes first, so a pair that
+/// admits none fails before any build, and the generator says why: the same mesh twice (one
+/// file, or a copy). With `--seconds 0` (build only) it is fine.
+#[test]
+fn demo_refuses_one_mesh_twice_before_building() {
+    let dir = fixture("demo");
+    let (box_obj, copy) = (dir.path("box.obj"), dir.path("copy.obj"));
+    std::fs::copy(&box_obj, &copy).unwrap();
+    for b in [&box_obj, &copy] {
+        let err = run(
+            &[
+                "demo",
+                "--a",
+                s(&box_obj),
+                "--b",
+                s(b),
+                "--resolution",
+                "16",
+            ],
+            2,
+        );
+        assert!(err.contains("the same mesh"), "{err}");
+        assert!(!err.contains("never touch"), "{err}");
+        // Refused before building: nothing about trees or stages was printed.
+        assert!(!err.contains("packing"), "{err}");
+    }
+    // `ist motion` says the same.
+    let err = run(
+        &[
+            "motion",
+            "--a",
+            s(&box_obj),
+            "--b",
+            s(&copy),
+            "-o",
+            s(&dir.path("m2.csv")),
+        ],
+        2,
+    );
+    assert!(err.contains("the same mesh"), "{err}");
+    run(
+        &[
+            "demo",
+            "--a",
+            s(&box_obj),
+            "--b",
+            s(&box_obj),
+            "--resolution",
+            "16",
+            "--seconds",
+            "0",
+            "-q",
+        ],
+        0,
+    );
 }

@@ -14,9 +14,12 @@ pub struct DemoPair {
     pub b: (Mesh, SharedTree, BuildReport),
 }
 
+/// Subdivisions of the demo's generated tooth pair ([`innersphere::shapes::tooth_pair`]).
+pub const TOOTH_SUBDIVISIONS: u32 = 5;
+
 /// Generates the tooth pair (see [`innersphere::shapes::tooth_pair`]) and builds both trees.
 pub fn build_pair(opts: &BuildOptions, progress: &dyn Progress) -> Result<DemoPair> {
-    let (ma, mb) = innersphere::shapes::tooth_pair(5);
+    let (ma, mb) = innersphere::shapes::tooth_pair(TOOTH_SUBDIVISIONS);
     build_pair_from(ma, mb, opts, progress)
 }
 
@@ -35,16 +38,26 @@ pub fn build_pair_from(
     })
 }
 
+/// The demo's motion of `b` against `a`: a chewing motion of `seconds` (seed 1). It needs
+/// only the meshes, so a pair that admits no motion (the same body twice, bodies that never
+/// meet) fails here, before any tree is built.
+pub fn motion_for(a: &Mesh, b: &Mesh, seconds: f64) -> Result<crate::motion::Motion> {
+    crate::motion::generate(crate::motion::Scenario::Chew, seconds, 1, a, b)
+}
+
 /// Generates a chewing motion of `seconds` for the pair (seed 1) and replays it through every
 /// query kind, with the exact mesh distance as reference on every 10th frame.
 pub fn replay_pair(pair: &DemoPair, seconds: f64) -> Result<crate::replay::ReplayReport> {
-    let motion = crate::motion::generate(
-        crate::motion::Scenario::Chew,
-        seconds,
-        1,
-        &pair.a.0,
-        &pair.b.0,
-    )?;
+    let motion = motion_for(&pair.a.0, &pair.b.0, seconds)?;
+    replay_motion(pair, &motion)
+}
+
+/// Replays `motion` through every query kind, with the exact mesh distance as reference on
+/// every 10th frame.
+pub fn replay_motion(
+    pair: &DemoPair,
+    motion: &crate::motion::Motion,
+) -> Result<crate::replay::ReplayReport> {
     let ea = innersphere::exact::ExactMesh::new(&pair.a.0)?;
     let eb = innersphere::exact::ExactMesh::new(&pair.b.0)?;
     let opts = crate::replay::ReplayOptions {
@@ -54,7 +67,7 @@ pub fn replay_pair(pair: &DemoPair, seconds: f64) -> Result<crate::replay::Repla
     Ok(crate::replay::replay(
         &pair.a.1,
         &pair.b.1,
-        &motion,
+        motion,
         Some((&ea, &eb)),
         &opts,
     ))

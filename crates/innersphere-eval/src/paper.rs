@@ -18,6 +18,23 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
+/// Every file [`run`] may write into its output folder (so that a caller can check before
+/// the run that none of them is one of its inputs).
+pub const FILES: [&str; 12] = [
+    "fig6_speed_vs_leaves.csv",
+    "fig6_speed_vs_leaves.png",
+    "fig9_error_vs_leaves.csv",
+    "fig9_error_vs_leaves.png",
+    "fig7_8_fanout.csv",
+    "fig7_8_fanout.png",
+    "backtracking.csv",
+    "backtracking.png",
+    "multipoint_k.csv",
+    "multipoint_k.png",
+    "ours_vs_paper.csv",
+    "ours_vs_paper.png",
+];
+
 /// What `ist bench paper` measures.
 #[derive(Debug, Clone)]
 pub struct PaperOptions {
@@ -156,17 +173,22 @@ struct Out<'a> {
 }
 
 impl Out<'_> {
-    /// Writes `text` to `name`.
+    /// Writes `text` to `name` (one of [`FILES`]), through a temporary file renamed into
+    /// place.
     fn csv(&mut self, name: &str, text: &str) -> Result<()> {
-        let p = self.dir.join(name);
-        std::fs::write(&p, text).map_err(|e| Error::io(p, e))?;
+        debug_assert!(FILES.contains(&name), "{name} missing from FILES");
+        innersphere::output::write_file(&self.dir.join(name), text.as_bytes())?;
         self.files.push(name.into());
         Ok(())
     }
 
-    /// Draws `series` into the PNG file `name`.
+    /// Draws `series` into the PNG file `name` (one of [`FILES`]), through a temporary file
+    /// renamed into place.
     fn png(&mut self, name: &str, chart: &Chart, series: &[Series]) -> Result<()> {
-        line_chart(&self.dir.join(name), chart, series)?;
+        debug_assert!(FILES.contains(&name), "{name} missing from FILES");
+        innersphere::output::render_atomic(&self.dir.join(name), |tmp| {
+            line_chart(tmp, chart, series)
+        })?;
         self.files.push(name.into());
         Ok(())
     }

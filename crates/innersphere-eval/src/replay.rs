@@ -164,17 +164,21 @@ pub struct Accuracy {
     pub speedup_p99: f64,
 }
 
-/// One frame's results (for `--csv`).
+/// One frame's results (for `--csv`: [`ReplayReport::write_csv`]).
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct FrameRow {
     /// Frame index.
     pub frame: usize,
     /// Time stamp (s).
     pub t: f64,
-    /// Sphere-set distance from [`proximity`] (0 when overlapping).
+    /// Sphere-set distance from [`Pair::distance`] (0 when overlapping); NaN when it was not
+    /// computed (the distance query not timed and no exact comparison).
     pub distance: f64,
-    /// Whether the sphere sets overlap.
-    pub contact: bool,
+    /// Whether the sphere sets overlap ([`Pair::distance`]); `None` when not computed.
+    pub contact: Option<bool>,
+    /// Each timed kind's own answer on this frame in the first pass, in
+    /// [`ReplayOptions::kinds`] order; `None` if not run.
+    pub answers: [Option<KindAnswer>; 4],
     /// Time of each kind in this frame in the first pass (µs), in [`ReplayOptions::kinds`]
     /// order; NaN if not run.
     pub us: [f64; 4],
@@ -182,10 +186,56 @@ pub struct FrameRow {
     pub best_of_passes_us: [f64; 4],
     /// Exact mesh distance (NaN when not compared).
     pub exact_distance: f64,
-    /// Whether the meshes intersect (false when not compared).
-    pub exact_intersecting: bool,
+    /// Whether the meshes intersect (`None` when not compared).
+    pub exact_intersecting: Option<bool>,
     /// Time of the exact mesh distance in the first pass (µs; NaN when not compared).
     pub exact_us: f64,
+}
+
+/// What one query kind answered on one frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct KindAnswer {
+    /// Whether this kind found the bodies in contact (distance: the sphere sets overlap;
+    /// contact: a contact found; multipoint: at least one contact; penetration: at least one
+    /// overlapping leaf pair).
+    pub in_contact: bool,
+    /// Distance: the sphere-set distance (0 when overlapping). Contact and multipoint: 0 in
+    /// contact, else their proved lower bound on the separation. Penetration: the penetration
+    /// volume (model units³).
+    pub value: f64,
+    /// Multipoint: contacts found. Penetration: overlapping leaf pairs. Distance and contact:
+    /// 1 in contact, else 0.
+    pub count: usize,
+}
+
+impl KindAnswer {
+    /// The CSV columns of `kind`'s answer ([`ReplayReport::write_csv`]).
+    fn columns(kind: QueryKind) -> &'static [&'static str] {
+        match kind {
+            QueryKind::Distance => &["distance_in_contact", "distance"],
+            QueryKind::Contact => &["contact_in_contact", "contact_separation_bound"],
+            QueryKind::Multipoint => &[
+                "multipoint_in_contact",
+                "multipoint_contacts",
+                "multipoint_separation_bound",
+            ],
+            QueryKind::Penetration => &[
+                "penetration_in_contact",
+                "penetration_volume",
+                "penetration_pairs",
+            ],
+        }
+    }
+
+    /// The cells of [`columns`](Self::columns).
+    fn cells(&self, kind: QueryKind) -> Vec<String> {
+        let c = self.in_contact.to_string();
+        match kind {
+            QueryKind::Distance | QueryKind::Contact => vec![c, self.value.to_string()],
+            QueryKind::Multipoint => vec![c, self.count.to_string(), self.value.to_string()],
+            QueryKind::Penetration => vec![c, self.value.to_string(), self.count.to_string()],
+        }
+    }
 }
 
 /// The result of a replay.
@@ -203,6 +253,87 @@ pub struct ReplayReport {
     /// Per-frame rows.
     #[serde(skip)]
     pub rows: Vec<FrameRow>,
+}
+
+impl ReplayReport {
+    /// Writes one CSV row per frame: `frame,t`, then each timed kind's own answer (the
+    /// columns of [`KindAnswer`], prefixed by the kind), then each kind's first-pass time
+    /// (`{kind}_us_1pass`, and `{kind}_us_best_of_{N}` with N > 1 passes), then, with an exact
+    /// comparison, the tree distance it used (`distance_in_contact,distance`, unless the
+    /// distance kind was timed) and `exact_distance,exact_intersecting,exact_us_1pass`, empty
+    /// on the frames not compared. A cell is empty where nothing was computed; no answer is
+    /// ever filled in for a kind that did not run.
+    pub fn write_csv(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        let kinds: Vec<QueryKind> = self.kinds.iter().map(|k| k.kind).collect();
+        let best = self.passes > 1;
+        let tree_distance = self.accuracy.is_some() && !kinds.contains(&QueryKind::Distance);
+        let mut head = vec!["frame".to_string(), "t".to_string()];
+        for &k in &kinds {
+            head.extend(KindAnswer::columns(k).iter().map(|c| c.to_string()));
+        }
+        for &k in &kinds {
+            let k = format!("{k:?}").to_lowercase();
+            head.push(format!("{k}_us_1pass"));
+            if best {
+                head.push(format!("{k}_us_best_of_{}", self.passes));
+            }
+        }
+        if tree_distance {
+            head.extend(["distance_in_contact".into(), "distance".into()]);
+        }
+        if self.accuracy.is_some() {
+            head.extend([
+                "exact_distance".into(),
+                "exact_intersecting".into(),
+                "exact_us_1pass".into(),
+            ]);
+        }
+        writeln!(w, "{}", head.join(","))?;
+        let num = |x: f64| {
+            if x.is_nan() {
+                String::new()
+            } else {
+                x.to_string()
+            }
+        };
+        let us = |x: f64| {
+            if x.is_nan() {
+                String::new()
+            } else {
+                format!("{x:.3}")
+            }
+        };
+        for r in &self.rows {
+            let mut cells = vec![r.frame.to_string(), r.t.to_string()];
+            for (slot, &k) in kinds.iter().enumerate() {
+                match &r.answers[slot] {
+                    Some(a) => cells.extend(a.cells(k)),
+                    None => cells.extend(KindAnswer::columns(k).iter().map(|_| String::new())),
+                }
+            }
+            for slot in 0..kinds.len() {
+                cells.push(us(r.us[slot]));
+                if best {
+                    cells.push(us(r.best_of_passes_us[slot]));
+                }
+            }
+            if tree_distance {
+                cells.push(r.contact.map(|c| c.to_string()).unwrap_or_default());
+                cells.push(num(r.distance));
+            }
+            if self.accuracy.is_some() {
+                cells.push(num(r.exact_distance));
+                cells.push(
+                    r.exact_intersecting
+                        .map(|c| c.to_string())
+                        .unwrap_or_default(),
+                );
+                cells.push(us(r.exact_us));
+            }
+            writeln!(w, "{}", cells.join(","))?;
+        }
+        Ok(())
+    }
 }
 
 fn percentile(sorted: &[f64], q: f64) -> f64 {
@@ -263,6 +394,7 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
         .map(|(i, f)| FrameRow {
             frame: i,
             t: f.t,
+            distance: f64::NAN,
             us: [f64::NAN; 4],
             best_of_passes_us: [f64::NAN; 4],
             exact_distance: f64::NAN,
@@ -294,9 +426,10 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
         for (i, row) in rows.iter_mut().enumerate() {
             row.us[slot] = first[i];
             row.best_of_passes_us[slot] = best[i];
+            row.answers[slot] = Some(first_answers[i].answer);
             if kind == QueryKind::Distance {
-                row.distance = first_answers[i].value;
-                row.contact = first_answers[i].flag;
+                row.distance = first_answers[i].answer.value;
+                row.contact = Some(first_answers[i].answer.in_contact);
             }
         }
         let (max_frame, max_us) =
@@ -335,7 +468,7 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
             for (i, f) in motion.frames.iter().enumerate() {
                 let p = pair.distance(&id, &f.pose);
                 rows[i].distance = p.distance;
-                rows[i].contact = p.overlapping;
+                rows[i].contact = Some(p.overlapping);
             }
         }
         let timed = time_exact(ma, mb, motion, every, passes, clock);
@@ -349,10 +482,10 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
         for (j, (i, f)) in motion.frames.iter().enumerate().step_by(every).enumerate() {
             let e = timed.answers[j];
             rows[i].exact_distance = e.distance;
-            rows[i].exact_intersecting = e.intersecting;
+            rows[i].exact_intersecting = Some(e.intersecting);
             rows[i].exact_us = timed.first[j];
             acc.frames += 1;
-            let tree_contact = rows[i].contact;
+            let tree_contact = rows[i].contact == Some(true);
             if e.intersecting {
                 if !tree_contact {
                     acc.missed_contacts += 1;
@@ -465,18 +598,21 @@ pub(crate) fn time_exact<C: FnMut() -> f64>(
     out
 }
 
-/// What one query answered on one frame, to check that passes do the same work: the
-/// distance (or volume, or number of contacts), whether in contact, node pairs tested.
+/// What one query answered on one frame, and the node pairs it tested: passes that agree
+/// on both did the same work.
 #[derive(Debug, Clone, Copy, Default)]
 struct Answer {
-    value: f64,
-    flag: bool,
+    answer: KindAnswer,
     visits: u64,
 }
 
 impl PartialEq for Answer {
     fn eq(&self, o: &Answer) -> bool {
-        self.value.to_bits() == o.value.to_bits() && self.flag == o.flag && self.visits == o.visits
+        let (a, b) = (&self.answer, &o.answer);
+        a.value.to_bits() == b.value.to_bits()
+            && a.in_contact == b.in_contact
+            && a.count == b.count
+            && self.visits == o.visits
     }
 }
 
@@ -509,8 +645,11 @@ fn replay_pass<C: FnMut() -> f64>(
                 let t1 = clock();
                 (
                     Answer {
-                        value: r.distance,
-                        flag: r.overlapping,
+                        answer: KindAnswer {
+                            in_contact: r.overlapping,
+                            value: r.distance,
+                            count: usize::from(r.overlapping),
+                        },
                         visits: r.visits,
                     },
                     t1,
@@ -521,8 +660,11 @@ fn replay_pass<C: FnMut() -> f64>(
                 let t1 = clock();
                 (
                     Answer {
-                        value: r.distance,
-                        flag: r.in_contact(),
+                        answer: KindAnswer {
+                            in_contact: r.in_contact(),
+                            value: r.distance,
+                            count: usize::from(r.in_contact()),
+                        },
                         visits: r.visits,
                     },
                     t1,
@@ -533,8 +675,11 @@ fn replay_pass<C: FnMut() -> f64>(
                 let t1 = clock();
                 (
                     Answer {
-                        value: r.count as f64,
-                        flag: r.count > 0,
+                        answer: KindAnswer {
+                            in_contact: r.count > 0,
+                            value: r.distance,
+                            count: r.count,
+                        },
                         visits: r.visits,
                     },
                     t1,
@@ -545,8 +690,11 @@ fn replay_pass<C: FnMut() -> f64>(
                 let t1 = clock();
                 (
                     Answer {
-                        value: r.volume,
-                        flag: r.pairs > 0,
+                        answer: KindAnswer {
+                            in_contact: r.pairs > 0,
+                            value: r.volume,
+                            count: r.pairs,
+                        },
                         visits: r.visits,
                     },
                     t1,

@@ -3,7 +3,7 @@
 
 use innersphere::build::{BuildOptions, Resolution};
 use innersphere_eval::motion::{generate, Scenario};
-use innersphere_eval::paper::{run, PaperOptions};
+use innersphere_eval::paper::{run, PaperOptions, FILES};
 
 #[test]
 fn paper_figures_on_the_tooth_pair() {
@@ -27,6 +27,12 @@ fn paper_figures_on_the_tooth_pair() {
     assert!(lines >= 4);
     // The backtracking chart needs frames in contact, which coarse trees may not reach.
     assert!(s.files.len() >= 11, "{:?}", s.files);
+    // Every file written is listed in FILES (what the CLI checks against its inputs), and no
+    // temporary file is left behind.
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(FILES.contains(&name.as_str()), "{name} is not in FILES");
+    }
     for f in &s.files {
         let p = dir.join(f);
         let len = std::fs::metadata(&p).unwrap().len();

@@ -152,8 +152,8 @@ fn replay_of_two_balls_matches_the_closed_form() {
         // Closed form: the sphere sets are the two balls.
         let expect = (d - 2.0).max(0.0);
         assert!((row.distance - expect).abs() < 1e-5, "{row:?} vs {expect}");
-        assert_eq!(row.contact, d < 2.0);
-        assert_eq!(row.exact_intersecting, d < 2.0);
+        assert_eq!(row.contact, Some(d < 2.0));
+        assert_eq!(row.exact_intersecting, Some(d < 2.0));
     }
     let acc = report.accuracy.unwrap();
     assert_eq!(acc.frames, 20);
@@ -300,4 +300,119 @@ fn single_pass_statistics_come_from_the_first_pass() {
     let ours: Vec<f64> = (0..compared).map(|j| d(passes * n + j * every)).collect();
     assert_eq!(acc.distance_p99_us, percentile(&ours, 0.99));
     assert_eq!(acc.speedup_p99, acc.exact_p99_us / acc.distance_p99_us);
+}
+
+/// The CSV cells of `column` (by header name), one per row.
+fn csv_column(csv: &str, column: &str) -> Vec<String> {
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let i = head
+        .iter()
+        .position(|h| *h == column)
+        .unwrap_or_else(|| panic!("no column {column} in {head:?}"));
+    lines
+        .map(|l| l.split(',').nth(i).unwrap().to_string())
+        .collect()
+}
+
+fn csv_of(report: &ReplayReport) -> String {
+    let mut out = Vec::new();
+    report.write_csv(&mut out).unwrap();
+    String::from_utf8(out).unwrap()
+}
+
+/// Issue 25 (5): the CSV of a replay that times only the contact query used to say
+/// `distance=0,contact=false` on every frame, overlapping ones included. Each kind now writes
+/// its own answer, and a column nothing computed is absent or empty.
+#[test]
+fn the_csv_holds_each_kinds_own_answer() {
+    let (a, b) = (ball_tree(), ball_tree());
+    let centre = centres();
+    let motion = motion_of(&centre);
+    let only = |kind| ReplayOptions {
+        kinds: vec![kind],
+        ..Default::default()
+    };
+    // Contact alone: its own verdict, no distance anywhere.
+    let report = replay(&a, &b, &motion, None, &only(QueryKind::Contact));
+    let csv = csv_of(&report);
+    let head = csv.lines().next().unwrap();
+    assert_eq!(
+        head,
+        "frame,t,contact_in_contact,contact_separation_bound,contact_us_1pass"
+    );
+    let verdict = csv_column(&csv, "contact_in_contact");
+    let bound = csv_column(&csv, "contact_separation_bound");
+    for (i, &d) in centre.iter().enumerate() {
+        assert_eq!(verdict[i], (d < 2.0).to_string(), "frame {i}");
+        let lb: f64 = bound[i].parse().unwrap();
+        if d < 2.0 {
+            assert_eq!(lb, 0.0);
+        } else {
+            assert!(lb >= 0.0 && lb <= d - 2.0 + 1e-6, "frame {i}: {lb}");
+        }
+        let row = &report.rows[i];
+        assert!(row.distance.is_nan() && row.contact.is_none());
+        assert_eq!(row.answers[0].unwrap().in_contact, d < 2.0);
+        assert!(row.answers[1..].iter().all(Option::is_none));
+    }
+
+    // Every kind, with the exact reference on every other frame.
+    let sphere_mesh = innersphere::shapes::icosphere(4);
+    let exact = ExactMesh::new(&sphere_mesh).unwrap();
+    let opts = ReplayOptions {
+        every: 2,
+        ..Default::default()
+    };
+    let report = replay(&a, &b, &motion, Some((&exact, &exact)), &opts);
+    let csv = csv_of(&report);
+    let cols = |c: &str| csv_column(&csv, c);
+    let (dist, pen, mp, ex) = (
+        cols("distance"),
+        cols("penetration_volume"),
+        cols("multipoint_contacts"),
+        cols("exact_intersecting"),
+    );
+    for (i, &d) in centre.iter().enumerate() {
+        for kind in ["distance", "contact", "multipoint", "penetration"] {
+            let c = &cols(&format!("{kind}_in_contact"))[i];
+            assert_eq!(*c, (d < 2.0).to_string(), "{kind} frame {i}");
+        }
+        let dd: f64 = dist[i].parse().unwrap();
+        assert!((dd - (d - 2.0).max(0.0)).abs() < 1e-5, "frame {i}: {dd}");
+        // The lens of two unit balls at centre distance d: π (4 + d) (2 − d)² / 12.
+        let v: f64 = pen[i].parse().unwrap();
+        let lens = if d < 2.0 {
+            std::f64::consts::PI * (4.0 + d) * (2.0 - d).powi(2) / 12.0
+        } else {
+            0.0
+        };
+        assert!(
+            (v - lens).abs() <= 1e-3 * lens.max(1e-9),
+            "frame {i}: {v} vs {lens}"
+        );
+        assert_eq!(mp[i], if d < 2.0 { "1" } else { "0" }, "frame {i}");
+        // The exact columns are empty on the frames not compared.
+        if i % 2 == 0 {
+            assert_eq!(ex[i], (d < 2.0).to_string());
+        } else {
+            assert_eq!(ex[i], "", "frame {i}");
+        }
+    }
+    // The distance columns appear once (the timed distance query's).
+    let head = csv.lines().next().unwrap();
+    assert_eq!(head.split(',').filter(|h| *h == "distance").count(), 1);
+
+    // Contact with the exact reference: the tree distance the accuracy used is written too.
+    let opts = ReplayOptions {
+        kinds: vec![QueryKind::Contact],
+        ..Default::default()
+    };
+    let report = replay(&a, &b, &motion, Some((&exact, &exact)), &opts);
+    let csv = csv_of(&report);
+    let dist = csv_column(&csv, "distance");
+    for (i, &d) in centre.iter().enumerate() {
+        let dd: f64 = dist[i].parse().unwrap();
+        assert!((dd - (d - 2.0).max(0.0)).abs() < 1e-5, "frame {i}: {dd}");
+    }
 }

@@ -493,10 +493,36 @@ pub fn build_tree(
     let spheres = packing::pack(&field, &opts.packing, surface.as_ref(), progress);
     let t_pack = t2.elapsed().as_secs_f64();
     if spheres.is_empty() {
-        return Err(Error::InvalidMesh(format!(
-            "no inner sphere of radius ≥ {} fits (minimum radius too large for this mesh?)",
-            opts.packing.min_radius
-        )));
+        // The packing's floor is the larger of the minimum radius and 1e-4 voxel: blame the
+        // one that set it.
+        let short = |x: f64| {
+            if x != 0.0 && !(1e-4..1e6).contains(&x.abs()) {
+                format!("{x:e}")
+            } else {
+                let t = format!("{x:.6}");
+                t.trim_end_matches('0').trim_end_matches('.').to_string()
+            }
+        };
+        let longest = (hi - lo).max_element();
+        return Err(Error::InvalidMesh(
+            if opts.packing.min_radius > 1e-4 * grid.h {
+                format!(
+                    "no inner sphere of radius ≥ {} fits: the minimum radius is too large for this mesh, whose longest side is {}",
+                    short(opts.packing.min_radius),
+                    short(longest)
+                )
+            } else {
+                format!(
+                    "no inner sphere fits at voxel size {}: the voxel size is too large for this mesh, whose longest side is {} (a {} × {} × {} grid); give a smaller voxel size, e.g. {} (the longest side / 128), or a resolution in cells",
+                    short(grid.h),
+                    short(longest),
+                    grid.dims[0],
+                    grid.dims[1],
+                    grid.dims[2],
+                    short(longest / 128.0)
+                )
+            },
+        ));
     }
 
     let t3 = Instant::now();

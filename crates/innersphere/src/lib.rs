@@ -37,6 +37,8 @@
 //! query/      the Pair and one file per query kind, over a kernel and the fronts
 //! exact/      exact mesh-mesh distance, intersection and penetration depth (also the
 //!             accuracy reference of the sphere queries)
+//! output.rs   writing outputs: never onto an input, through a temporary file renamed
+//!             into place
 //! ```
 //!
 //! Motion files, replay, benchmarks and the paper's figures are the `innersphere-eval` crate.
@@ -49,6 +51,7 @@ pub mod exact;
 pub mod field;
 pub mod hierarchy;
 pub mod mesh;
+pub mod output;
 pub mod packing;
 pub mod pose;
 pub mod progress;

@@ -16,6 +16,21 @@ pub const ROTATION_TOLERANCE: f64 = 1e-5;
 /// The shortest quaternion [`Pose::new`] normalises; a shorter one has no reliable direction.
 pub const MIN_QUATERNION_LENGTH: f64 = 1e-12;
 
+/// The message of [`PoseError::BadQuaternion`]: too small or too large, said as such.
+fn bad_quaternion_text(length: f64) -> String {
+    if length.is_finite() {
+        format!(
+            "the quaternion (qw qx qy qz) has length {length:e}, too small to normalise to a \
+             rotation (its length must be above {MIN_QUATERNION_LENGTH:e})"
+        )
+    } else {
+        format!(
+            "the quaternion (qw qx qy qz) has length {length:e}: it cannot be normalised to a \
+             rotation (its length overflows; scale its components down)"
+        )
+    }
+}
+
 /// A rigid transform `p' = R(q)·p + t`, in f64 so that composing poses along a long motion
 /// loses nothing; queries convert the relative pose of a pair to f32 once per query.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,11 +60,9 @@ pub enum PoseError {
         /// Which input: "translation", "quaternion", "rotation matrix" or "4×4 matrix".
         what: &'static str,
     },
-    /// A quaternion too short (zero) or too long (its length overflows) to normalise.
-    #[error(
-        "the quaternion (qw qx qy qz) has length {length:e}: it cannot be normalised to a \
-         rotation (it must be finite and above {MIN_QUATERNION_LENGTH:e})"
-    )]
+    /// A quaternion too short (at most [`MIN_QUATERNION_LENGTH`]) or too long (its length
+    /// overflows) to normalise.
+    #[error("{}", bad_quaternion_text(*length))]
     BadQuaternion {
         /// Its length as computed.
         length: f64,

@@ -70,7 +70,12 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             every,
             json,
         } => {
-            use innersphere_eval::paper::{run, PaperOptions};
+            use innersphere_eval::paper::{run, PaperOptions, FILES};
+            // Every file the run may write into --out, checked against the inputs before
+            // the minutes of work.
+            let outputs: Vec<PathBuf> = FILES.iter().map(|f| out.join(f)).collect();
+            let outputs: Vec<&std::path::Path> = outputs.iter().map(|p| p.as_path()).collect();
+            crate::check_outputs(&outputs, &[&a, &b, &motion])?;
             let ma = crate::load_mesh(&a)?;
             let mb = crate::load_mesh(&b)?;
             let m = innersphere_eval::motion::Motion::load(&motion)?;

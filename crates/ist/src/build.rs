@@ -121,8 +121,10 @@ impl BuildArgs {
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     let t0 = Instant::now();
-    // Bad flags fail before a large mesh is loaded.
+    // Bad flags and an output that would overwrite the mesh fail before a large mesh is
+    // loaded.
     innersphere::build::validate_options(&args.opts.options())?;
+    crate::check_outputs(&[&args.output], &[&args.mesh])?;
     let bars = Bars::new(args.quiet);
     let mesh = crate::load_mesh(&args.mesh)?;
     let t_load = t0.elapsed().as_secs_f64();
@@ -137,7 +139,10 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let (tree, report) = SphereTree::build_with_progress(&mesh, &opts, &bars)
         .with_context(|| format!("building the tree of {}", args.mesh.display()))?;
     let t1 = Instant::now();
-    tree.save(&args.output).context("writing the tree")?;
+    // Through a temporary file renamed into place: a failed write leaves no partial tree.
+    let bytes = innersphere::tree::file::to_bytes(&tree);
+    innersphere::output::write_atomic(&args.output, |w| w.write_all(&bytes))
+        .context("writing the tree")?;
     let t_write = t1.elapsed().as_secs_f64();
     let total = t0.elapsed().as_secs_f64();
     let preset = args.preset.map(|p| Preset::from(p).name());

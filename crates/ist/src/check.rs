@@ -1,5 +1,6 @@
 //! `ist check`: verify a tree against its mesh; exit code 1 when an invariant fails.
 
+use anyhow::Context;
 use std::path::PathBuf;
 
 /// Arguments of `ist check`.
@@ -19,7 +20,14 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<i32> {
     let tree = crate::load_tree(&args.tree)?;
     let mesh = crate::load_mesh(&args.mesh)?;
-    let report = innersphere::tree::check::check(&tree, &mesh)?;
+    // A mesh other than the tree's own (by the facts the tree keeps) is an error, not "ok".
+    let report = innersphere::tree::check::check_built_from(&tree, &mesh).with_context(|| {
+        format!(
+            "checking {} against {}",
+            args.tree.display(),
+            args.mesh.display()
+        )
+    })?;
     if args.json {
         crate::print_json(&report)?;
     } else {

@@ -2,6 +2,7 @@
 
 use crate::build::BuildArgs;
 use crate::progress::Bars;
+use anyhow::Context;
 
 /// Arguments of `ist demo`.
 #[derive(clap::Args)]
@@ -33,19 +34,28 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         args.seconds.is_finite() && (0.0..=600.0).contains(&args.seconds),
         "--seconds must be between 0 and 600"
     );
-    let pair = match (&args.a, &args.b) {
-        (Some(a), Some(b)) => innersphere_eval::demo::build_pair_from(
-            crate::load_mesh(a)?,
-            crate::load_mesh(b)?,
-            &opts,
-            &bars,
-        )?,
-        _ => innersphere_eval::demo::build_pair(&opts, &bars)?,
+    let (ma, mb) = match (&args.a, &args.b) {
+        (Some(a), Some(b)) => (crate::load_mesh(a)?, crate::load_mesh(b)?),
+        _ => innersphere::shapes::tooth_pair(innersphere_eval::demo::TOOTH_SUBDIVISIONS),
     };
-    let replay = if args.seconds > 0.0 {
-        Some(innersphere_eval::demo::replay_pair(&pair, args.seconds)?)
+    // The motion first: it needs only the meshes, so a pair that admits none (the same mesh
+    // twice, bodies that never meet) fails before the seconds of building.
+    let motion = if args.seconds > 0.0 {
+        Some(
+            innersphere_eval::demo::motion_for(&ma, &mb, args.seconds).with_context(|| {
+                match (&args.a, &args.b) {
+                    (Some(a), Some(b)) => format!("--a {} and --b {}", a.display(), b.display()),
+                    _ => "the generated tooth pair".into(),
+                }
+            })?,
+        )
     } else {
         None
+    };
+    let pair = innersphere_eval::demo::build_pair_from(ma, mb, &opts, &bars)?;
+    let replay = match &motion {
+        Some(m) => Some(innersphere_eval::demo::replay_motion(&pair, m)?),
+        None => None,
     };
     if args.json {
         crate::print_json(&serde_json::json!({ "a": pair.a.2, "b": pair.b.2, "replay": replay }))?;

@@ -1,6 +1,5 @@
 //! `ist export`: the spheres of a tree as PLY or CSV.
 
-use anyhow::Context;
 use innersphere::tree::export::{self, Which};
 use std::io::Write;
 use std::path::PathBuf;
@@ -29,22 +28,28 @@ enum Format {
 
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
+    if let Some(p) = &args.output {
+        crate::check_outputs(&[p], &[&args.tree])?;
+    }
     let tree = crate::load_tree(&args.tree)?;
     let which = if args.all_nodes {
         Which::All
     } else {
         Which::Leaves
     };
-    let mut out: Box<dyn Write> = match &args.output {
-        Some(p) => Box::new(std::io::BufWriter::new(
-            std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
-        )),
-        None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
+    let write = |out: &mut dyn Write| -> std::io::Result<()> {
+        match args.format {
+            Format::Ply => export::write_ply(&tree, which, out),
+            Format::Csv => export::write_csv(&tree, which, out),
+        }
     };
-    match args.format {
-        Format::Ply => export::write_ply(&tree, which, &mut out)?,
-        Format::Csv => export::write_csv(&tree, which, &mut out)?,
+    match &args.output {
+        Some(p) => innersphere::output::write_atomic(p, write)?,
+        None => {
+            let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+            write(&mut out)?;
+            out.flush()?;
+        }
     }
-    out.flush()?;
     Ok(0)
 }

@@ -127,6 +127,18 @@ fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Refuses, before any work, outputs that are one of the inputs or the same file twice: the
+/// library's [`innersphere::output`] checks (canonical paths, and device and inode on Unix, so
+/// links are caught). Every output is then written through
+/// [`innersphere::output::write_atomic`].
+fn check_outputs(outputs: &[&std::path::Path], inputs: &[&std::path::Path]) -> anyhow::Result<()> {
+    innersphere::output::ensure_distinct_outputs(outputs)?;
+    for o in outputs {
+        innersphere::output::ensure_not_input(o, inputs)?;
+    }
+    Ok(())
+}
+
 /// Loads a tree file; a mesh given instead (by its extension) is named as such, with the fix.
 /// Every error names the file once (the library's errors already carry the path).
 fn load_tree(path: &std::path::Path) -> anyhow::Result<innersphere::SphereTree> {

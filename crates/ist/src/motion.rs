@@ -49,6 +49,9 @@ fn parse_scenario(s: &str) -> Result<Scenario, String> {
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     let start = Instant::now();
+    let mut outputs = vec![args.output.as_path()];
+    outputs.extend(args.labels.as_deref());
+    crate::check_outputs(&outputs, &[&args.a, &args.b])?;
     // The library's errors name the file; the context says which body it was.
     let a = crate::load_mesh(&args.a).context("loading body A (--a)")?;
     let b = crate::load_mesh(&args.b).context("loading body B (--b)")?;
@@ -64,8 +67,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let g = generate_with(args.scenario, args.seconds, args.seed, &a, &b, &opts)?;
     g.motion.save(&args.output).context("writing the motion")?;
     if let Some(path) = &args.labels {
-        std::fs::write(path, g.labels_csv())
-            .with_context(|| format!("writing {}", path.display()))?;
+        innersphere::output::write_file(path, g.labels_csv().as_bytes())
+            .context("writing the labels")?;
     }
     let c = g.counts();
     println!(

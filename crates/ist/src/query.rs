@@ -32,8 +32,8 @@ pub struct Args {
     /// The query.
     #[arg(long, value_enum, default_value_t = Kind::Distance)]
     query: Kind,
-    /// Multipoint: most contacts to report (the same default as `ist replay --k`: the
-    /// benchmarks' and the issue-3 bar's k = 16).
+    /// Multipoint: most contacts to report, at least 1 (the same default as `ist replay
+    /// --k`: the benchmarks' and the issue-3 bar's k = 16).
     #[arg(long, default_value_t = 16)]
     k: usize,
     /// Multipoint: at most one contact below each pair of nodes at this depth.
@@ -77,6 +77,9 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     }
     if !(args.abs_tol >= 0.0 && args.rel_tol >= 0.0) {
         anyhow::bail!("--abs-tol and --rel-tol must be ≥ 0");
+    }
+    if args.k == 0 {
+        anyhow::bail!("--k must be at least 1 (the most contacts multipoint reports)");
     }
     let a = crate::load_tree(&args.a)?;
     let b = crate::load_tree(&args.b)?;

@@ -1,9 +1,7 @@
 //! `ist replay`: run a motion frame by frame through a pair's state, as a haptic loop would.
 
-use anyhow::Context;
 use innersphere::exact::ExactMesh;
 use innersphere_eval::replay::{replay, QueryKind, ReplayOptions};
-use std::io::Write;
 use std::path::PathBuf;
 
 /// Arguments of `ist replay`.
@@ -28,8 +26,8 @@ pub struct Args {
     /// frame (K frames back).
     #[arg(long, default_value_t = 1)]
     every: usize,
-    /// Multipoint: most contacts per frame (the same default as `ist query --k`: the
-    /// benchmarks' and the issue-3 bar's k = 16).
+    /// Multipoint: most contacts per frame, at least 1 (the same default as `ist query
+    /// --k`: the benchmarks' and the issue-3 bar's k = 16).
     #[arg(long, default_value_t = 16)]
     k: usize,
     /// Multipoint: at most one contact below each pair of nodes at this depth (the same
@@ -61,16 +59,37 @@ enum Kind {
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     anyhow::ensure!(args.every >= 1, "--every must be at least 1");
+    anyhow::ensure!(
+        args.k >= 1,
+        "--k must be at least 1 (the most contacts multipoint reports per frame)"
+    );
+    if let Some(csv) = &args.csv {
+        let mut inputs = vec![args.a.as_path(), args.b.as_path(), args.motion.as_path()];
+        inputs.extend(args.exact.iter().flatten().map(|p| p.as_path()));
+        crate::check_outputs(&[csv], &inputs)?;
+    }
     let a = innersphere::SharedTree::new(crate::load_tree(&args.a)?);
     let b = innersphere::SharedTree::new(crate::load_tree(&args.b)?);
     crate::warn_if_stale(&args.a, &a);
     crate::warn_if_stale(&args.b, &b);
     let motion = innersphere_eval::motion::Motion::load(&args.motion)?;
     let exact = match &args.exact {
-        Some(m) => Some((
-            ExactMesh::new(&crate::load_mesh(&m[0])?)?,
-            ExactMesh::new(&crate::load_mesh(&m[1])?)?,
-        )),
+        Some(m) => {
+            let (ma, mb) = (crate::load_mesh(&m[0])?, crate::load_mesh(&m[1])?);
+            // Meshes that are not the trees' own make the accuracy meaningless: say so.
+            for (mesh, path, tree, tree_path) in
+                [(&ma, &m[0], &a, &args.a), (&mb, &m[1], &b, &args.b)]
+            {
+                if let Some(why) = innersphere::tree::check::source_mismatch(tree, mesh) {
+                    eprintln!(
+                        "warning: --exact {} is not the mesh {} was built from ({why}): the accuracy figures compare unrelated shapes",
+                        path.display(),
+                        tree_path.display()
+                    );
+                }
+            }
+            Some((ExactMesh::new(&ma)?, ExactMesh::new(&mb)?))
+        }
         None => None,
     };
     let kinds = match args.query {
@@ -90,47 +109,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     };
     let report = replay(&a, &b, &motion, exact.as_ref().map(|(x, y)| (x, y)), &opts);
     if let Some(path) = &args.csv {
-        let mut out = std::io::BufWriter::new(
-            std::fs::File::create(path)
-                .with_context(|| format!("cannot create {}", path.display()))?,
-        );
-        // Per kind the first pass's time, then (with more passes) each frame's fastest.
-        let best = report.passes > 1;
-        let mut names: Vec<String> = Vec::new();
-        for k in &opts.kinds {
-            let k = format!("{k:?}").to_lowercase();
-            names.push(format!("{k}_us_1pass"));
-            if best {
-                names.push(format!("{k}_us_best_of_{}", report.passes));
-            }
-        }
-        writeln!(
-            out,
-            "frame,t,distance,contact,{},exact_distance,exact_intersecting,exact_us_1pass",
-            names.join(",")
-        )?;
-        for r in &report.rows {
-            let mut us: Vec<String> = Vec::new();
-            for slot in 0..opts.kinds.len() {
-                us.push(format!("{:.3}", r.us[slot]));
-                if best {
-                    us.push(format!("{:.3}", r.best_of_passes_us[slot]));
-                }
-            }
-            writeln!(
-                out,
-                "{},{},{},{},{},{},{},{:.3}",
-                r.frame,
-                r.t,
-                r.distance,
-                r.contact,
-                us.join(","),
-                r.exact_distance,
-                r.exact_intersecting,
-                r.exact_us
-            )?;
-        }
-        out.flush()?;
+        innersphere::output::write_atomic(path, |w| report.write_csv(w))?;
     }
     if args.json {
         crate::print_json(&report)?;

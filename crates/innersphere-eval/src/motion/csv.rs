@@ -5,8 +5,8 @@
 use glam::{DQuat, DVec3};
 use innersphere::Pose;
 use innersphere::{Error, Result};
-use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
+use std::io::Read;
+use std::path::Path;
 
 /// The header line of a motion file.
 pub const HEADER: &str = "t,tx,ty,tz,qw,qx,qy,qz";
@@ -265,22 +265,14 @@ impl Motion {
     }
 
     /// Writes the motion file ([`to_csv`](Self::to_csv)), gzip-compressed when the path ends
-    /// in `.gz`. Refuses a motion that [`validate`](Self::validate) rejects, so that every
-    /// written file loads again.
+    /// in `.gz`, through a temporary file renamed into place
+    /// ([`innersphere::output::write_file`]: a failed write leaves no partial file). Refuses a
+    /// motion that [`validate`](Self::validate) rejects, so that every written file loads
+    /// again.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
         self.validate(path)?;
-        let text = self.to_csv();
-        let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
-        let result = if innersphere::mesh::io::is_gzip(path) {
-            let mut enc = flate2::write::GzEncoder::new(file, flate2::Compression::default());
-            enc.write_all(text.as_bytes())
-                .and_then(|()| enc.finish().map(drop))
-        } else {
-            let mut w = std::io::BufWriter::new(file);
-            w.write_all(text.as_bytes()).and_then(|()| w.flush())
-        };
-        result.map_err(|e| Error::io(PathBuf::from(path), e))
+        innersphere::output::write_file(path, self.to_csv().as_bytes())
     }
 }
 

@@ -21,4 +21,4 @@ pub use clearance::{
 };
 pub use csv::{Frame, Motion, HEADER};
 pub use frame::AnatomicalFrame;
-pub use generate::{generate, generate_with, GenerateOptions, Generated, Scenario};
+pub use generate::{generate, generate_with, same_body, GenerateOptions, Generated, Scenario};

@@ -51,6 +51,8 @@ pub struct MultipointOptions {
     /// front order, at most one per split-depth pair. Same guarantees.
     pub tracking: bool,
     /// At most this many contacts (no cap; default 16, the same as `ist query` and `ist replay`).
+    /// `k = 0` asks for none: no search runs, and the answer is no contacts with distance 0
+    /// (no separation proved), never a claim that the bodies are apart.
     pub k: usize,
     /// At most one contact below each traversal pair at this depth (pairs of nodes at this
     /// depth; a contact at a shallower leaf pair stands for itself).
@@ -112,7 +114,8 @@ pub(crate) fn multipoint(
     s.contacts.clear();
     s.excluded.clear();
     s.stale.clear();
-    let mut min_sep = f32::INFINITY;
+    // With k = 0 nothing is searched, so nothing is proved: the lower bound is 0.
+    let mut min_sep = if k == 0 { 0.0 } else { f32::INFINITY };
     let mut visits = 0u64;
     let mut reused = 0;
     let mut skip = false;

@@ -32,7 +32,67 @@ pub struct CheckReport {
     pub tolerance: f64,
 }
 
-/// Verifies `tree` against `mesh`.
+/// Why `mesh` is not the mesh `tree` was built from, from the facts the tree keeps about its
+/// source ([`TreeMeta`](super::TreeMeta)): the bounding box, each coordinate within 1e-5 of
+/// the larger of the box's diagonal and its farthest coordinate from the origin (rounding the
+/// coordinates to f32 or to 6 significant digits moves them by less), and the enclosed volume,
+/// within 1e-4 of itself. `None` when both agree. A tree of the same shape moved, scaled or
+/// edited, or of another shape with another box or volume, is caught; a tree is never
+/// compared with a mesh by its spheres here (that is [`check`]'s job).
+pub fn source_mismatch(tree: &SphereTree, mesh: &Mesh) -> Option<String> {
+    let m = &tree.meta;
+    let (lo, hi) = mesh.bbox();
+    let (tlo, thi) = (
+        glam::DVec3::from_array(m.bbox_min),
+        glam::DVec3::from_array(m.bbox_max),
+    );
+    let reach = lo
+        .abs()
+        .max(hi.abs())
+        .max(tlo.abs())
+        .max(thi.abs())
+        .max_element();
+    let tol = 1e-5 * (hi - lo).length().max((thi - tlo).length()).max(reach);
+    let mut why = Vec::new();
+    let off = (lo - tlo).abs().max((hi - thi).abs()).max_element();
+    // NaN (a mesh or a tree with non-finite facts) counts as a mismatch.
+    if off.is_nan() || off > tol {
+        why.push(format!(
+            "its bounding box is {:?} to {:?}, the tree's source's was {:?} to {:?} (off by {off:.3e}, tolerance {tol:.1e})",
+            lo.to_array(),
+            hi.to_array(),
+            m.bbox_min,
+            m.bbox_max
+        ));
+    }
+    let volume = mesh.signed_volume().abs();
+    let vtol = 1e-4 * volume.max(m.mesh_volume.abs()) + 1e-12 * tol.powi(3);
+    let dv = (volume - m.mesh_volume).abs();
+    if dv.is_nan() || dv > vtol {
+        why.push(format!(
+            "its volume is {volume:.6e}, the tree's source's was {:.6e} (relative difference {:.1e}, tolerance 1e-4)",
+            m.mesh_volume,
+            dv / volume.max(m.mesh_volume.abs()).max(f64::MIN_POSITIVE)
+        ));
+    }
+    (!why.is_empty()).then(|| why.join("; "))
+}
+
+/// [`check`] of `tree` against the mesh it was built from: an error when `mesh` is not that
+/// mesh ([`source_mismatch`]), since the spheres of a tree checked against another mesh say
+/// nothing about either (a smaller tree fits inside a larger mesh and would pass).
+pub fn check_built_from(tree: &SphereTree, mesh: &Mesh) -> crate::Result<CheckReport> {
+    mesh.validate()?;
+    if let Some(why) = source_mismatch(tree, mesh) {
+        return Err(crate::Error::InvalidMesh(format!(
+            "not the mesh the tree was built from: {why}"
+        )));
+    }
+    check(tree, mesh)
+}
+
+/// Verifies `tree` against `mesh` (any mesh: [`check_built_from`] first makes sure it is
+/// the tree's own).
 pub fn check(tree: &SphereTree, mesh: &Mesh) -> crate::Result<CheckReport> {
     mesh.validate()?;
     tree.validate_structure()?;

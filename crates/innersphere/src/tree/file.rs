@@ -240,7 +240,7 @@ pub fn from_bytes(bytes: &[u8]) -> Result<SphereTree> {
 /// Writes a tree file; refuses a tree that would not read back (see [`check_writable`]).
 pub fn save(tree: &SphereTree, path: &Path) -> Result<()> {
     let bytes = to_checked_bytes(tree)?;
-    std::fs::write(path, bytes).map_err(|e| Error::io(path, e))
+    crate::output::write_atomic(path, |w| w.write_all(&bytes))
 }
 
 /// Reads a tree file: the header first, then exactly the size it declares (see the module

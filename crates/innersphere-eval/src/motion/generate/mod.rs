@@ -128,6 +128,19 @@ pub fn generate(scenario: Scenario, seconds: f64, seed: u64, a: &Mesh, b: &Mesh)
     generate_with(scenario, seconds, seed, a, b, &GenerateOptions::default()).map(|g| g.motion)
 }
 
+/// True when `a` and `b` are the same body: equal meshes, or the same triangle count,
+/// bounding box and volume (to 1e-9: the same file in another format or vertex order).
+pub fn same_body(a: &Mesh, b: &Mesh) -> bool {
+    a == b || {
+        let ((la, ha), (lb, hb)) = (a.bbox(), b.bbox());
+        let tol = 1e-9 * (ha - la).length().max((hb - lb).length());
+        let (va, vb) = (a.signed_volume().abs(), b.signed_volume().abs());
+        a.triangles.len() == b.triangles.len()
+            && (la - lb).abs().max((ha - hb).abs()).max_element() <= tol
+            && (va - vb).abs() <= 1e-9 * va.max(vb)
+    }
+}
+
 /// [`generate`] with options, returning the labels and the plan's anchors too.
 pub fn generate_with(
     scenario: Scenario,
@@ -196,11 +209,27 @@ pub fn generate_with(
             0.02 * touch,
         )
         .ok_or_else(|| {
-            Error::InvalidOption(
+            // Say why: the same body twice, bodies that overlap and never come apart, or
+            // bodies that never meet.
+            Error::InvalidOption(if same_body(a, b) {
+                format!(
+                    "cannot generate a motion: body A and body B are the same mesh ({} \
+                     triangles, the same bounding box and volume), so they coincide at the \
+                     identity pose, and moving B along the occlusal direction finds no light \
+                     bite; give two different bodies (an upper and a lower jaw, say)",
+                    a.triangles.len()
+                )
+            } else if c0 < 0.0 {
+                format!(
+                    "cannot generate a motion: the bodies overlap at the identity pose \
+                     (clearance estimate {c0:.3e}) and moving B along the occlusal direction \
+                     finds no light bite"
+                )
+            } else {
                 "cannot generate a motion: the bodies never touch when B moves along the \
-                     occlusal direction"
-                    .into(),
-            )
+                 occlusal direction"
+                    .into()
+            })
         })?;
         Pose::from_translation(up * -x)
     };

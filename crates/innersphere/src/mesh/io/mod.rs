@@ -36,7 +36,7 @@ mod weld;
 pub use obj::to_obj_bytes;
 pub use stl::to_stl_bytes;
 
-use std::io::{BufReader, Read, Seek, SeekFrom, Write};
+use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
 use super::Mesh;
@@ -147,13 +147,13 @@ pub fn load_bytes(bytes: &[u8], format: Format, name: &Path) -> Result<Mesh> {
 /// Writes a mesh as binary STL (coordinates rounded to `f32`, facet normals from the
 /// corners); gzip-compressed when the path ends in `.gz`.
 pub fn save_stl(mesh: &Mesh, path: &Path) -> Result<()> {
-    write_file(path, &to_stl_bytes(mesh)?)
+    crate::output::write_file(path, &to_stl_bytes(mesh)?)
 }
 
 /// Writes a mesh as Wavefront OBJ (`v` and `f` lines, coordinates in full `f64` precision);
 /// gzip-compressed when the path ends in `.gz`.
 pub fn save_obj(mesh: &Mesh, path: &Path) -> Result<()> {
-    write_file(path, &to_obj_bytes(mesh)?)
+    crate::output::write_file(path, &to_obj_bytes(mesh)?)
 }
 
 // ---------------------------------------------------------------------------------------
@@ -173,18 +173,6 @@ fn check_writable(mesh: &Mesh) -> Result<()> {
         return Ok(());
     }
     mesh.validate()
-}
-
-fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
-    let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
-    let result = if is_gzip(path) {
-        let mut enc = flate2::write::GzEncoder::new(file, flate2::Compression::default());
-        enc.write_all(bytes).and_then(|()| enc.finish().map(drop))
-    } else {
-        let mut file = file;
-        file.write_all(bytes)
-    };
-    result.map_err(|e| Error::io(path, e))
 }
 
 /// Why reading stopped: an I/O (or gzip) error, or a limit.

@@ -356,6 +356,7 @@ impl<R: Read> Read for RatioGuard<R> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::io::Write;
 
     fn gzip(data: &[u8], level: u32) -> Vec<u8> {
         let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::new(level));

@@ -217,7 +217,9 @@ impl SphereTree {
                     return bad(format!("node {ch} has two parents"));
                 }
                 *seen = true;
-                if self.parent[ch] as usize != i || self.depth[ch] != self.depth[i] + 1 {
+                if self.parent[ch] as usize != i
+                    || Some(self.depth[ch]) != self.depth[i].checked_add(1)
+                {
                     return bad(format!("node {ch} disagrees with its parent {i}"));
                 }
             }

@@ -217,7 +217,10 @@ impl SphereTree {
                     return bad(format!("node {ch} has two parents"));
                 }
                 *seen = true;
-                if self.parent[ch] as usize != i || self.depth[ch] != self.depth[i] + 1 {
+                // `checked_add`: node `i` may be an orphan (refused below) of any depth.
+                if self.parent[ch] as usize != i
+                    || self.depth[i].checked_add(1) != Some(self.depth[ch])
+                {
                     return bad(format!("node {ch} disagrees with its parent {i}"));
                 }
             }

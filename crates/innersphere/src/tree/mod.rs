@@ -217,8 +217,9 @@ impl SphereTree {
                     return bad(format!("node {ch} has two parents"));
                 }
                 *seen = true;
+                // `checked_add`: node `i` may be an orphan (refused below) of any depth.
                 if self.parent[ch] as usize != i
-                    || Some(self.depth[ch]) != self.depth[i].checked_add(1)
+                    || self.depth[i].checked_add(1) != Some(self.depth[ch])
                 {
                     return bad(format!("node {ch} disagrees with its parent {i}"));
                 }

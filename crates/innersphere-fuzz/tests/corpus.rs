@@ -83,6 +83,7 @@ fn every_target_has_seeds_and_a_corpus() {
 #[test]
 fn the_corpus_replays_without_failure() {
     let (count, failures) = replay("fuzz/corpus", true);
+    eprintln!("replayed {count} seeds and corpus files");
     assert!(
         failures.is_empty(),
         "{} of {count} inputs failed:\n{}",

@@ -5,57 +5,17 @@
 //! and say what to do, JSON that ends with a newline, progress on stderr when piped, and the
 //! same defaults for the same option in `query` and `replay`.
 
+mod support;
+use support::{code, ist, s, stderr, stdout, TempDir};
+
 use innersphere::glam::DVec3;
 use innersphere::shapes;
 use innersphere::{DistanceOptions, Pair, Pose};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
 
 /// Half extents of the box mesh.
 const HALF: DVec3 = DVec3::new(1.0, 0.6, 0.4);
-
-/// A temporary folder, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> TempDir {
-        let dir = std::env::temp_dir().join(format!("ist-cli-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-
-    fn path(&self, file: &str) -> PathBuf {
-        self.0.join(file)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-/// Runs `ist` with `args`.
-fn ist(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ist"))
-        .args(args)
-        .output()
-        .expect("ist runs")
-}
-
-fn code(out: &Output) -> i32 {
-    out.status.code().expect("ist exited normally")
-}
-
-fn stdout(out: &Output) -> String {
-    String::from_utf8(out.stdout.clone()).unwrap()
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8(out.stderr.clone()).unwrap()
-}
 
 /// Runs `ist` with `args`, asserts exit code `want`, parses stdout as JSON.
 fn ist_json(args: &[&str], want: i32) -> Value {
@@ -68,10 +28,6 @@ fn ist_json(args: &[&str], want: i32) -> Value {
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_str(&stdout(&out)).unwrap_or_else(|e| panic!("ist {args:?}: {e}"))
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 /// The box `[-HALF, HALF]` as an ASCII STL, written here (not by the library's writer).
@@ -107,7 +63,7 @@ fn write_ball_obj(path: &Path) {
 /// A folder with `box.stl`, `ball.obj` and their trees `box.ist`, `ball.ist` built by
 /// `ist build`.
 fn fixture(name: &str) -> TempDir {
-    let dir = TempDir::new(name);
+    let dir = TempDir::new("ist-cli", name);
     write_box_stl(&dir.path("box.stl"));
     write_ball_obj(&dir.path("ball.obj"));
     for (mesh, tree) in [("box.stl", "box.ist"), ("ball.obj", "ball.ist")] {
@@ -137,7 +93,7 @@ fn fixture(name: &str) -> TempDir {
 
 #[test]
 fn inspect_reports_the_meshes() {
-    let dir = TempDir::new("inspect");
+    let dir = TempDir::new("ist-cli", "inspect");
     let (stl, obj) = (dir.path("box.stl"), dir.path("ball.obj"));
     write_box_stl(&stl);
     write_ball_obj(&obj);
@@ -345,7 +301,7 @@ fn a_mesh_where_a_tree_belongs_and_a_tree_where_a_mesh_belongs_say_so() {
 
 #[test]
 fn inspect_ends_with_a_verdict_that_matches_what_build_does() {
-    let dir = TempDir::new("verdict");
+    let dir = TempDir::new("ist-cli", "verdict");
     let closed = shapes::cuboid(HALF);
     let mut inward = closed.clone();
     inward.flip();
@@ -435,7 +391,7 @@ fn built_options(mesh: &Path, tree: &Path, extra: &[&str]) -> Value {
 
 #[test]
 fn presets_are_computed_from_the_mesh_and_flags_override_their_fields() {
-    let dir = TempDir::new("preset");
+    let dir = TempDir::new("ist-cli", "preset");
     let (stl, tree) = (dir.path("box.stl"), dir.path("box.ist"));
     write_box_stl(&stl); // 2 x 1.2 x 0.8: read as millimetres, a small tooth
                          // The jaw preset: absolute millimetres.
@@ -499,7 +455,7 @@ fn presets_are_computed_from_the_mesh_and_flags_override_their_fields() {
 
 #[test]
 fn build_reports_its_stages_on_stderr_when_not_on_a_terminal() {
-    let dir = TempDir::new("stages");
+    let dir = TempDir::new("ist-cli", "stages");
     let (stl, tree) = (dir.path("box.stl"), dir.path("box.ist"));
     write_box_stl(&stl);
     // The test captures stdout and stderr through pipes: no terminal.

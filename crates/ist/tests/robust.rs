@@ -7,60 +7,13 @@
 //! tiny quaternion called too small to normalise, `demo` on one mesh twice refused before it
 //! builds). docs/RELIABILITY.md, "Files and outputs", lists the same cases.
 
+mod support;
+use support::{code, ist, s, stderr, stdout, TempDir};
+
 use innersphere::glam::DVec3;
 use innersphere::shapes;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
-
-/// A temporary folder, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> TempDir {
-        let dir = std::env::temp_dir().join(format!("ist-robust-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-
-    fn path(&self, file: &str) -> PathBuf {
-        self.0.join(file)
-    }
-
-    /// Names of the files in the folder that look like left-over temporary files.
-    fn temporaries(&self) -> Vec<String> {
-        std::fs::read_dir(&self.0)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .filter(|n| n.starts_with('.') || n.ends_with(".tmp"))
-            .collect()
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn ist(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ist"))
-        .args(args)
-        .output()
-        .expect("ist runs")
-}
-
-fn code(out: &Output) -> i32 {
-    out.status.code().expect("ist exited normally")
-}
-
-fn stdout(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
 
 /// Runs `ist args`, asserts exit code `want`, returns stderr.
 fn run(args: &[&str], want: i32) -> String {
@@ -73,10 +26,6 @@ fn run(args: &[&str], want: i32) -> String {
         stderr(&out)
     );
     stderr(&out)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 /// `mesh` as an OBJ, written here (coordinates printed in full).
@@ -105,7 +54,7 @@ fn write_motion(path: &Path, xs: &[f64]) {
 /// the ball moving along x from overlapping the box (frames 0–2) to 1 apart from it
 /// (frames 3–4).
 fn fixture(name: &str) -> TempDir {
-    let dir = TempDir::new(name);
+    let dir = TempDir::new("ist-robust", name);
     let cuboid = shapes::cuboid(DVec3::new(1.0, 0.6, 0.4));
     write_obj(&cuboid, &dir.path("box.obj"));
     let mut big = cuboid.clone();

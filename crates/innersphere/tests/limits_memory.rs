@@ -2,14 +2,15 @@
 //! file of zeros given as a mesh or a tree, `/dev/zero` as a tree, and a pipe that lies about
 //! its size are refused fast, having allocated a small fraction of their size.
 //!
-//! The peak of live heap bytes is measured by a counting global allocator; the tests of this
-//! binary run one at a time (a lock), so that one test's peak does not include another's.
+//! The peak of live heap bytes is measured by a counting global allocator, which counts every
+//! thread's allocations: each test holds a lock from its first line to its last (its setup
+//! allocates too), so that one test's peak never includes another's.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::{Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 use innersphere::{Error, Mesh, SphereTree};
@@ -53,9 +54,14 @@ static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
 
 const MIB: usize = 1 << 20;
 
-/// Runs `f` alone and returns its result, the heap bytes it held at its peak, and its time.
+/// Held for the whole of each test, setup included.
+fn alone() -> MutexGuard<'static, ()> {
+    ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Runs `f` and returns its result, the heap bytes it held at its peak, and its time (the
+/// caller holds [`alone`]).
 fn measured<T>(f: impl FnOnce() -> T) -> (T, usize, Duration) {
-    let _alone = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let base = LIVE.load(Ordering::Relaxed);
     PEAK.store(base, Ordering::Relaxed);
     let t = Instant::now();
@@ -90,6 +96,7 @@ fn parse_message(r: innersphere::Result<Mesh>) -> String {
 
 #[test]
 fn a_gzip_bomb_is_refused_fast_in_little_memory() {
+    let _alone = alone();
     // 300 MB of zeros, 1.3 MB compressed: as STL, its header declares 0 triangles, so reading
     // stops after the first 64 KiB; as OBJ (no header to go by), the ratio limit stops it
     // at 64 MiB of output.
@@ -114,6 +121,7 @@ fn a_gzip_bomb_is_refused_fast_in_little_memory() {
 
 #[test]
 fn a_large_file_of_zeros_is_refused_before_it_is_read() {
+    let _alone = alone();
     // Sparse 300 MB files: cheap to make, and read as zeros.
     for name in ["zeros.stl", "zeros.ist"] {
         let path = tmp(name);
@@ -141,6 +149,7 @@ fn a_large_file_of_zeros_is_refused_before_it_is_read() {
 
 #[test]
 fn dev_zero_is_no_tree() {
+    let _alone = alone();
     let path = Path::new("/dev/zero");
     if !path.exists() {
         return;
@@ -152,6 +161,7 @@ fn dev_zero_is_no_tree() {
 
 #[test]
 fn tree_headers_declaring_too_much_are_refused_before_reading_on() {
+    let _alone = alone();
     let tree = SphereTree::build(
         &innersphere::shapes::icosphere(1),
         &innersphere::BuildOptions {
@@ -184,6 +194,7 @@ fn tree_headers_declaring_too_much_are_refused_before_reading_on() {
 
 #[test]
 fn a_pipe_is_read_only_as_far_as_the_tree_header_declares() {
+    let _alone = alone();
     // A FIFO has no length to check: the reader takes the declared size (here 2^30 nodes,
     // 27 GiB) but allocates only as the bytes arrive, and fails when they end.
     let path = tmp("pipe.ist");

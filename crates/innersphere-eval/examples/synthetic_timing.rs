@@ -37,6 +37,7 @@ fn main() {
         coverage: 0.0,
         mesh_closed: true,
         built_by: None,
+        inertia: None,
     };
     let (tree, stats) =
         innersphere::hierarchy::build(&spheres, &Default::default(), meta, &Silent).unwrap();

@@ -33,6 +33,7 @@ fn ball_tree() -> SharedTree {
         coverage: 1.0,
         mesh_closed: true,
         built_by: None,
+        inertia: None,
     };
     SharedTree::new(
         hierarchy::build(&spheres, &HierarchyOptions::default(), meta, &Silent)

@@ -254,6 +254,7 @@ pub fn small_tree() -> SphereTree {
             coverage: 0.5,
             mesh_closed: true,
             built_by: Some(innersphere::tree::BuildStamp::current(0)),
+            inertia: None,
         },
     }
 }

@@ -552,6 +552,7 @@ fn meta() -> TreeMeta {
         coverage: 0.0,
         mesh_closed: true,
         built_by: None,
+        inertia: None,
     }
 }
 

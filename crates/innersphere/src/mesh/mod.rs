@@ -1,13 +1,16 @@
 //! Triangle meshes: loading ([`io`]), welding, the defect report ([`report`]), the triangle
-//! BVH ([`bvh`]) and the generalized winding number ([`winding`]).
+//! BVH ([`bvh`]), the generalized winding number ([`winding`]) and mass properties
+//! ([`mass`]).
 
 pub mod bvh;
 pub mod closest;
 pub mod io;
+pub mod mass;
 pub mod report;
 pub mod winding;
 
 pub use io::{load, load_bytes, save_obj, save_stl, Format};
+pub use mass::MassProperties;
 pub use report::MeshReport;
 
 use glam::DVec3;

@@ -74,11 +74,15 @@ pub fn check_writable(tree: &SphereTree) -> Result<()> {
         ("bbox_min", m.bbox_min),
         ("bbox_max", m.bbox_max),
     ];
-    let values = scalars.into_iter().chain(
-        points
-            .into_iter()
-            .flat_map(|(name, p)| p.into_iter().map(move |x| (name, x))),
-    );
+    let inertia = m.inertia.unwrap_or_default().map(|x| ("inertia", x));
+    let values = scalars
+        .into_iter()
+        .chain(
+            points
+                .into_iter()
+                .flat_map(|(name, p)| p.into_iter().map(move |x| (name, x))),
+        )
+        .chain(inertia);
     for (name, x) in values {
         if !x.is_finite() {
             return Err(Error::CorruptTree(format!(

@@ -31,6 +31,13 @@ pub struct TreeMeta {
     /// existed (they still load: see [`SphereTree::staleness`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub built_by: Option<BuildStamp>,
+    /// Inertia tensor of the solid about [`center_of_mass`](Self::center_of_mass), per unit
+    /// density, `[xx, yy, zz, xy, xz, yz]` (model units⁵; see
+    /// [`MassProperties`](crate::mesh::MassProperties)): what the haptic tool needs to move
+    /// as a rigid body. From the mesh when it is closed, else from the inner spheres. `None`
+    /// in files written before it was stored.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inertia: Option<[f64; 6]>,
 }
 
 /// Revision of the tree construction whose node spheres the queries' speed figures assume;

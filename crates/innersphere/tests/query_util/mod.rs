@@ -35,6 +35,7 @@ pub fn analytic_tree(
         coverage: 0.0,
         mesh_closed: true,
         built_by: None,
+        inertia: None,
     };
     let opts = HierarchyOptions {
         fanout,

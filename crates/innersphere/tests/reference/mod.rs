@@ -383,6 +383,7 @@ pub fn hand_tree(leaves: &[(V3, f64)], com: V3) -> SphereTree {
         coverage: 0.0,
         mesh_closed: true,
         built_by: None,
+        inertia: None,
     };
     if leaves.len() == 1 {
         let (c, r) = leaves[0];

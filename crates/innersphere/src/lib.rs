@@ -65,8 +65,9 @@ pub use glam;
 pub use mesh::Mesh;
 pub use pose::{MatrixOrder, Pose, PoseError};
 pub use query::{
-    BudgetedVolume, Contact, ContactResult, Distance, DistanceOptions, Multipoint,
-    MultipointOptions, Pair, Patch, Penetration, PenetrationOptions, SharedTree, Tracking,
+    BudgetedVolume, Contact, ContactResult, ContactStiffness, Distance, DistanceOptions,
+    Multipoint, MultipointOptions, Pair, Patch, Penetration, PenetrationOptions, SharedTree,
+    Tracking,
 };
 pub use tree::SphereTree;
 

@@ -5,7 +5,8 @@ use super::kernel::geometry::lens;
 use super::kernel::heap::{Entry, PairHeap};
 use super::kernel::info::TreeInfo;
 use super::kernel::{expand_larger, Ctx};
-use super::penetration::Sums;
+use super::penetration::{ContactStiffness, Sums};
+use glam::{DMat3, DVec3};
 
 /// Result of [`Pair::penetration_within`](crate::Pair::penetration_within).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -18,6 +19,18 @@ pub struct BudgetedVolume {
     pub visits: u64,
     /// True when every overlapping pair was refined: `volume` is exact.
     pub complete: bool,
+    /// Largest overlap `ra + rb − d` among the leaf pairs found.
+    pub max_depth: f64,
+    /// Contact normal of the pairs found (world; as [`Penetration::normal`](crate::Penetration::normal)).
+    pub normal: DVec3,
+    /// Penalty force on B from the pairs found: `stiffness × volume × normal` (world).
+    pub force: DVec3,
+    /// Torque on B about its centre of mass from the pairs found (world).
+    pub torque_b: DVec3,
+    /// Contact area of the pairs found (as [`Penetration::area`](crate::Penetration::area)).
+    pub area: f64,
+    /// Linearised wrench of the pairs found (as [`Penetration::stiffness`](crate::Penetration::stiffness)).
+    pub stiffness: ContactStiffness,
 }
 
 /// Time-critical penetration volume: refines node pairs in order of an upper bound of the
@@ -37,10 +50,11 @@ pub(crate) fn penetration_within(
     ib: &TreeInfo,
     heap: &mut PairHeap,
     budget: u64,
+    stiffness: f64,
 ) -> BudgetedVolume {
     heap.clear();
     let mut visits = 1u64;
-    let mut found = 0.0f64;
+    let mut sums = Sums::default();
     let c0 = ctx.xf(0);
     let (ov, _) = ctx.test(0, 0, c0);
     let va = &ia.subtree_volume;
@@ -60,15 +74,13 @@ pub(crate) fn penetration_within(
             f
         }
     };
-    let leaf_volume = |i: u32, j: u32, cb: [f32; 3]| -> f64 {
+    let leaf = |sums: &mut Sums, i: u32, j: u32, cb: [f32; 3]| {
         let n = &na[i as usize];
-        let mut s = Sums::default();
-        s.add([n.x, n.y, n.z], n.r, cb, nb[j as usize].r);
-        s.volume
+        sums.add([n.x, n.y, n.z], n.r, cb, nb[j as usize].r);
     };
     if ov {
         if na[0].is_leaf() && nb[0].is_leaf() {
-            found = leaf_volume(0, 0, c0);
+            leaf(&mut sums, 0, 0, c0);
         } else {
             let dx = na[0].x - c0[0];
             let dy = na[0].y - c0[1];
@@ -87,7 +99,7 @@ pub(crate) fn penetration_within(
             visits += 1;
             if d2 < sr * sr {
                 if leafs {
-                    found += leaf_volume(i, j, c);
+                    leaf(&mut sums, i, j, c);
                 } else {
                     heap.push(Entry {
                         key: -bound(i, j, d2),
@@ -101,6 +113,11 @@ pub(crate) fn penetration_within(
     }
     let rest: f64 = heap.entries().iter().map(|e| -e.key as f64).sum();
     let complete = heap.len() == 0;
+    let found = sums.volume;
+    let com_a = ia.center_of_mass;
+    let com_b = ctx.rel.transform_point(ib.center_of_mass);
+    let (n, f, _, tb) = sums.wrench(stiffness, com_a, com_b);
+    let r = DMat3::from_quat(ctx.pose_a.rotation);
     BudgetedVolume {
         volume: found,
         upper_bound: if complete {
@@ -110,6 +127,12 @@ pub(crate) fn penetration_within(
         },
         visits,
         complete,
+        max_depth: sums.max_depth,
+        normal: r * n,
+        force: r * f,
+        torque_b: r * tb,
+        area: sums.area,
+        stiffness: sums.stiffness(stiffness, com_b).rotated(r),
     }
 }
 
@@ -120,5 +143,11 @@ pub(crate) fn separated() -> BudgetedVolume {
         upper_bound: 0.0,
         visits: 1,
         complete: true,
+        max_depth: 0.0,
+        normal: DVec3::ZERO,
+        force: DVec3::ZERO,
+        torque_b: DVec3::ZERO,
+        area: 0.0,
+        stiffness: ContactStiffness::default(),
     }
 }

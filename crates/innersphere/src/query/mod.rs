@@ -55,4 +55,6 @@ pub use kernel::separation::SeparationRecord;
 pub use multipoint::{Multipoint, MultipointOptions};
 pub use pair::{Pair, Paper, SharedTree};
 pub use paper::TraversalOptions;
-pub use penetration::{Patch, Penetration, PenetrationOptions, Tracking, AUTO_FRONT_NODES};
+pub use penetration::{
+    ContactStiffness, Patch, Penetration, PenetrationOptions, Tracking, AUTO_FRONT_NODES,
+};

@@ -319,11 +319,30 @@ impl Pair {
         pose_b: &Pose,
         budget: u64,
     ) -> BudgetedVolume {
+        self.penetration_within_with(pose_a, pose_b, budget, &PenetrationOptions::default())
+    }
+
+    /// [`Pair::penetration_within`] with options: of [`PenetrationOptions`] only the
+    /// stiffness applies (the force of the pairs found).
+    pub fn penetration_within_with(
+        &mut self,
+        pose_a: &Pose,
+        pose_b: &Pose,
+        budget: u64,
+        opts: &PenetrationOptions,
+    ) -> BudgetedVolume {
         let ctx = ctx(&self.a.info, &self.b.info, pose_a, pose_b);
         if far(&self.a.info, &self.b.info, &ctx.rel).is_some() {
             return budgeted::separated();
         }
-        budgeted::penetration_within(&ctx, &self.a.info, &self.b.info, &mut self.heap, budget)
+        budgeted::penetration_within(
+            &ctx,
+            &self.a.info,
+            &self.b.info,
+            &mut self.heap,
+            budget,
+            opts.stiffness,
+        )
     }
 
     /// The paper's traversals on this pair (its baselines: same contact answers as

@@ -4,13 +4,13 @@
 //! leaf pairs is exactly the volume of the intersection of the two sphere unions.
 
 use super::kernel::block::TItem;
-use super::kernel::geometry::{direction, lens};
+use super::kernel::geometry::{direction, lens, lens_area};
 use super::kernel::info::TreeInfo;
 use super::kernel::separation::{record, safe_separation, SeparationRecord};
 use super::kernel::{expand_larger, Ctx, Item};
 use super::search::descent::{blocked, overlap_pairs_dispatch, Descent};
 use super::search::front::Front;
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 /// Patches reserved per pair: `max_patches` up to this allocates nothing.
 pub(crate) const RESERVED_PATCHES: usize = 64;
@@ -130,6 +130,13 @@ pub struct Penetration {
     pub torque_b: DVec3,
     /// Number of contact patches.
     pub patch_count: usize,
+    /// Contact area: the summed areas of the discs where the overlapping leaf spheres'
+    /// boundaries meet, which is how fast the volume shrinks per unit of separation
+    /// (`−dV/dd` for a motion along every pair's own direction).
+    pub area: f64,
+    /// How the force and B's torque change as B moves: what an implicit integrator needs
+    /// (see [`ContactStiffness`]).
+    pub stiffness: ContactStiffness,
     /// 0 with penetration; otherwise a proved lower bound on the separation.
     pub distance: f64,
     /// Node pairs tested.
@@ -138,8 +145,82 @@ pub struct Penetration {
     pub skipped: bool,
 }
 
+/// The linearised penalty wrench: with `δ` a small translation of B and `θ` a small rotation
+/// of B about its centre of mass (world frame), B's force and torque change by
+/// `−[linear·δ + coupling·θ, couplingᵀ·δ + angular·θ]`. It is the Gauss–Newton part
+/// `k Σ aᵢ JᵢJᵢᵀ`, `aᵢ` the area of pair `i`'s lens disc and `Jᵢ = [uᵢ; rᵢ × uᵢ]`: symmetric
+/// and positive semi-definite (what an implicit integrator needs to stay stable with stiff
+/// contact), leaving out the small terms from the pairs' directions turning.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ContactStiffness {
+    /// Force per translation (force / length).
+    pub linear: DMat3,
+    /// Force per rotation, and (transposed) torque per translation.
+    pub coupling: DMat3,
+    /// Torque per rotation (force · length / radian).
+    pub angular: DMat3,
+}
+
+impl Default for ContactStiffness {
+    /// Zero (no contact). By hand: glam's default matrix is the identity.
+    fn default() -> ContactStiffness {
+        ContactStiffness {
+            linear: DMat3::ZERO,
+            coupling: DMat3::ZERO,
+            angular: DMat3::ZERO,
+        }
+    }
+}
+
+impl ContactStiffness {
+    /// The 6×6 matrix `[[linear, coupling], [couplingᵀ, angular]]`, row-major.
+    pub fn to_matrix6(&self) -> [[f64; 6]; 6] {
+        let mut m = [[0.0; 6]; 6];
+        let (l, c, a) = (
+            self.linear.to_cols_array_2d(),
+            self.coupling.to_cols_array_2d(),
+            self.angular.to_cols_array_2d(),
+        );
+        for i in 0..3 {
+            for j in 0..3 {
+                // Column-major sources: l[j][i] is row i, column j.
+                m[i][j] = l[j][i];
+                m[i][j + 3] = c[j][i];
+                m[i + 3][j] = c[i][j];
+                m[i + 3][j + 3] = a[j][i];
+            }
+        }
+        m
+    }
+
+    /// Rotated into another frame: `R K Rᵀ` block by block.
+    pub(crate) fn rotated(&self, r: DMat3) -> ContactStiffness {
+        let rt = r.transpose();
+        ContactStiffness {
+            linear: r * self.linear * rt,
+            coupling: r * self.coupling * rt,
+            angular: r * self.angular * rt,
+        }
+    }
+}
+
+/// `u vᵀ`.
+#[inline]
+fn outer(u: DVec3, v: DVec3) -> DMat3 {
+    DMat3::from_cols(u * v.x, u * v.y, u * v.z)
+}
+
+/// The cross-product matrix `[c]×` (`[c]× v = c × v`).
+fn cross_matrix(c: DVec3) -> DMat3 {
+    DMat3::from_cols(
+        DVec3::new(0.0, c.z, -c.y),
+        DVec3::new(-c.z, 0.0, c.x),
+        DVec3::new(c.y, -c.x, 0.0),
+    )
+}
+
 /// Sums over the overlapping leaf pairs (A's frame).
-#[derive(Debug, Default, Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 pub(crate) struct Sums {
     pub volume: f64,
     /// Σ v·u.
@@ -148,6 +229,31 @@ pub(crate) struct Sums {
     pub vgu: DVec3,
     pub max_depth: f64,
     pub pairs: usize,
+    /// Σ a, a the lens disc's area.
+    pub area: f64,
+    /// Σ a·u uᵀ.
+    pub auu: DMat3,
+    /// Σ a·u sᵀ, s = g × u.
+    pub aus: DMat3,
+    /// Σ a·s sᵀ.
+    pub ass: DMat3,
+}
+
+impl Default for Sums {
+    // By hand: glam's default matrix is the identity, not zero.
+    fn default() -> Sums {
+        Sums {
+            volume: 0.0,
+            vu: DVec3::ZERO,
+            vgu: DVec3::ZERO,
+            max_depth: 0.0,
+            pairs: 0,
+            area: 0.0,
+            auu: DMat3::ZERO,
+            aus: DMat3::ZERO,
+            ass: DMat3::ZERO,
+        }
+    }
 }
 
 impl Sums {
@@ -168,12 +274,34 @@ impl Sums {
         let (v, g) = lens(ra, rb, d);
         let p = ca + u * g;
         let depth = ra + rb - d;
+        let s = p.cross(u);
+        let a = lens_area(ra, rb, d);
         self.pairs += 1;
         self.volume += v;
         self.vu += u * v;
-        self.vgu += p.cross(u) * v;
+        self.vgu += s * v;
         self.max_depth = self.max_depth.max(depth);
+        self.area += a;
+        let au = u * a;
+        self.auu += outer(au, u);
+        self.aus += outer(au, s);
+        self.ass += outer(s * a, s);
         (v, p, u, depth)
+    }
+
+    /// The [`ContactStiffness`] (A's frame) of penalty stiffness `k`, rotations about
+    /// `com_b` (A's frame).
+    pub(crate) fn stiffness(&self, k: f64, com_b: DVec3) -> ContactStiffness {
+        // Jᵢ = [u; s − C u] with C = [com_b]×: the lever arm from B's centre of mass.
+        let c = cross_matrix(com_b);
+        let ct = c.transpose();
+        let coupling = self.aus - self.auu * ct;
+        let angular = self.ass - self.aus.transpose() * ct - c * self.aus + c * self.auu * ct;
+        ContactStiffness {
+            linear: self.auu * k,
+            coupling: coupling * k,
+            angular: angular * k,
+        }
     }
 
     /// (normal, force on B, torque on A, torque on B) in A's frame, torques about `com_a`
@@ -360,6 +488,9 @@ pub(crate) fn penetration(
     let com_a = ia.center_of_mass;
     let com_b = ctx.rel.transform_point(ib.center_of_mass);
     let (n, f, ta, tb) = sums.wrench(opts.stiffness, com_a, com_b);
+    let stiffness = sums
+        .stiffness(opts.stiffness, com_b)
+        .rotated(DMat3::from_quat(pose_a.rotation));
     let rot = |v: DVec3| pose_a.transform_vector(v);
     for pa in &s.patch_acc {
         s.patches.push(Patch {
@@ -395,6 +526,8 @@ pub(crate) fn penetration(
         torque_a: rot(ta),
         torque_b: rot(tb),
         patch_count: s.patches.len(),
+        area: sums.area,
+        stiffness,
         distance,
         visits,
         skipped,
@@ -414,6 +547,8 @@ pub(crate) fn separated(s: &mut PenetrationScratch, separation: f64) -> Penetrat
         torque_a: DVec3::ZERO,
         torque_b: DVec3::ZERO,
         patch_count: 0,
+        area: 0.0,
+        stiffness: ContactStiffness::default(),
         distance: separation,
         visits: 1,
         skipped: false,

@@ -166,6 +166,18 @@ pub(crate) fn lens(ra: f64, rb: f64, d: f64) -> (f64, f64) {
     (v, (va * ga + vb * gb) / v)
 }
 
+/// Area of the disc where the boundaries of two overlapping spheres meet (radii `ra`, `rb`,
+/// centres `d` apart): minus the derivative of [`lens`]'s volume with respect to `d`. Zero
+/// when they do not overlap or one holds the other (moving it changes nothing then).
+#[inline]
+pub(crate) fn lens_area(ra: f64, rb: f64, d: f64) -> f64 {
+    if d >= ra + rb || d <= (ra - rb).abs() {
+        return 0.0;
+    }
+    let x = (d * d + ra * ra - rb * rb) / (2.0 * d);
+    (std::f64::consts::PI * (ra * ra - x * x)).max(0.0)
+}
+
 /// One contact between a leaf sphere of A and a leaf sphere of B.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Contact {

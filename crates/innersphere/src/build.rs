@@ -594,6 +594,42 @@ pub fn build_tree(
     Ok((tree, report))
 }
 
+/// Centre of mass and inertia entries (per unit density, about the centre of mass) of the
+/// solid: the mesh's own when it is closed, else those of the inner spheres, which stand for
+/// the solid the winding number found.
+fn mass_of(mesh: &Mesh, closed: bool, spheres: &[Sphere]) -> (DVec3, Option<[f64; 6]>) {
+    if closed {
+        if let Some(m) = mesh.mass_properties() {
+            return (mesh.center_of_mass(), Some(m.inertia_entries()));
+        }
+    }
+    let com = mesh.center_of_mass();
+    let vol: f64 = spheres.iter().map(|s| s.radius.powi(3)).sum::<f64>() * (4.0 / 3.0) * PI;
+    if vol.is_nan() || vol <= 0.0 {
+        return (com, None);
+    }
+    let c = spheres
+        .iter()
+        .map(|s| s.center * s.radius.powi(3))
+        .sum::<DVec3>()
+        * ((4.0 / 3.0) * PI / vol);
+    let mut i = glam::DMat3::ZERO;
+    for s in spheres {
+        let v = (4.0 / 3.0) * PI * s.radius.powi(3);
+        let r = s.center - c;
+        // A solid ball's own inertia (2/5 v r²) plus the parallel-axis term.
+        let own = 0.4 * v * s.radius * s.radius;
+        i += glam::DMat3::from_diagonal(DVec3::splat(own + v * r.length_squared()))
+            - glam::DMat3::from_cols(r * (v * r.x), r * (v * r.y), r * (v * r.z));
+    }
+    let m = crate::mesh::MassProperties {
+        volume: vol,
+        center_of_mass: c,
+        inertia: i,
+    };
+    (c, Some(m.inertia_entries()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -772,40 +808,4 @@ mod tests {
         assert_eq!(SphereTree::load(file.as_path()).unwrap(), tree);
         std::fs::remove_dir_all(&dir).unwrap();
     }
-}
-
-/// Centre of mass and inertia entries (per unit density, about the centre of mass) of the
-/// solid: the mesh's own when it is closed, else those of the inner spheres, which stand for
-/// the solid the winding number found.
-fn mass_of(mesh: &Mesh, closed: bool, spheres: &[Sphere]) -> (DVec3, Option<[f64; 6]>) {
-    if closed {
-        if let Some(m) = mesh.mass_properties() {
-            return (mesh.center_of_mass(), Some(m.inertia_entries()));
-        }
-    }
-    let com = mesh.center_of_mass();
-    let vol: f64 = spheres.iter().map(|s| s.radius.powi(3)).sum::<f64>() * (4.0 / 3.0) * PI;
-    if !(vol > 0.0) {
-        return (com, None);
-    }
-    let c = spheres
-        .iter()
-        .map(|s| s.center * s.radius.powi(3))
-        .sum::<DVec3>()
-        * ((4.0 / 3.0) * PI / vol);
-    let mut i = glam::DMat3::ZERO;
-    for s in spheres {
-        let v = (4.0 / 3.0) * PI * s.radius.powi(3);
-        let r = s.center - c;
-        // A solid ball's own inertia (2/5 v r²) plus the parallel-axis term.
-        let own = 0.4 * v * s.radius * s.radius;
-        i += glam::DMat3::from_diagonal(DVec3::splat(own + v * r.length_squared()))
-            - glam::DMat3::from_cols(r * (v * r.x), r * (v * r.y), r * (v * r.z));
-    }
-    let m = crate::mesh::MassProperties {
-        volume: vol,
-        center_of_mass: c,
-        inertia: i,
-    };
-    (c, Some(m.inertia_entries()))
 }

@@ -68,7 +68,7 @@ impl Mesh {
             cov += (outer(a) + outer(b) + outer(c) + outer(s)) * det;
         }
         let volume = vol / 6.0;
-        if !(volume.abs() > 1e-300) || !volume.is_finite() {
+        if volume.is_nan() || volume.abs() <= 1e-300 || !volume.is_finite() {
             return None;
         }
         let com = first / (24.0 * volume);

@@ -16,6 +16,7 @@
 
 pub mod bench;
 pub mod demo;
+pub mod haptic;
 pub mod motion;
 pub mod paper;
 pub mod plot;

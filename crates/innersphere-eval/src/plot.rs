@@ -196,3 +196,59 @@ mod tests {
         std::fs::remove_dir_all(&dir).ok();
     }
 }
+
+/// A haptic session's force (N), tool depth (mm) and tick time (µs) against time, three
+/// panels one above the other (900 × 900 PNG).
+pub fn haptic_chart(path: &Path, run: &crate::haptic::HapticRun) -> Result<()> {
+    register();
+    let root = BitMapBackend::new(path, (900, 900)).into_drawing_area();
+    root.fill(&WHITE).map_err(plot_err)?;
+    let panels = root.split_evenly((3, 1));
+    let t_end = run.ticks.last().map_or(1.0, |r| r.t).max(1e-9);
+    let t0 = run.ticks.first().map_or(0.0, |r| r.t);
+    let series: [(&str, &str, Box<dyn Fn(&crate::haptic::TickRecord) -> f64>); 3] = [
+        (
+            "force sent to the device",
+            "N",
+            Box::new(|r| r.tick.force.length()),
+        ),
+        (
+            "tool penetration depth",
+            "mm",
+            Box::new(|r| r.tick.max_depth),
+        ),
+        (
+            "tick compute time",
+            "µs",
+            Box::new(|r| r.tick.compute * 1e6),
+        ),
+    ];
+    for (area, (title, unit, f)) in panels.iter().zip(series.iter()) {
+        let pts: Vec<(f64, f64)> = run
+            .ticks
+            .iter()
+            .map(|r| (r.t, f(r)))
+            .filter(|p| p.1.is_finite())
+            .collect();
+        let ymax = pts.iter().map(|p| p.1).fold(0.0, f64::max).max(1e-9) * 1.1;
+        let mut chart = ChartBuilder::on(area)
+            .caption(*title, ("sans-serif", 20))
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(60)
+            .build_cartesian_2d(t0..t_end, 0.0..ymax)
+            .map_err(plot_err)?;
+        chart
+            .configure_mesh()
+            .x_desc("time (s)")
+            .y_desc(*unit)
+            .y_label_formatter(&|v| short(*v))
+            .draw()
+            .map_err(plot_err)?;
+        chart
+            .draw_series(LineSeries::new(pts, COLORS[0].stroke_width(1)))
+            .map_err(plot_err)?;
+    }
+    root.present().map_err(plot_err)?;
+    Ok(())
+}

@@ -49,6 +49,7 @@ pub mod build;
 pub mod error;
 pub mod exact;
 pub mod field;
+pub mod haptic;
 pub mod hierarchy;
 pub mod mesh;
 pub mod output;

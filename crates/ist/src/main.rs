@@ -6,8 +6,10 @@ mod build;
 mod check;
 mod demo;
 mod export;
+mod haptic;
 mod inspect;
 mod motion;
+mod occlude;
 mod progress;
 mod query;
 mod replay;
@@ -43,6 +45,11 @@ enum Command {
     Replay(replay::Args),
     /// Benchmarks (build).
     Bench(bench::Args),
+    /// Run the 6-DOF haptic loop over a recorded device trajectory (mm, N, s): force to the
+    /// device, tool pose, deadline, passivity.
+    Haptic(haptic::Args),
+    /// Close body B onto body A under a constant force until it rests: the bite.
+    Occlude(occlude::Args),
 }
 
 fn main() {
@@ -64,6 +71,8 @@ fn main() {
         Command::Motion(a) => motion::run(a),
         Command::Replay(a) => replay::run(a),
         Command::Query(a) => query::run(a),
+        Command::Haptic(a) => haptic::run(a),
+        Command::Occlude(a) => occlude::run(a),
     };
     match result {
         Ok(code) => std::process::exit(code),

@@ -1,16 +1,21 @@
 //! `ist motion`: generate a hand-recorded-looking motion of body B against body A.
 
 use anyhow::Context;
-use innersphere_eval::motion::{generate_with, ClearanceOptions, GenerateOptions, Scenario};
+use innersphere_eval::motion::{
+    generate_with, press, AnatomicalFrame, ClearanceOptions, GenerateOptions, PressOptions,
+    Scenario,
+};
 use std::path::PathBuf;
 use std::time::Instant;
 
 /// Arguments of `ist motion`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// What the motion does: chew, open-close or grind.
+    /// What the motion does: chew, open-close or grind; or press, a smooth 6 s haptic device
+    /// trajectory (3 mm open → 1 mm past the bite, hold, ±0.8 mm sideways while pressing,
+    /// release; --seconds, --seed and the labels do not apply).
     #[arg(long, default_value = "chew", value_parser = parse_scenario)]
-    scenario: Scenario,
+    scenario: Kind,
     /// Length of the motion in seconds.
     #[arg(long, default_value_t = 5.0)]
     seconds: f64,
@@ -42,8 +47,20 @@ pub struct Args {
     samples: usize,
 }
 
-fn parse_scenario(s: &str) -> Result<Scenario, String> {
-    s.parse().map_err(|e: innersphere::Error| e.to_string())
+/// A generated hand motion, or the haptic press trajectory.
+#[derive(Clone, Copy)]
+enum Kind {
+    Hand(Scenario),
+    Press,
+}
+
+fn parse_scenario(s: &str) -> Result<Kind, String> {
+    if s.trim().eq_ignore_ascii_case("press") {
+        return Ok(Kind::Press);
+    }
+    s.parse()
+        .map(Kind::Hand)
+        .map_err(|e: innersphere::Error| format!("{e} or press"))
 }
 
 /// Runs the subcommand; returns the process exit code.
@@ -55,6 +72,34 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     // The library's errors name the file; the context says which body it was.
     let a = crate::load_mesh(&args.a).context("loading body A (--a)")?;
     let b = crate::load_mesh(&args.b).context("loading body B (--b)")?;
+    let scenario = match args.scenario {
+        Kind::Hand(s) => s,
+        Kind::Press => {
+            if args.labels.is_some() {
+                anyhow::bail!("--labels does not apply to the press trajectory");
+            }
+            let frame = AnatomicalFrame::from_meshes(&a, &b)?;
+            let opts = PressOptions {
+                rate: args.rate,
+                ..PressOptions::default()
+            };
+            let m = press(&frame, &opts)?;
+            m.save(&args.output).context("writing the motion")?;
+            println!(
+                "{}: {} frames at {} Hz (press: {} open → {} past the bite along up {:.3?}, \
+                 ±{} along left {:.3?}; model units)",
+                args.output.display(),
+                m.len(),
+                args.rate,
+                opts.open,
+                opts.past,
+                frame.up.to_array(),
+                opts.slide,
+                frame.left.to_array()
+            );
+            return Ok(0);
+        }
+    };
     let opts = GenerateOptions {
         rate: args.rate,
         touch: args.touch,
@@ -64,7 +109,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         },
         ..GenerateOptions::default()
     };
-    let g = generate_with(args.scenario, args.seconds, args.seed, &a, &b, &opts)?;
+    let g = generate_with(scenario, args.seconds, args.seed, &a, &b, &opts)?;
     g.motion.save(&args.output).context("writing the motion")?;
     if let Some(path) = &args.labels {
         innersphere::output::write_file(path, g.labels_csv().as_bytes())
@@ -78,7 +123,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         g.motion.len(),
         args.rate,
         args.seconds,
-        args.scenario,
+        scenario,
         args.seed,
         c.separated,
         c.touching,

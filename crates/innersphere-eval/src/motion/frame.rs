@@ -50,12 +50,22 @@ impl AnatomicalFrame {
     pub fn from_meshes(a: &Mesh, b: &Mesh) -> Result<AnatomicalFrame> {
         a.validate()?;
         b.validate()?;
-        let ca = centroid(&a.vertices);
-        let cb = centroid(&b.vertices);
-        let centre = (ca * a.vertices.len() as f64 + cb * b.vertices.len() as f64)
-            / (a.vertices.len() + b.vertices.len()) as f64;
+        Self::from_points(&a.vertices, &b.vertices)
+    }
+
+    /// The frame from points of each body (vertices, or the centres of a tree's leaf
+    /// spheres when no mesh is at hand); the same method as [`from_meshes`](Self::from_meshes).
+    pub fn from_points(a: &[DVec3], b: &[DVec3]) -> Result<AnatomicalFrame> {
+        if a.is_empty() || b.is_empty() {
+            return Err(Error::InvalidMesh(
+                "the anatomical frame needs points of both bodies".into(),
+            ));
+        }
+        let ca = centroid(a);
+        let cb = centroid(b);
+        let centre = (ca * a.len() as f64 + cb * b.len() as f64) / (a.len() + b.len()) as f64;
         let mut cov = [[0.0f64; 3]; 3];
-        for v in a.vertices.iter().chain(&b.vertices) {
+        for v in a.iter().chain(b) {
             let d = (*v - centre).to_array();
             for (i, row) in cov.iter_mut().enumerate() {
                 for (j, c) in row.iter_mut().enumerate() {
@@ -88,7 +98,7 @@ impl AnatomicalFrame {
         let (e1, e2) = plane_basis(up);
         let cb2 = (cb.dot(e1), cb.dot(e2));
         let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
-        for v in &b.vertices {
+        for v in b {
             let x = v.dot(e1) - cb2.0;
             let y = v.dot(e2) - cb2.1;
             sxx += x * x;
@@ -101,7 +111,6 @@ impl AnatomicalFrame {
         // Which one is anterior–posterior: the one along which the spread across it changes.
         let width_trend = |ax: DVec3, across: DVec3| -> f64 {
             let xs: Vec<(f64, f64)> = b
-                .vertices
                 .iter()
                 .map(|v| ((*v - cb).dot(ax), (*v - cb).dot(across).abs()))
                 .collect();
@@ -121,7 +130,6 @@ impl AnatomicalFrame {
 
         // Coordinates of B's vertices in the frame.
         let coords: Vec<[f64; 3]> = b
-            .vertices
             .iter()
             .map(|v| [v.dot(left), v.dot(anterior), v.dot(up)])
             .collect();
@@ -196,8 +204,11 @@ fn centroid(v: &[DVec3]) -> DVec3 {
     }
 }
 
-fn bbox_diagonal(m: &Mesh) -> f64 {
-    let (lo, hi) = m.bbox();
+fn bbox_diagonal(p: &[DVec3]) -> f64 {
+    let lo = p.iter().fold(DVec3::splat(f64::INFINITY), |m, v| m.min(*v));
+    let hi = p
+        .iter()
+        .fold(DVec3::splat(f64::NEG_INFINITY), |m, v| m.max(*v));
     (hi - lo).length()
 }
 

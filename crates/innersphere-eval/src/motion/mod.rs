@@ -14,6 +14,7 @@ pub mod clearance;
 pub mod csv;
 pub mod frame;
 pub mod generate;
+pub mod press;
 mod rng;
 
 pub use clearance::{
@@ -22,3 +23,4 @@ pub use clearance::{
 pub use csv::{Frame, Motion, HEADER};
 pub use frame::AnatomicalFrame;
 pub use generate::{generate, generate_with, same_body, GenerateOptions, Generated, Scenario};
+pub use press::{press, PressOptions};

@@ -1,0 +1,121 @@
+//! The contact wrench of one tick, within a deadline: the exact penetration query when its
+//! predicted time fits what is left of the tick, else the time-critical one with a node-pair
+//! budget sized to the time left.
+
+use super::mat6::Mat6;
+use super::step::{add_block, Wrench};
+use crate::{ContactStiffness, Pair, PenetrationOptions, Pose};
+use std::time::{Duration, Instant};
+
+/// A node-pair test of the time-critical query, assumed before any was measured (s): the
+/// figure measured on the jaw trees (see [`Pair::penetration_within`]).
+const FIRST_VISIT_COST: f64 = 75e-9;
+
+/// The contact of one tick.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ContactSample {
+    /// Penalty force and torque on the tool (world, about its centre of mass).
+    pub wrench: Wrench,
+    /// Their linearisation (`−∂w/∂x`, 6×6).
+    pub stiffness: Mat6,
+    /// Penetration volume (mm³): exact, or what the time-critical query found.
+    pub volume: f64,
+    /// Upper bound on the volume (= `volume` when exact).
+    pub volume_bound: f64,
+    /// Deepest leaf-pair overlap found (mm).
+    pub max_depth: f64,
+    /// Contact patches of the exact query (0 on the time-critical path).
+    pub patches: usize,
+    /// True when the time-critical query answered.
+    pub budgeted: bool,
+}
+
+/// Chooses between the exact and the time-critical query from their measured costs.
+#[derive(Debug, Clone)]
+pub(crate) struct Deadline {
+    /// Time of the last exact query (s); infinite until a query showed the contact small.
+    exact: f64,
+    /// Measured seconds per node-pair test of the time-critical query.
+    per_visit: f64,
+}
+
+impl Deadline {
+    pub(crate) fn new() -> Deadline {
+        Deadline {
+            exact: f64::INFINITY,
+            per_visit: FIRST_VISIT_COST,
+        }
+    }
+
+    /// The contact at the tool pose `pose_b`, answering before `deadline` (what is left of
+    /// the tick after `reserve` for the rest of the tick).
+    pub(crate) fn sample(
+        &mut self,
+        pair: &mut Pair,
+        pose_a: &Pose,
+        pose_b: &Pose,
+        opts: &PenetrationOptions,
+        deadline: Instant,
+        reserve: Duration,
+    ) -> ContactSample {
+        let start = Instant::now();
+        let left = deadline
+            .checked_duration_since(start)
+            .unwrap_or_default()
+            .saturating_sub(reserve)
+            .as_secs_f64();
+        // The exact query's time follows the motion smoothly from tick to tick: 1.5× the last
+        // one, plus a little for the clock's and the scheduler's noise.
+        if 1.5 * self.exact + 5e-6 <= left {
+            let p = pair.penetration_with(pose_a, pose_b, opts);
+            self.exact = start.elapsed().as_secs_f64();
+            return ContactSample {
+                wrench: Wrench {
+                    force: p.force,
+                    torque: p.torque_b,
+                },
+                stiffness: matrix(&p.stiffness),
+                volume: p.volume,
+                volume_bound: p.volume,
+                max_depth: p.max_depth,
+                patches: p.patch_count,
+                budgeted: false,
+            };
+        }
+        let visits = ((0.7 * left / self.per_visit) as u64).max(1);
+        let w = pair.penetration_within_with(pose_a, pose_b, visits, opts);
+        let t = start.elapsed().as_secs_f64();
+        if w.visits > 16 {
+            self.per_visit = 0.8 * self.per_visit + 0.2 * (t / w.visits as f64);
+        }
+        if w.complete {
+            // Everything was found in the budget: the exact query (cheaper per frame, on
+            // its front) is expected to fit next time.
+            self.exact = self.exact.min(t);
+        } else {
+            // Decay, so that a contact that shrank is eventually tried exactly again.
+            self.exact *= 0.999;
+        }
+        ContactSample {
+            wrench: Wrench {
+                force: w.force,
+                torque: w.torque_b,
+            },
+            stiffness: matrix(&w.stiffness),
+            volume: w.volume,
+            volume_bound: w.upper_bound,
+            max_depth: w.max_depth,
+            patches: 0,
+            budgeted: true,
+        }
+    }
+}
+
+fn matrix(k: &ContactStiffness) -> Mat6 {
+    let mut m = [[0.0; 6]; 6];
+    add_block(&mut m, 0, 0, &k.linear);
+    add_block(&mut m, 0, 3, &k.coupling);
+    add_block(&mut m, 3, 0, &k.coupling.transpose());
+    add_block(&mut m, 3, 3, &k.angular);
+    m
+}

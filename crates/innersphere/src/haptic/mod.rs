@@ -1,0 +1,26 @@
+//! 6-DOF haptic rendering on top of the [`Pair`](crate::Pair) queries: a virtual tool (body
+//! B) with mass and inertia, coupled to the device by a spring-damper (virtual coupling) and
+//! pushed out of body A by the volume-based penalty wrench of the penetration query, moved
+//! by a linearly implicit Euler step so that stiff contact stays stable at the device rate;
+//! and automatic occlusion (closing B onto A under a constant force until it rests).
+//!
+//! - [`device`]: device classes, their limits and default coupling;
+//! - [`body`]: the tool's mass properties and state;
+//! - [`render`]: the loop, one [`HapticLoop::tick`] per device tick, with a deadline;
+//! - [`occlusion`]: the bite found by dynamics.
+//!
+//! Units: millimetres, newtons, seconds, kilograms. `docs/HAPTICS.md` explains the model,
+//! the parameters and why the loop is stable and passive.
+
+pub mod body;
+mod contact;
+pub mod device;
+mod mat6;
+pub mod occlusion;
+pub mod render;
+mod step;
+
+pub use body::{BodyState, RigidBody, TOOTH_DENSITY};
+pub use device::{Coupling, DeviceClass, DeviceLimits};
+pub use occlusion::{occlude, Occlusion, OcclusionOptions};
+pub use render::{HapticLoop, HapticOptions, Tick};

@@ -1,0 +1,201 @@
+//! Automatic occlusion: body B closed onto body A under a constant force, moved as a damped
+//! rigid body with the penalty contact of the haptic loop until it rests — the bite a
+//! surgeon looks for by closing plaster casts (maximal intercuspation).
+
+use super::body::{rotation_between, BodyState, RigidBody, TOOTH_DENSITY};
+use super::device::LEVER;
+use super::mat6::Mat6;
+use super::step::{add_block, implicit_step, Wrench};
+use crate::{Error, Pair, Patch, PenetrationOptions, Pose, Result};
+use glam::DVec3;
+
+/// Settings of [`occlude`]. Units: mm, N, s, kg.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct OcclusionOptions {
+    /// Unit direction B is pushed (world), e.g. A's occlusal "up" for a lower jaw.
+    pub axis: DVec3,
+    /// Closing force (N), applied at B's centre of mass.
+    pub force: f64,
+    /// Penalty force per unit of penetration volume (N/mm³).
+    pub contact_stiffness: f64,
+    /// Contact damping (s), as [`HapticOptions::contact_damping`](super::HapticOptions::contact_damping).
+    pub contact_damping: f64,
+    /// Viscous damping of B's motion (N·s/mm); rotations get `damping × 20²` N·mm·s/rad.
+    /// It sets how fast B closes (`force / damping` mm/s in free flight).
+    pub damping: f64,
+    /// Density of B (kg per model unit³).
+    pub density: f64,
+    /// Integration step (s).
+    pub step: f64,
+    /// Rest: B's centre of mass moved less than this (mm) and B turned less than
+    /// `rest_distance / 20` rad over the last `rest_window` steps.
+    pub rest_distance: f64,
+    /// Steps over which rest is judged.
+    pub rest_window: usize,
+    /// Give up after this much simulated time (s).
+    pub max_seconds: f64,
+}
+
+impl Default for OcclusionOptions {
+    /// Closing along +z with 5 N, the haptic loop's contact (10 N/mm³, 1 ms), 1 N·s/mm of
+    /// damping (5 mm/s closing speed), 1 ms steps, rest at 0.1 µm over 100 steps, at most
+    /// 30 s of simulated time.
+    fn default() -> Self {
+        OcclusionOptions {
+            axis: DVec3::Z,
+            force: 5.0,
+            contact_stiffness: 10.0,
+            contact_damping: 1e-3,
+            damping: 1.0,
+            density: TOOTH_DENSITY,
+            step: 1e-3,
+            rest_distance: 1e-4,
+            rest_window: 100,
+            max_seconds: 30.0,
+        }
+    }
+}
+
+/// Where B came to rest.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Occlusion {
+    /// B's final pose.
+    pub pose: Pose,
+    /// True when B came to rest within the time allowed.
+    pub converged: bool,
+    /// Integration steps taken.
+    pub steps: usize,
+    /// Simulated time (s).
+    pub seconds: f64,
+    /// Penetration volume at rest (mm³).
+    pub volume: f64,
+    /// Deepest leaf-pair overlap at rest (mm).
+    pub max_depth: f64,
+    /// Contact regions at rest (world).
+    pub patches: Vec<Patch>,
+}
+
+/// Closes B (at `from`) onto A (fixed at `pose_a`) under `opts.force` along `opts.axis` until
+/// it rests. Fails on bad options or a tree of B without mass properties.
+pub fn occlude(
+    pair: &mut Pair,
+    pose_a: &Pose,
+    from: &Pose,
+    opts: &OcclusionOptions,
+) -> Result<Occlusion> {
+    check(opts)?;
+    let body = RigidBody::from_tree(pair.tree_b(), opts.density)?;
+    let axis = opts.axis.normalize();
+    let mut state = BodyState::at_rest(*from);
+    let popts = PenetrationOptions {
+        stiffness: opts.contact_stiffness,
+        max_patches: 16,
+        ..Default::default()
+    };
+    let h = opts.step;
+    let max_steps = (opts.max_seconds / h).ceil() as usize;
+    let window = opts.rest_window.max(1);
+    // The centre of mass and rotation `window` steps ago, in a ring.
+    let mut ring = vec![(DVec3::ZERO, glam::DQuat::IDENTITY); window];
+    let (b, br) = (opts.damping, opts.damping * LEVER * LEVER);
+    let mut steps = 0;
+    let mut converged = false;
+    while steps < max_steps {
+        let p = pair.penetration_with(pose_a, &state.pose, &popts);
+        let com = state.pose.transform_point(body.center_of_mass);
+        ring[steps % window] = (com, state.pose.rotation);
+        if steps >= window {
+            let (c0, q0) = ring[(steps + 1) % window];
+            let moved = (com - c0).length();
+            let turned = rotation_between(q0, state.pose.rotation).length();
+            if moved < opts.rest_distance && turned < opts.rest_distance / LEVER {
+                converged = true;
+                break;
+            }
+        }
+        let mut k: Mat6 = [[0.0; 6]; 6];
+        add_block(&mut k, 0, 0, &p.stiffness.linear);
+        add_block(&mut k, 0, 3, &p.stiffness.coupling);
+        add_block(&mut k, 3, 0, &p.stiffness.coupling.transpose());
+        add_block(&mut k, 3, 3, &p.stiffness.angular);
+        let beta = opts.contact_damping;
+        let v6 = [
+            state.velocity.x,
+            state.velocity.y,
+            state.velocity.z,
+            state.angular_velocity.x,
+            state.angular_velocity.y,
+            state.angular_velocity.z,
+        ];
+        let kv = super::mat6::mul(&k, v6);
+        let w = Wrench {
+            force: axis * opts.force + p.force
+                - state.velocity * b
+                - DVec3::new(kv[0], kv[1], kv[2]) * beta,
+            torque: p.torque_b
+                - state.angular_velocity * br
+                - DVec3::new(kv[3], kv[4], kv[5]) * beta,
+        };
+        let mut d: Mat6 = [[0.0; 6]; 6];
+        for i in 0..6 {
+            for j in 0..6 {
+                d[i][j] = beta * k[i][j];
+            }
+            d[i][i] += if i < 3 { b } else { br };
+        }
+        if !implicit_step(&body, &mut state, h, w, &k, &d) {
+            return Err(Error::InvalidOption(
+                "the occlusion's dynamics became non-finite (a non-finite pose or option?)".into(),
+            ));
+        }
+        steps += 1;
+    }
+    let p = pair.penetration_with(pose_a, &state.pose, &popts);
+    Ok(Occlusion {
+        pose: state.pose,
+        converged,
+        steps,
+        seconds: steps as f64 * h,
+        volume: p.volume,
+        max_depth: p.max_depth,
+        patches: pair.patches().to_vec(),
+    })
+}
+
+fn check(o: &OcclusionOptions) -> Result<()> {
+    let positive = [
+        ("the closing force", o.force),
+        ("the contact stiffness", o.contact_stiffness),
+        ("the damping", o.damping),
+        ("the density", o.density),
+        ("the step", o.step),
+        ("the rest distance", o.rest_distance),
+        ("the time limit", o.max_seconds),
+    ];
+    for (what, x) in positive {
+        if !(x.is_finite() && x > 0.0) {
+            return Err(Error::InvalidOption(format!(
+                "{what} must be positive and finite, not {x}"
+            )));
+        }
+    }
+    if !(o.contact_damping.is_finite() && o.contact_damping >= 0.0) {
+        return Err(Error::InvalidOption(format!(
+            "the contact damping must be finite and not negative, not {}",
+            o.contact_damping
+        )));
+    }
+    if !(o.axis.is_finite() && o.axis.length() > 1e-12) {
+        return Err(Error::InvalidOption(format!(
+            "the closing axis must be a finite non-zero vector, not {}",
+            o.axis
+        )));
+    }
+    if o.max_seconds / o.step > 1e8 {
+        return Err(Error::InvalidOption(format!(
+            "{} s in steps of {} s is more than 10⁸ steps",
+            o.max_seconds, o.step
+        )));
+    }
+    Ok(())
+}

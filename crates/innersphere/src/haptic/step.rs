@@ -1,0 +1,89 @@
+//! One linearly implicit (backward) Euler step of a rigid body (Baraff & Witkin 1998; Otaduy
+//! & Lin 2006 for 6-DOF haptics): the forces are linearised about the current state, so that
+//! a contact far stiffer than `mass / step²` stays stable with one collision query per step.
+
+use super::body::{exp, BodyState, RigidBody};
+use super::mat6::{solve_spd, Mat6};
+use crate::Pose;
+use glam::{DMat3, DVec3};
+
+/// Kilograms times mm/s² per newton: `F = m·a` with `a` in mm/s² needs `m` in kg / 1000.
+const KG_MM: f64 = 1e-3;
+
+/// A force and a torque about the body's centre of mass (N, N·mm; world frame).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Wrench {
+    pub force: DVec3,
+    pub torque: DVec3,
+}
+
+/// Writes the 3×3 block `m` at (`r`, `c`) of `a`, adding.
+pub(crate) fn add_block(a: &mut Mat6, r: usize, c: usize, m: &DMat3) {
+    let cols = m.to_cols_array_2d();
+    for (j, col) in cols.iter().enumerate() {
+        for (i, v) in col.iter().enumerate() {
+            a[r + i][c + j] += v;
+        }
+    }
+}
+
+/// Advances `state` by `h` seconds under `w` (evaluated at the current state), with
+/// `stiffness = −∂w/∂x` and `damping = −∂w/∂v` (6×6, symmetric positive semi-definite,
+/// world frame, about the centre of mass). Returns false (and leaves the state alone) when
+/// the system cannot be solved (non-finite input).
+pub(crate) fn implicit_step(
+    body: &RigidBody,
+    state: &mut BodyState,
+    h: f64,
+    w: Wrench,
+    stiffness: &Mat6,
+    damping: &Mat6,
+) -> bool {
+    let r = DMat3::from_quat(state.pose.rotation);
+    let inertia = r * body.inertia * r.transpose() * KG_MM;
+    let (v, om) = (state.velocity, state.angular_velocity);
+    // Gyroscopic torque −ω × Iω, explicit (small at haptic speeds).
+    let torque = w.torque - om.cross(inertia * om);
+    // (M + hB + h²K) v⁺ = M v + h F + h B v.
+    let mut a = [[0.0f64; 6]; 6];
+    let m = body.mass * KG_MM;
+    for (i, row) in a.iter_mut().enumerate().take(3) {
+        row[i] = m;
+    }
+    add_block(&mut a, 3, 3, &inertia);
+    for i in 0..6 {
+        for j in 0..6 {
+            a[i][j] += h * damping[i][j] + h * h * stiffness[i][j];
+        }
+    }
+    let x = [v.x, v.y, v.z, om.x, om.y, om.z];
+    let bv = super::mat6::mul(damping, x);
+    let iw = inertia * om;
+    let rhs = [
+        m * v.x + h * (w.force.x + bv[0]),
+        m * v.y + h * (w.force.y + bv[1]),
+        m * v.z + h * (w.force.z + bv[2]),
+        iw.x + h * (torque.x + bv[3]),
+        iw.y + h * (torque.y + bv[4]),
+        iw.z + h * (torque.z + bv[5]),
+    ];
+    let Some(n) = solve_spd(&a, rhs) else {
+        return false;
+    };
+    if n.iter().any(|x| !x.is_finite()) {
+        return false;
+    }
+    let v1 = DVec3::new(n[0], n[1], n[2]);
+    let w1 = DVec3::new(n[3], n[4], n[5]);
+    // Move the centre of mass and turn about it.
+    let com = state.pose.transform_point(body.center_of_mass) + v1 * h;
+    let rot = (exp(w1 * h) * state.pose.rotation).normalize();
+    let t = com - rot * body.center_of_mass;
+    state.pose = Pose {
+        rotation: rot,
+        translation: t,
+    };
+    state.velocity = v1;
+    state.angular_velocity = w1;
+    true
+}

@@ -1,0 +1,120 @@
+//! `ist haptic`: the library's 6-DOF haptic loop over a recorded device trajectory.
+
+use anyhow::Context;
+use innersphere::haptic::{DeviceClass, HapticOptions};
+use innersphere::Pair;
+use innersphere_eval::haptic::{run as run_session, trace_csv};
+use innersphere_eval::motion::Motion;
+use std::path::PathBuf;
+
+/// Arguments of `ist haptic`. Units: millimetres, newtons, seconds (torques in N·mm).
+#[derive(clap::Args)]
+pub struct Args {
+    /// Tree file of body A (fixed, at the identity pose).
+    a: PathBuf,
+    /// Tree file of body B, the tool the device moves (its tree must hold mass properties:
+    /// built by this version of `ist build`).
+    b: PathBuf,
+    /// The device trajectory: a motion CSV (`t,tx,ty,tz,qw,qx,qy,qz`, the device's pose of B
+    /// in A's frame; mm and s), e.g. from `ist motion --scenario press`.
+    #[arg(long)]
+    device: PathBuf,
+    /// Device class, for the force and torque limits and the default coupling: touch
+    /// (3.3 N) or omega (12 N).
+    #[arg(long, default_value = "omega", value_parser = parse_class)]
+    device_class: DeviceClass,
+    /// Coupling stiffness (N/mm; default 60 % of the device's; rotations get × 20² mm²).
+    #[arg(long)]
+    stiffness: Option<f64>,
+    /// Coupling damping (N·s/mm; rotations get × 20² mm²).
+    #[arg(long)]
+    damping: Option<f64>,
+    /// Contact stiffness: penalty force per penetration volume (N/mm³).
+    #[arg(long)]
+    contact_stiffness: Option<f64>,
+    /// Device ticks per second (Hz).
+    #[arg(long, default_value_t = 1000.0)]
+    rate: f64,
+    /// Tick budget (µs; default one tick period): the exact query gives way to the
+    /// time-critical one when it would not fit.
+    #[arg(long)]
+    budget_us: Option<f64>,
+    /// Pace the ticks at the rate in real time (default: as fast as possible).
+    #[arg(long)]
+    realtime: bool,
+    /// Write one row per tick: t, device pose, tool pose, force xyz (N), torque xyz (N·mm),
+    /// volume (mm³), depth (mm), compute_us, budgeted.
+    #[arg(long)]
+    trace: Option<PathBuf>,
+    /// Draw force, depth and compute time against time into this PNG.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// Print JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+fn parse_class(s: &str) -> Result<DeviceClass, String> {
+    s.parse().map_err(|e: innersphere::Error| e.to_string())
+}
+
+/// Runs the subcommand; returns the process exit code.
+pub fn run(args: Args) -> anyhow::Result<i32> {
+    let mut outputs = vec![];
+    outputs.extend(args.trace.as_deref());
+    outputs.extend(args.plot.as_deref());
+    crate::check_outputs(&outputs, &[&args.a, &args.b, &args.device])?;
+    let mut opts = HapticOptions::for_device(args.device_class);
+    opts.rate = args.rate;
+    opts.budget = args.budget_us.map_or(1.0 / args.rate, |us| us * 1e-6);
+    if let Some(k) = args.stiffness {
+        opts.coupling.stiffness = k;
+        opts.coupling.angular_stiffness = k * innersphere::haptic::device::LEVER.powi(2);
+    }
+    if let Some(b) = args.damping {
+        opts.coupling.damping = b;
+        opts.coupling.angular_damping = b * innersphere::haptic::device::LEVER.powi(2);
+    }
+    if let Some(k) = args.contact_stiffness {
+        opts.contact_stiffness = k;
+    }
+    opts.check()?;
+    let a = crate::load_tree(&args.a)?;
+    let b = crate::load_tree(&args.b)?;
+    let device = Motion::load(&args.device)?;
+    let r = run_session(Pair::new(a, b), &device, opts, args.realtime)?;
+    if let Some(path) = &args.trace {
+        innersphere::output::write_file(path, trace_csv(&r).as_bytes())
+            .context("writing the trace")?;
+    }
+    if let Some(path) = &args.plot {
+        innersphere_eval::plot::haptic_chart(path, &r).context("drawing the plot")?;
+    }
+    let s = &r.summary;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(s)?);
+    } else {
+        println!(
+            "{} ticks at {} Hz ({}): compute p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs; {} over the {:.0} µs budget, {} budgeted\n\
+             force max {:.3} N (largest step {:.4} N), torque max {:.1} N·mm; depth max {:.3} mm, volume max {:.3} mm³\n\
+             energy to the hand: max {:.3e} J, end {:.3e} J (≤ 0: passive)",
+            s.ticks,
+            s.rate_hz,
+            if s.realtime { "real time" } else { "as fast as possible" },
+            s.compute_p50_us,
+            s.compute_p99_us,
+            s.compute_max_us,
+            s.deadline_misses,
+            s.budget_us,
+            s.budgeted_ticks,
+            s.max_force_n,
+            s.max_force_step_n,
+            s.max_torque_nmm,
+            s.max_depth_mm,
+            s.max_volume_mm3,
+            s.energy_to_user_max_j,
+            s.energy_to_user_end_j
+        );
+    }
+    Ok(0)
+}

@@ -1,0 +1,157 @@
+//! `ist occlude`: close body B onto body A under a constant force until it rests (the
+//! library's automatic occlusion), and say how far the bite found is from a reference.
+
+use anyhow::Context;
+use innersphere::glam::DVec3;
+use innersphere::haptic::{occlude, OcclusionOptions};
+use innersphere::{Pair, Pose, SphereTree};
+use innersphere_eval::motion::AnatomicalFrame;
+use serde_json::json;
+use std::path::PathBuf;
+
+/// Arguments of `ist occlude`. Units: millimetres, newtons, seconds.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Tree file of body A (fixed, at the identity pose).
+    a: PathBuf,
+    /// Tree file of body B (its tree must hold mass properties: built by this version).
+    b: PathBuf,
+    /// Starting pose of B in A's frame, "tx ty tz qw qx qy qz" (p' = R(q)·p + t).
+    #[arg(long, allow_hyphen_values = true)]
+    from: String,
+    /// Closing direction "x y z" (A's frame; B is pushed along it). Default: the pair's
+    /// occlusal "up" (from B towards A), found from the trees' leaf spheres as `ist motion`
+    /// finds it from the meshes.
+    #[arg(long, num_args = 3, allow_hyphen_values = true)]
+    axis: Option<Vec<f64>>,
+    /// Closing force (N).
+    #[arg(long, default_value_t = 5.0)]
+    force: f64,
+    /// Contact stiffness: penalty force per penetration volume (N/mm³).
+    #[arg(long, default_value_t = 10.0)]
+    contact_stiffness: f64,
+    /// Give up after this much simulated time (s).
+    #[arg(long, default_value_t = 30.0)]
+    max_seconds: f64,
+    /// The pose to compare the bite with (default the identity: the scanned bite of a pair
+    /// that was scanned in occlusion).
+    #[arg(long, default_value = "0 0 0 1 0 0 0", allow_hyphen_values = true)]
+    reference: String,
+    /// Landmarks of B to compare: a teeth-axes JSON (`{"18": {"c": [x, y, z], …}, …}`,
+    /// B's frame); each tooth's crown centre `c` is one landmark, and so is the incisal
+    /// point of the pair's frame.
+    #[arg(long)]
+    landmarks: Option<PathBuf>,
+    /// Print JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+fn leaf_centres(t: &SphereTree) -> Vec<DVec3> {
+    t.leaves().map(|n| t.sphere(n).0.as_dvec3()).collect()
+}
+
+/// Runs the subcommand; returns the process exit code.
+pub fn run(args: Args) -> anyhow::Result<i32> {
+    let from: Pose = args
+        .from
+        .parse()
+        .with_context(|| format!("--from \"{}\"", args.from))?;
+    let reference: Pose = args
+        .reference
+        .parse()
+        .with_context(|| format!("--reference \"{}\"", args.reference))?;
+    let a = crate::load_tree(&args.a)?;
+    let b = crate::load_tree(&args.b)?;
+    let frame = AnatomicalFrame::from_points(&leaf_centres(&a), &leaf_centres(&b))?;
+    let axis = match &args.axis {
+        Some(v) => DVec3::new(v[0], v[1], v[2]),
+        None => frame.up,
+    };
+    let mut landmarks = vec![("incisal".to_string(), frame.incisal)];
+    if let Some(path) = &args.landmarks {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        let v: serde_json::Value = serde_json::from_str(&text)
+            .with_context(|| format!("{} is not JSON", path.display()))?;
+        let obj = v
+            .as_object()
+            .with_context(|| format!("{}: expected an object of teeth", path.display()))?;
+        for (tooth, axes) in obj {
+            let c = axes
+                .get("c")
+                .and_then(|c| c.as_array())
+                .filter(|c| c.len() == 3)
+                .and_then(|c| {
+                    let x: Vec<f64> = c.iter().filter_map(|x| x.as_f64()).collect();
+                    (x.len() == 3 && x.iter().all(|x| x.is_finite()))
+                        .then(|| DVec3::new(x[0], x[1], x[2]))
+                })
+                .with_context(|| {
+                    format!(
+                        "{}: tooth {tooth} has no crown centre \"c\": [x, y, z]",
+                        path.display()
+                    )
+                })?;
+            landmarks.push((format!("tooth {tooth}"), c));
+        }
+    }
+    let opts = OcclusionOptions {
+        axis,
+        force: args.force,
+        contact_stiffness: args.contact_stiffness,
+        max_seconds: args.max_seconds,
+        ..OcclusionOptions::default()
+    };
+    let t0 = std::time::Instant::now();
+    let mut pair = Pair::new(a, b);
+    let o = occlude(&mut pair, &Pose::IDENTITY, &from, &opts)?;
+    let wall = t0.elapsed().as_secs_f64();
+    let errors: Vec<(String, f64)> = landmarks
+        .iter()
+        .map(|(name, p)| {
+            let d = (o.pose.transform_point(*p) - reference.transform_point(*p)).length();
+            (name.clone(), d)
+        })
+        .collect();
+    let worst = errors.iter().map(|e| e.1).fold(0.0, f64::max);
+    let patches: Vec<_> = o
+        .patches
+        .iter()
+        .map(|p| json!({"point": p.point.to_array(), "normal": p.normal.to_array(), "volume": p.volume, "depth": p.depth}))
+        .collect();
+    if args.json {
+        let out = json!({
+            "pose": o.pose.to_array(),
+            "converged": o.converged,
+            "steps": o.steps,
+            "seconds": o.seconds,
+            "wall_seconds": wall,
+            "volume": o.volume,
+            "max_depth": o.max_depth,
+            "patches": patches,
+            "axis": axis.to_array(),
+            "force": args.force,
+            "landmark_error_max": worst,
+            "landmark_errors": errors.iter().map(|(n, d)| json!({"landmark": n, "error": d})).collect::<Vec<_>>(),
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        let p = o.pose.to_array();
+        println!(
+            "{} after {} steps ({:.3} s simulated, {:.2} s wall): pose {:.4} {:.4} {:.4} {:.6} {:.6} {:.6} {:.6}\n\
+             volume {:.4} mm³, max depth {:.4} mm, {} patches; landmarks within {:.3} mm of the reference (worst of {})",
+            if o.converged { "converged" } else { "NOT converged" },
+            o.steps,
+            o.seconds,
+            wall,
+            p[0], p[1], p[2], p[3], p[4], p[5], p[6],
+            o.volume,
+            o.max_depth,
+            o.patches.len(),
+            worst,
+            errors.len()
+        );
+    }
+    Ok(if o.converged { 0 } else { 1 })
+}

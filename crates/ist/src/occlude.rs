@@ -3,7 +3,7 @@
 
 use anyhow::Context;
 use innersphere::glam::DVec3;
-use innersphere::haptic::{occlude, OcclusionOptions};
+use innersphere::haptic::{occlude, Joints, OcclusionOptions};
 use innersphere::{Pair, Pose, SphereTree};
 use innersphere_eval::motion::AnatomicalFrame;
 use serde_json::json;
@@ -42,10 +42,21 @@ pub struct Args {
     /// point of the pair's frame.
     #[arg(long)]
     landmarks: Option<PathBuf>,
+    /// Stiffness of each temporomandibular joint (N/mm): B's two condyles (on the pair's
+    /// hinge axis, 50 mm either side of the midline at human scale) are held by springs at
+    /// their places in the reference pose.
+    #[arg(long, default_value_t = 20.0)]
+    joint_stiffness: f64,
+    /// B is a free body: no joints (a mandible then slides sideways along its cusps).
+    #[arg(long)]
+    free: bool,
     /// Print JSON.
     #[arg(long)]
     json: bool,
 }
+
+/// Half the distance between a human's condyles (mm).
+const CONDYLE_HALF_SPAN: f64 = 50.0;
 
 fn leaf_centres(t: &SphereTree) -> Vec<DVec3> {
     t.leaves().map(|n| t.sphere(n).0.as_dvec3()).collect()
@@ -101,6 +112,15 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         force: args.force,
         contact_stiffness: args.contact_stiffness,
         max_seconds: args.max_seconds,
+        joints: (!args.free).then(|| {
+            let half = frame.left * (CONDYLE_HALF_SPAN * frame.scale);
+            let points = [frame.hinge + half, frame.hinge - half];
+            Joints {
+                points,
+                anchors: points.map(|p| reference.transform_point(p)),
+                stiffness: args.joint_stiffness,
+            }
+        }),
         ..OcclusionOptions::default()
     };
     let t0 = std::time::Instant::now();
@@ -132,6 +152,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             "patches": patches,
             "axis": axis.to_array(),
             "force": args.force,
+            "joints": opts.joints.map(|j| json!({"points": j.points.map(|p| p.to_array()), "anchors": j.anchors.map(|p| p.to_array()), "stiffness": j.stiffness})),
             "landmark_error_max": worst,
             "landmark_errors": errors.iter().map(|(n, d)| json!({"landmark": n, "error": d})).collect::<Vec<_>>(),
         });

@@ -22,5 +22,5 @@ mod step;
 
 pub use body::{BodyState, RigidBody, TOOTH_DENSITY};
 pub use device::{Coupling, DeviceClass, DeviceLimits};
-pub use occlusion::{occlude, Occlusion, OcclusionOptions};
+pub use occlusion::{occlude, Joints, Occlusion, OcclusionOptions};
 pub use render::{HapticLoop, HapticOptions, Tick};

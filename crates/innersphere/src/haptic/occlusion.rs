@@ -7,7 +7,16 @@ use super::device::LEVER;
 use super::mat6::Mat6;
 use super::step::{add_block, implicit_step, Wrench};
 use crate::{Error, Pair, Patch, PenetrationOptions, Pose, Result};
-use glam::DVec3;
+use glam::{DMat3, DVec3};
+
+/// `[r]×`.
+fn cross(r: DVec3) -> DMat3 {
+    DMat3::from_cols(
+        DVec3::new(0.0, r.z, -r.y),
+        DVec3::new(-r.z, 0.0, r.x),
+        DVec3::new(r.y, -r.x, 0.0),
+    )
+}
 
 /// Settings of [`occlude`]. Units: mm, N, s, kg.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -34,6 +43,23 @@ pub struct OcclusionOptions {
     pub rest_window: usize,
     /// Give up after this much simulated time (s).
     pub max_seconds: f64,
+    /// Joints that hold points of B near points of A (see [`Joints`]); `None`: B is a free
+    /// body.
+    pub joints: Option<Joints>,
+}
+
+/// Compliant joints of B: each point of B (its model frame) is pulled towards an anchor in
+/// A's frame by a spring. For a mandible these are its condyles in the temporomandibular
+/// joints, which keep a closing jaw from sliding sideways or forwards where no patient's
+/// jaw can go.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Joints {
+    /// The points of B (model frame).
+    pub points: [DVec3; 2],
+    /// Where they are held (world frame).
+    pub anchors: [DVec3; 2],
+    /// Spring stiffness per joint (N/mm).
+    pub stiffness: f64,
 }
 
 impl Default for OcclusionOptions {
@@ -52,6 +78,7 @@ impl Default for OcclusionOptions {
             rest_distance: 1e-4,
             rest_window: 100,
             max_seconds: 30.0,
+            joints: None,
         }
     }
 }
@@ -118,6 +145,29 @@ pub fn occlude(
         add_block(&mut k, 0, 3, &p.stiffness.coupling);
         add_block(&mut k, 3, 0, &p.stiffness.coupling.transpose());
         add_block(&mut k, 3, 3, &p.stiffness.angular);
+        let (mut jf, mut jt) = (DVec3::ZERO, DVec3::ZERO);
+        if let Some(j) = &opts.joints {
+            for (pb, anchor) in j.points.iter().zip(&j.anchors) {
+                let at = state.pose.transform_point(*pb);
+                let f = (*anchor - at) * j.stiffness;
+                let r = at - com;
+                jf += f;
+                jt += r.cross(f);
+                // A point spring at lever r: K = k·[[I, −[r]×], [[r]×, −[r]×[r]×]].
+                let c = cross(r);
+                let ks = j.stiffness;
+                add_block(&mut k, 0, 0, &(DMat3::IDENTITY * ks));
+                add_block(&mut k, 0, 3, &(c * -ks));
+                add_block(&mut k, 3, 0, &(c * ks));
+                add_block(&mut k, 3, 3, &(c * c * -ks));
+            }
+        }
+        // The contact's damping only: β·K of the contact, not of the joints.
+        let mut kc: Mat6 = [[0.0; 6]; 6];
+        add_block(&mut kc, 0, 0, &p.stiffness.linear);
+        add_block(&mut kc, 0, 3, &p.stiffness.coupling);
+        add_block(&mut kc, 3, 0, &p.stiffness.coupling.transpose());
+        add_block(&mut kc, 3, 3, &p.stiffness.angular);
         let beta = opts.contact_damping;
         let v6 = [
             state.velocity.x,
@@ -127,19 +177,19 @@ pub fn occlude(
             state.angular_velocity.y,
             state.angular_velocity.z,
         ];
-        let kv = super::mat6::mul(&k, v6);
+        let kv = super::mat6::mul(&kc, v6);
         let w = Wrench {
-            force: axis * opts.force + p.force
+            force: axis * opts.force + jf + p.force
                 - state.velocity * b
                 - DVec3::new(kv[0], kv[1], kv[2]) * beta,
-            torque: p.torque_b
+            torque: p.torque_b + jt
                 - state.angular_velocity * br
                 - DVec3::new(kv[3], kv[4], kv[5]) * beta,
         };
         let mut d: Mat6 = [[0.0; 6]; 6];
         for i in 0..6 {
             for j in 0..6 {
-                d[i][j] = beta * k[i][j];
+                d[i][j] = beta * kc[i][j];
             }
             d[i][i] += if i < 3 { b } else { br };
         }
@@ -190,6 +240,14 @@ fn check(o: &OcclusionOptions) -> Result<()> {
             "the closing axis must be a finite non-zero vector, not {}",
             o.axis
         )));
+    }
+    if let Some(j) = &o.joints {
+        let finite = j.points.iter().chain(&j.anchors).all(|p| p.is_finite());
+        if !(finite && j.stiffness.is_finite() && j.stiffness >= 0.0) {
+            return Err(Error::InvalidOption(format!(
+                "the joints must have finite points and anchors and a finite stiffness ≥ 0 ({j:?})"
+            )));
+        }
     }
     if o.max_seconds / o.step > 1e8 {
         return Err(Error::InvalidOption(format!(

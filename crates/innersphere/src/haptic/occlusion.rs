@@ -3,7 +3,6 @@
 //! surgeon looks for by closing plaster casts (maximal intercuspation).
 
 use super::body::{rotation_between, BodyState, RigidBody, TOOTH_DENSITY};
-use super::device::LEVER;
 use super::mat6::Mat6;
 use super::step::{add_block, implicit_step, Wrench};
 use crate::{Error, Pair, Patch, PenetrationOptions, Pose, Result};
@@ -29,15 +28,16 @@ pub struct OcclusionOptions {
     pub contact_stiffness: f64,
     /// Contact damping (s), as [`HapticOptions::contact_damping`](super::HapticOptions::contact_damping).
     pub contact_damping: f64,
-    /// Viscous damping of B's motion (N·s/mm); rotations get `damping × 20²` N·mm·s/rad.
-    /// It sets how fast B closes (`force / damping` mm/s in free flight).
+    /// Viscous damping of B's motion (N·s/mm); rotations get `damping × r²` N·mm·s/rad,
+    /// `r` B's radius of gyration. It sets how fast B closes (`force / damping` mm/s in free
+    /// flight).
     pub damping: f64,
     /// Density of B (kg per model unit³).
     pub density: f64,
     /// Integration step (s).
     pub step: f64,
     /// Rest: B's centre of mass moved less than this (mm) and B turned less than
-    /// `rest_distance / 20` rad over the last `rest_window` steps.
+    /// `rest_distance / r` rad (`r` its radius of gyration) over the last `rest_window` steps.
     pub rest_distance: f64,
     /// Steps over which rest is judged.
     pub rest_window: usize,
@@ -124,7 +124,11 @@ pub fn occlude(
     let window = opts.rest_window.max(1);
     // The centre of mass and rotation `window` steps ago, in a ring.
     let mut ring = vec![(DVec3::ZERO, glam::DQuat::IDENTITY); window];
-    let (b, br) = (opts.damping, opts.damping * LEVER * LEVER);
+    // Rotations are damped as the body's mass at its radius of gyration would be by the
+    // linear damping, so that a small body and a large one settle alike.
+    let i = &body.inertia;
+    let gyration2 = (i.x_axis.x + i.y_axis.y + i.z_axis.z) / (3.0 * body.mass);
+    let (b, br) = (opts.damping, opts.damping * gyration2);
     let mut steps = 0;
     let mut converged = false;
     while steps < max_steps {
@@ -135,7 +139,7 @@ pub fn occlude(
             let (c0, q0) = ring[(steps + 1) % window];
             let moved = (com - c0).length();
             let turned = rotation_between(q0, state.pose.rotation).length();
-            if moved < opts.rest_distance && turned < opts.rest_distance / LEVER {
+            if moved < opts.rest_distance && turned < opts.rest_distance / gyration2.sqrt() {
                 converged = true;
                 break;
             }

@@ -1,0 +1,375 @@
+//! The haptic loop and the occlusion on generated bodies: the coupling is passive, a held
+//! tool settles to the static equilibrium, a tick allocates nothing, the deadline holds with
+//! a tiny budget, and occlusion from several open starts ends in the same bite.
+
+mod alloc_util;
+
+use glam::{DQuat, DVec3};
+use innersphere::haptic::{
+    occlude, DeviceClass, HapticLoop, HapticOptions, OcclusionOptions, RigidBody,
+};
+use innersphere::{shapes, BuildOptions, Pair, Pose, Resolution, SharedTree, SphereTree};
+use proptest::prelude::*;
+use std::sync::OnceLock;
+
+/// The tests of this file run one at a time: one of them times its ticks.
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    LOCK.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn build(mesh: &innersphere::Mesh, cells: u32) -> SharedTree {
+    SharedTree::new(
+        SphereTree::build(
+            mesh,
+            &BuildOptions {
+                resolution: Resolution::Cells(cells),
+                ..Default::default()
+            },
+        )
+        .unwrap(),
+    )
+}
+
+/// A 20 × 20 × 2 mm slab (A, top face at z = 1) and a 4 × 4 × 2 mm block (B, centred on
+/// its model origin).
+fn slab_and_block() -> &'static (SharedTree, SharedTree) {
+    static T: OnceLock<(SharedTree, SharedTree)> = OnceLock::new();
+    T.get_or_init(|| {
+        (
+            build(&shapes::cuboid(DVec3::new(10.0, 10.0, 1.0)), 96),
+            build(&shapes::cuboid(DVec3::new(2.0, 2.0, 1.0)), 32),
+        )
+    })
+}
+
+/// The block resting on the slab with its bottom `into` below the slab's top.
+fn on_slab(into: f64) -> Pose {
+    Pose::from_translation(DVec3::new(0.0, 0.0, 2.0 - into))
+}
+
+fn options() -> HapticOptions {
+    let mut o = HapticOptions::for_device(DeviceClass::Omega);
+    o.contact_stiffness = 50.0;
+    o
+}
+
+#[test]
+fn a_tree_without_mass_properties_is_refused_clearly() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    let mut old: SphereTree = (**b.tree()).clone();
+    old.meta.inertia = None;
+    let e = RigidBody::from_tree(&old, 2e-6).unwrap_err().to_string();
+    assert!(e.contains("rebuild"), "{e}");
+    let pair = Pair::new(a.clone(), old);
+    let e = HapticLoop::new(pair, Pose::IDENTITY, on_slab(-1.0), options())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("inertia"), "{e}");
+}
+
+#[test]
+fn bad_options_are_refused() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    let base = options();
+    let mut cases = vec![];
+    let mut o = base;
+    o.rate = 0.0;
+    cases.push(o);
+    o = base;
+    o.rate = f64::NAN;
+    cases.push(o);
+    o = base;
+    o.budget = -1.0;
+    cases.push(o);
+    o = base;
+    o.coupling.stiffness = 6.0; // stiffer than the omega renders
+    cases.push(o);
+    o = base;
+    o.coupling.damping = f64::INFINITY;
+    cases.push(o);
+    o = base;
+    o.density = 0.0;
+    cases.push(o);
+    for o in cases {
+        let pair = Pair::new(a.clone(), b.clone());
+        assert!(
+            HapticLoop::new(pair, Pose::IDENTITY, on_slab(-1.0), o).is_err(),
+            "{o:?}"
+        );
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// In free space the loop is the coupling and the tool: whatever the hand does (smooth
+    /// moves, jerks of up to 1 mm and 0.05 rad per tick, rests), the energy the device has
+    /// given the hand never rises above zero, for any stiffness up to the device's and any
+    /// damping of at least k·T/2 (the documented stable range).
+    #[test]
+    fn the_coupling_alone_is_passive(
+        k in 0.05f64..5.0,
+        b_factor in 1.0f64..20.0,
+        rate in prop_oneof![Just(1000.0), Just(4000.0)],
+        steps in prop::collection::vec(
+            ((-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0), (-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0), 1usize..80, 0.0f64..1.0),
+            1..12,
+        ),
+    ) {
+        let _serial = serial();
+        let (a, b) = slab_and_block();
+        let mut o = options();
+        o.rate = rate;
+        o.budget = 1.0; // no deadline here: this is about energy
+        o.coupling.stiffness = k;
+        o.coupling.damping = b_factor * k / rate / 2.0;
+        o.coupling.angular_stiffness = k * 400.0;
+        o.coupling.angular_damping = o.coupling.damping * 400.0;
+        // Far above the slab: no contact at all.
+        let start = Pose::from_translation(DVec3::new(0.0, 0.0, 500.0));
+        let mut hl = HapticLoop::new(Pair::new(a.clone(), b.clone()), Pose::IDENTITY, start, o).unwrap();
+        let mut dev = start;
+        for (dx, dr, n, jerk) in steps {
+            let v = DVec3::new(dx.0, dx.1, dx.2) * if jerk > 0.7 { 1.0 } else { 0.02 };
+            let w = DVec3::new(dr.0, dr.1, dr.2) * if jerk > 0.7 { 0.05 } else { 0.001 };
+            for _ in 0..n {
+                dev.translation += v;
+                dev.rotation = (DQuat::from_scaled_axis(w) * dev.rotation).normalize();
+                let t = hl.tick(&dev);
+                prop_assert_eq!(t.volume, 0.0);
+            }
+            // A rest between moves lets the coupling give back what it can.
+            for _ in 0..20 {
+                hl.tick(&dev);
+            }
+        }
+        prop_assert!(
+            hl.energy_to_user_max() <= 1e-12,
+            "energy to the hand rose to {} J (k {k} N/mm, b {} N·s/mm, {rate} Hz)",
+            hl.energy_to_user_max(), o.coupling.damping
+        );
+    }
+}
+
+#[test]
+fn a_held_tool_settles_to_the_static_equilibrium() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    // The device held 0.5 mm inside the slab: the tool rests on it, the spring's pull equal
+    // to the contact's push.
+    for (into, rate) in [(0.5, 1000.0), (1.5, 1000.0), (0.5, 4000.0)] {
+        let mut o = options();
+        o.rate = rate;
+        o.budget = 1.0;
+        let mut hl = HapticLoop::new(
+            Pair::new(a.clone(), b.clone()),
+            Pose::IDENTITY,
+            on_slab(-0.5),
+            o,
+        )
+        .unwrap();
+        let held = on_slab(into);
+        let n = (3.0 * rate) as usize;
+        let mut last = vec![];
+        for i in 0..n {
+            let t = hl.tick(&held);
+            if i >= n - (rate as usize / 2) {
+                last.push(t);
+            }
+        }
+        let end = last.last().unwrap();
+        let f = end.force.length();
+        let c = end.contact_force.length();
+        assert!(c > 0.1, "no contact: {end:?}");
+        assert!(
+            (f - c).abs() <= 0.01 * c,
+            "into {into} mm at {rate} Hz: device force {f} N vs contact force {c} N"
+        );
+        assert!((end.force - end.contact_force).length() <= 0.01 * c);
+        // Settled: no oscillation left over the last half second (no buzz).
+        let spread = last
+            .iter()
+            .map(|t| (t.force - end.force).length())
+            .fold(0.0, f64::max);
+        assert!(spread <= 1e-3 * c, "force still moves by {spread} N");
+        assert!(hl.state().velocity.length() < 1e-3, "{:?}", hl.state());
+        // The tool rests at the slab, not at the device.
+        let z = end.tool.translation.z;
+        assert!(z > 2.0 - into + 0.1, "tool at z = {z}");
+        assert!(
+            hl.energy_to_user_max() <= 1e-12,
+            "{}",
+            hl.energy_to_user_max()
+        );
+    }
+}
+
+#[test]
+fn a_tick_allocates_nothing() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    for budget in [1.0, 15e-6] {
+        let mut o = options();
+        o.budget = budget;
+        let mut hl = HapticLoop::new(
+            Pair::new(a.clone(), b.clone()),
+            Pose::IDENTITY,
+            on_slab(-0.5),
+            o,
+        )
+        .unwrap();
+        let dev = |i: usize| {
+            let s = i as f64 * 1e-3;
+            Pose::new(
+                DVec3::new(
+                    0.8 * (3.0 * s).sin(),
+                    0.3 * s,
+                    2.0 - 0.8 * (s * 2.0).min(1.0),
+                ),
+                DQuat::from_rotation_z(0.1 * s),
+            )
+            .unwrap()
+        };
+        for i in 0..200 {
+            hl.tick(&dev(i));
+        }
+        let (allocs, bytes, budgeted) = alloc_util::counted(|| {
+            let mut budgeted = 0;
+            for i in 200..2200 {
+                budgeted += hl.tick(&dev(i)).budgeted as usize;
+            }
+            budgeted
+        });
+        assert_eq!(
+            (allocs, bytes),
+            (0, 0),
+            "budget {budget} s: {allocs} allocations ({bytes} bytes) in 2000 ticks"
+        );
+        if budget < 1e-3 {
+            assert!(
+                budgeted > 0,
+                "the tiny budget never took the time-critical path"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_tiny_budget_is_kept_by_the_time_critical_query() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    let mut o = options();
+    let budget = 20e-6;
+    o.budget = budget;
+    // Start deep in the slab: the exact query over the whole contact does not fit.
+    let mut hl = HapticLoop::new(
+        Pair::new(a.clone(), b.clone()),
+        Pose::IDENTITY,
+        on_slab(1.0),
+        o,
+    )
+    .unwrap();
+    let n = 2000;
+    let mut late = 0;
+    let mut times = vec![];
+    for i in 0..n {
+        let t = hl.tick(&on_slab(1.0 - 0.3 * (i as f64 / n as f64)));
+        assert!(t.budgeted, "tick {i} was exact");
+        assert!(t.volume <= t.volume_bound);
+        assert!(t.force.is_finite() && t.tool.translation.is_finite());
+        late += t.late as usize;
+        times.push(t.compute);
+    }
+    times.sort_by(f64::total_cmp);
+    // Preemption on a shared machine can delay any tick; the loop itself must not.
+    assert!(
+        late <= n / 100,
+        "{late} of {n} ticks over {budget} s (median {} s)",
+        times[n / 2]
+    );
+    assert!(times[n / 2] < 0.9 * budget, "median {} s", times[n / 2]);
+    // The contact pushed the tool up, out of the slab.
+    assert!(hl.state().pose.translation.z > on_slab(1.0).translation.z);
+}
+
+#[test]
+fn occlusion_of_a_peg_in_a_ring_ends_in_the_same_seat() {
+    let _serial = serial();
+    // A ring (A, hole radius 1 mm) and an egg-shaped peg (B, 2.8 mm wide, 6 mm long) pushed
+    // up (+z) into the hole: it seats centred and upright, whatever its start.
+    let a = build(&shapes::torus(2.0, 1.0, 96, 48), 64);
+    let b = build(&shapes::ellipsoid(DVec3::new(1.4, 1.4, 3.0), 5), 48);
+    let starts = [
+        Pose::from_translation(DVec3::new(0.0, 0.0, -5.0)),
+        Pose::from_translation(DVec3::new(0.3, -0.2, -6.0)),
+        Pose::new(DVec3::new(-0.3, 0.2, -5.5), DQuat::from_rotation_x(0.05)).unwrap(),
+        Pose::new(DVec3::new(0.1, 0.3, -5.0), DQuat::from_rotation_y(-0.05)).unwrap(),
+    ];
+    let opts = OcclusionOptions {
+        axis: DVec3::Z,
+        force: 5.0,
+        contact_stiffness: 20.0,
+        ..Default::default()
+    };
+    let mut ends = vec![];
+    for s in &starts {
+        let mut pair = Pair::new(a.clone(), b.clone());
+        let o = occlude(&mut pair, &Pose::IDENTITY, s, &opts).unwrap();
+        assert!(
+            o.converged,
+            "from {s:?}: not at rest after {} steps ({:?})",
+            o.steps, o.pose
+        );
+        assert!(o.volume > 0.0 && o.max_depth > 0.0 && !o.patches.is_empty());
+        // At rest the contact carries the closing force.
+        let f = o.volume * opts.contact_stiffness;
+        assert!((f / opts.force - 1.0).abs() < 0.05, "{f} N of contact");
+        ends.push(o.pose);
+    }
+    // The peg's axis (its tip and its foot) ends in the same place from every start (the
+    // turn about its own axis is a symmetry of the peg).
+    let probes = [DVec3::new(0.0, 0.0, 3.0), DVec3::new(0.0, 0.0, -3.0)];
+    for e in &ends {
+        for p in probes {
+            let d = (e.transform_point(p) - ends[0].transform_point(p)).length();
+            assert!(d < 0.01, "{d} mm apart: {e:?} vs {:?}", ends[0]);
+        }
+        // Centred in the ring and upright.
+        assert!(
+            e.transform_point(DVec3::ZERO).truncate().length() < 0.01,
+            "{e:?}"
+        );
+    }
+}
+
+#[test]
+fn occlusion_refuses_bad_options() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    let base = OcclusionOptions::default();
+    for o in [
+        OcclusionOptions { force: 0.0, ..base },
+        OcclusionOptions {
+            axis: DVec3::ZERO,
+            ..base
+        },
+        OcclusionOptions {
+            step: f64::NAN,
+            ..base
+        },
+        OcclusionOptions {
+            max_seconds: 1e9,
+            step: 1e-6,
+            ..base
+        },
+    ] {
+        let mut pair = Pair::new(a.clone(), b.clone());
+        assert!(
+            occlude(&mut pair, &Pose::IDENTITY, &on_slab(-1.0), &o).is_err(),
+            "{o:?}"
+        );
+    }
+}

@@ -2,8 +2,9 @@
 //! [`HapticLoop`] at a given rate, each tick recorded, and the figures that say whether the
 //! loop kept its deadline, stayed passive and rendered a smooth force.
 
-use crate::motion::Motion;
-use innersphere::haptic::{HapticLoop, HapticOptions, Tick};
+use crate::motion::{AnatomicalFrame, Motion};
+use innersphere::glam::DVec3;
+use innersphere::haptic::{HapticLoop, HapticOptions, Joints, Tick};
 use innersphere::{Error, Pair, Pose, Result};
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
@@ -181,4 +182,62 @@ pub fn trace_csv(run: &HapticRun) -> String {
         );
     }
     s
+}
+
+/// Half the distance between a human's condyles (mm, at the frame's scale 1).
+pub const CONDYLE_HALF_SPAN: f64 = 50.0;
+
+/// The temporomandibular joints of a lower jaw B for [`occlude`](innersphere::haptic::occlude):
+/// its condyles on the frame's hinge axis, [`CONDYLE_HALF_SPAN`] either side of the midline
+/// (times the frame's scale), held by springs of `stiffness` (N/mm) where they are when B is
+/// at `reference` (the scanned bite).
+pub fn temporomandibular_joints(
+    frame: &AnatomicalFrame,
+    reference: &Pose,
+    stiffness: f64,
+) -> Joints {
+    let half = frame.left * (CONDYLE_HALF_SPAN * frame.scale);
+    let points = [frame.hinge + half, frame.hinge - half];
+    Joints {
+        points,
+        anchors: points.map(|p| reference.transform_point(p)),
+        stiffness,
+    }
+}
+
+/// The crown centres of a teeth-axes JSON (`{"18": {"c": [x, y, z], …}, …}`, as in the
+/// Open-Full-Jaw dataset), named `tooth N`.
+pub fn crown_centres(path: &std::path::Path) -> Result<Vec<(String, DVec3)>> {
+    let bad = |m: String| Error::Parse {
+        path: path.to_path_buf(),
+        format: "teeth axes JSON",
+        message: m,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| bad(format!("not JSON: {e}")))?;
+    let obj = v
+        .as_object()
+        .ok_or_else(|| bad("expected an object of teeth".into()))?;
+    let mut out = Vec::with_capacity(obj.len());
+    for (tooth, axes) in obj {
+        let c: Option<Vec<f64>> = axes
+            .get("c")
+            .and_then(|c| c.as_array())
+            .map(|c| c.iter().filter_map(|x| x.as_f64()).collect());
+        match c {
+            Some(c) if c.len() == 3 && c.iter().all(|x| x.is_finite()) => {
+                out.push((format!("tooth {tooth}"), DVec3::new(c[0], c[1], c[2])))
+            }
+            _ => {
+                return Err(bad(format!(
+                    "tooth {tooth} has no crown centre \"c\": [x, y, z]"
+                )))
+            }
+        }
+    }
+    Ok(out)
 }

@@ -165,38 +165,6 @@ pub fn line_chart(path: &Path, chart: &Chart, series: &[Series]) -> Result<()> {
     Ok(())
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn draws_a_png() {
-        let dir = std::env::temp_dir().join(format!("innersphere-plot-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("t.png");
-        let s = [Series {
-            name: "a".into(),
-            points: vec![(1.0, 2.0), (10.0, 5.0), (100.0, 4.0)],
-        }];
-        let c = Chart {
-            title: "test",
-            x_label: "x",
-            y_label: "y",
-            log_x: true,
-            log_y: false,
-        };
-        line_chart(&path, &c, &s).unwrap();
-        let bytes = std::fs::read(&path).unwrap();
-        assert_eq!(&bytes[1..4], b"PNG");
-        let empty = [Series {
-            name: "e".into(),
-            points: vec![(f64::NAN, 1.0)],
-        }];
-        assert!(line_chart(&path, &c, &empty).is_err());
-        std::fs::remove_dir_all(&dir).ok();
-    }
-}
-
 /// A haptic session's force (N), tool depth (mm) and tick time (µs) against time, three
 /// panels one above the other (900 × 900 PNG).
 pub fn haptic_chart(path: &Path, run: &crate::haptic::HapticRun) -> Result<()> {
@@ -206,7 +174,8 @@ pub fn haptic_chart(path: &Path, run: &crate::haptic::HapticRun) -> Result<()> {
     let panels = root.split_evenly((3, 1));
     let t_end = run.ticks.last().map_or(1.0, |r| r.t).max(1e-9);
     let t0 = run.ticks.first().map_or(0.0, |r| r.t);
-    let series: [(&str, &str, Box<dyn Fn(&crate::haptic::TickRecord) -> f64>); 3] = [
+    type Value = Box<dyn Fn(&crate::haptic::TickRecord) -> f64>;
+    let series: [(&str, &str, Value); 3] = [
         (
             "force sent to the device",
             "N",
@@ -251,4 +220,36 @@ pub fn haptic_chart(path: &Path, run: &crate::haptic::HapticRun) -> Result<()> {
     }
     root.present().map_err(plot_err)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn draws_a_png() {
+        let dir = std::env::temp_dir().join(format!("innersphere-plot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("t.png");
+        let s = [Series {
+            name: "a".into(),
+            points: vec![(1.0, 2.0), (10.0, 5.0), (100.0, 4.0)],
+        }];
+        let c = Chart {
+            title: "test",
+            x_label: "x",
+            y_label: "y",
+            log_x: true,
+            log_y: false,
+        };
+        line_chart(&path, &c, &s).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        assert_eq!(&bytes[1..4], b"PNG");
+        let empty = [Series {
+            name: "e".into(),
+            points: vec![(f64::NAN, 1.0)],
+        }];
+        assert!(line_chart(&path, &c, &empty).is_err());
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }

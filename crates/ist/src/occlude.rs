@@ -3,8 +3,9 @@
 
 use anyhow::Context;
 use innersphere::glam::DVec3;
-use innersphere::haptic::{occlude, Joints, OcclusionOptions};
+use innersphere::haptic::{occlude, OcclusionOptions};
 use innersphere::{Pair, Pose, SphereTree};
+use innersphere_eval::haptic::{crown_centres, temporomandibular_joints};
 use innersphere_eval::motion::AnatomicalFrame;
 use serde_json::json;
 use std::path::PathBuf;
@@ -55,9 +56,6 @@ pub struct Args {
     json: bool,
 }
 
-/// Half the distance between a human's condyles (mm).
-const CONDYLE_HALF_SPAN: f64 = 50.0;
-
 fn leaf_centres(t: &SphereTree) -> Vec<DVec3> {
     t.leaves().map(|n| t.sphere(n).0.as_dvec3()).collect()
 }
@@ -81,46 +79,15 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     };
     let mut landmarks = vec![("incisal".to_string(), frame.incisal)];
     if let Some(path) = &args.landmarks {
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        let v: serde_json::Value = serde_json::from_str(&text)
-            .with_context(|| format!("{} is not JSON", path.display()))?;
-        let obj = v
-            .as_object()
-            .with_context(|| format!("{}: expected an object of teeth", path.display()))?;
-        for (tooth, axes) in obj {
-            let c = axes
-                .get("c")
-                .and_then(|c| c.as_array())
-                .filter(|c| c.len() == 3)
-                .and_then(|c| {
-                    let x: Vec<f64> = c.iter().filter_map(|x| x.as_f64()).collect();
-                    (x.len() == 3 && x.iter().all(|x| x.is_finite()))
-                        .then(|| DVec3::new(x[0], x[1], x[2]))
-                })
-                .with_context(|| {
-                    format!(
-                        "{}: tooth {tooth} has no crown centre \"c\": [x, y, z]",
-                        path.display()
-                    )
-                })?;
-            landmarks.push((format!("tooth {tooth}"), c));
-        }
+        landmarks.extend(crown_centres(path)?);
     }
     let opts = OcclusionOptions {
         axis,
         force: args.force,
         contact_stiffness: args.contact_stiffness,
         max_seconds: args.max_seconds,
-        joints: (!args.free).then(|| {
-            let half = frame.left * (CONDYLE_HALF_SPAN * frame.scale);
-            let points = [frame.hinge + half, frame.hinge - half];
-            Joints {
-                points,
-                anchors: points.map(|p| reference.transform_point(p)),
-                stiffness: args.joint_stiffness,
-            }
-        }),
+        joints: (!args.free)
+            .then(|| temporomandibular_joints(&frame, &reference, args.joint_stiffness)),
         ..OcclusionOptions::default()
     };
     let t0 = std::time::Instant::now();

@@ -49,9 +49,8 @@ fn ease(s: f64) -> f64 {
 /// The 6 s press trajectory of B (the device's pose in A's frame, the bite at the identity).
 pub fn press(frame: &AnatomicalFrame, opts: &PressOptions) -> Result<Motion> {
     let ok = |x: f64| x.is_finite() && x >= 0.0;
-    if !(ok(opts.open) && ok(opts.past) && ok(opts.slide))
-        || !(opts.rate.is_finite() && (1.0..=100_000.0).contains(&opts.rate))
-    {
+    let rate_ok = opts.rate.is_finite() && (1.0..=100_000.0).contains(&opts.rate);
+    if !(ok(opts.open) && ok(opts.past) && ok(opts.slide) && rate_ok) {
         return Err(Error::InvalidOption(format!(
             "press trajectory: open, past and slide must be finite and not negative, the rate \
              1 to 100000 Hz ({opts:?})"

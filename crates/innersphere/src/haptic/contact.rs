@@ -33,8 +33,12 @@ pub(crate) struct ContactSample {
 /// Chooses between the exact and the time-critical query from their measured costs.
 #[derive(Debug, Clone)]
 pub(crate) struct Deadline {
-    /// Time of the last exact query (s); infinite until a query showed the contact small.
-    exact: f64,
+    /// Times of the last exact queries (s), a ring; infinite until a query showed the
+    /// contact small. Their minimum predicts the next: a preempted query (a spike) does not
+    /// send the loop to the time-critical path, a contact that grew does.
+    exact: [f64; 4],
+    /// Where the next exact time goes in the ring.
+    next: usize,
     /// Measured seconds per node-pair test of the time-critical query.
     per_visit: f64,
 }
@@ -42,7 +46,8 @@ pub(crate) struct Deadline {
 impl Deadline {
     pub(crate) fn new() -> Deadline {
         Deadline {
-            exact: f64::INFINITY,
+            exact: [f64::INFINITY; 4],
+            next: 0,
             per_visit: FIRST_VISIT_COST,
         }
     }
@@ -64,11 +69,13 @@ impl Deadline {
             .unwrap_or_default()
             .saturating_sub(reserve)
             .as_secs_f64();
-        // The exact query's time follows the motion smoothly from tick to tick: 1.5× the last
-        // one, plus a little for the clock's and the scheduler's noise.
-        if 1.5 * self.exact + 5e-6 <= left {
+        // The exact query's time follows the motion smoothly from tick to tick: 1.5× the
+        // recent ones, plus a little for the clock's and the scheduler's noise.
+        let predicted = self.exact.iter().copied().fold(f64::INFINITY, f64::min);
+        if 1.5 * predicted + 5e-6 <= left {
             let p = pair.penetration_with(pose_a, pose_b, opts);
-            self.exact = start.elapsed().as_secs_f64();
+            self.exact[self.next] = start.elapsed().as_secs_f64();
+            self.next = (self.next + 1) % self.exact.len();
             return ContactSample {
                 wrench: Wrench {
                     force: p.force,
@@ -91,10 +98,12 @@ impl Deadline {
         if w.complete {
             // Everything was found in the budget: the exact query (cheaper per frame, on
             // its front) is expected to fit next time.
-            self.exact = self.exact.min(t);
+            self.exact = [predicted.min(t); 4];
         } else {
             // Decay, so that a contact that shrank is eventually tried exactly again.
-            self.exact *= 0.999;
+            for e in &mut self.exact {
+                *e *= 0.999;
+            }
         }
         ContactSample {
             wrench: Wrench {

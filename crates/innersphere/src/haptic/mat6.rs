@@ -8,6 +8,8 @@ pub(crate) type Mat6 = [[f64; 6]; 6];
 
 /// Solves `A x = b` for symmetric positive-definite `A` by Cholesky; `None` when `A` is not
 /// positive definite (to rounding).
+// Index form, as the textbook writes Cholesky.
+#[allow(clippy::needless_range_loop)]
 pub(crate) fn solve_spd(a: &Mat6, b: [f64; 6]) -> Option<[f64; 6]> {
     let mut l = [[0.0f64; 6]; 6];
     for i in 0..6 {

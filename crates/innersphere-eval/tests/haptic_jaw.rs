@@ -1,0 +1,155 @@
+//! The haptic loop and the occlusion on the real jaw pair (trees with `--preset jaw`), the
+//! issue's bars: the shipped press trajectory (3 mm open → 1 mm past the bite, hold, ±0.8 mm
+//! sideways while pressing, release) with the omega-class defaults at 1 kHz and 4 kHz, and
+//! the bite found from five open starts. The timings themselves are reported by
+//! `ist haptic` (docs/HAPTICS.md); here only what the loop guarantees is asserted.
+
+#[path = "../../innersphere/tests/common/mod.rs"]
+mod common;
+
+use innersphere::glam::DQuat;
+use innersphere::haptic::{occlude, DeviceClass, HapticOptions, OcclusionOptions};
+use innersphere::{BuildOptions, Mesh, Pair, Pose, SharedTree, SphereTree};
+use innersphere_eval::haptic::{crown_centres, run, temporomandibular_joints};
+use innersphere_eval::motion::{AnatomicalFrame, Motion};
+use std::sync::OnceLock;
+
+struct Jaw {
+    a: SharedTree,
+    b: SharedTree,
+    frame: AnatomicalFrame,
+}
+
+fn jaw() -> &'static Jaw {
+    static J: OnceLock<Jaw> = OnceLock::new();
+    J.get_or_init(|| {
+        let load = |rel: &str| Mesh::load(common::data(rel)).unwrap();
+        let (ma, mb) = (
+            load("jaw/ofj_p26_maxilla_teeth.stl.gz"),
+            load("jaw/ofj_p26_mandible_teeth.stl.gz"),
+        );
+        let build = |m: &Mesh| {
+            let opts = BuildOptions::preset(innersphere::build::Preset::Jaw, m).unwrap();
+            SharedTree::new(SphereTree::build(m, &opts).unwrap())
+        };
+        Jaw {
+            a: build(&ma),
+            b: build(&mb),
+            frame: AnatomicalFrame::from_meshes(&ma, &mb).unwrap(),
+        }
+    })
+}
+
+/// One at a time: the haptic loop wants a core of its own (as on a real device's machine).
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    LOCK.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn press() -> Motion {
+    Motion::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/jaw_press_device.csv"
+    ))
+    .unwrap()
+}
+
+#[test]
+#[ignore = "real data: run with --ignored"]
+fn pressing_the_jaw_into_the_bite_feels_solid_and_passive() {
+    let _serial = serial();
+    let j = jaw();
+    for rate in [1000.0, 4000.0] {
+        let mut o = HapticOptions::for_device(DeviceClass::Omega);
+        o.rate = rate;
+        o.budget = 1.0 / rate;
+        let r = run(Pair::new(j.a.clone(), j.b.clone()), &press(), o, false).unwrap();
+        let s = r.summary;
+        eprintln!("{rate} Hz: {s:?}");
+        assert_eq!(s.ticks, (6.0 * rate) as usize + 1);
+        // The device goes 1 mm past the bite; the tool stays within the bite's own overlap.
+        assert!(
+            s.max_depth_mm <= 0.3,
+            "{rate} Hz: depth {} mm",
+            s.max_depth_mm
+        );
+        assert!(s.max_force_n > 1.0, "{rate} Hz: the teeth were not felt");
+        assert!(
+            s.energy_to_user_max_j <= 1e-4,
+            "{rate} Hz: {} J",
+            s.energy_to_user_max_j
+        );
+        assert!(
+            s.max_force_step_n <= 0.05 * s.max_force_n,
+            "{rate} Hz: step {} N of {} N",
+            s.max_force_step_n,
+            s.max_force_n
+        );
+        // Deadline: a shared CI machine may preempt a tick; the loop may not overrun.
+        assert!(
+            s.deadline_misses * 1000 <= s.ticks,
+            "{rate} Hz: {} of {} ticks late",
+            s.deadline_misses,
+            s.ticks
+        );
+        // While the device is 1 mm inside and held (1.5–2.5 s), the tool rests at the bite.
+        let held: Vec<_> = r
+            .ticks
+            .iter()
+            .filter(|t| (1.8..2.5).contains(&t.t))
+            .collect();
+        let f0 = held[0].tick.force;
+        for t in &held {
+            assert!(
+                (t.tick.force - f0).length() < 0.02 * f0.length(),
+                "buzz at {}",
+                t.t
+            );
+        }
+    }
+}
+
+#[test]
+#[ignore = "real data: run with --ignored"]
+fn occlusion_finds_the_scanned_bite_from_open_starts() {
+    let _serial = serial();
+    let j = jaw();
+    let (up, left, ant) = (j.frame.up, j.frame.left, j.frame.anterior);
+    let mut landmarks = vec![j.frame.incisal];
+    landmarks.extend(
+        crown_centres(&common::data("jaw/ofj_p26_teeth_axes_mandible.json"))
+            .unwrap()
+            .into_iter()
+            .map(|(_, c)| c),
+    );
+    assert!(landmarks.len() >= 10, "{} landmarks", landmarks.len());
+    let deg = 1f64.to_radians();
+    let starts = [
+        (2.0, 0.0, 0.0, 0.0),
+        (3.0, 0.5, deg, 0.0),
+        (4.0, -0.5, 0.0, deg),
+        (2.5, 0.3, -deg, -deg),
+        (3.5, -0.2, 0.5 * deg, deg),
+    ];
+    let opts = OcclusionOptions {
+        axis: up,
+        joints: Some(temporomandibular_joints(&j.frame, &Pose::IDENTITY, 20.0)),
+        ..Default::default()
+    };
+    for (open, side, yaw, roll) in starts {
+        let rot = DQuat::from_axis_angle(up, yaw) * DQuat::from_axis_angle(ant, roll);
+        let from = Pose::new(up * -open + left * side, rot).unwrap();
+        let t = std::time::Instant::now();
+        let mut pair = Pair::new(j.a.clone(), j.b.clone());
+        let o = occlude(&mut pair, &Pose::IDENTITY, &from, &opts).unwrap();
+        let secs = t.elapsed().as_secs_f64();
+        assert!(o.converged, "from {from:?}: {} steps", o.steps);
+        assert!(secs <= 10.0, "{secs} s");
+        let worst = landmarks
+            .iter()
+            .map(|p| (o.pose.transform_point(*p) - *p).length())
+            .fold(0.0, f64::max);
+        eprintln!("open {open} side {side} yaw {yaw} roll {roll}: {} steps, {secs:.2} s, landmarks within {worst:.3} mm", o.steps);
+        assert!(worst <= 0.5, "landmark {worst} mm from the scanned bite");
+    }
+}

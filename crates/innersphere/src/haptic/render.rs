@@ -186,8 +186,21 @@ impl HapticLoop {
     /// One device tick: the device's pose in (B's pose in the world, as read from the device
     /// this tick), the force and torque to send out, with the tool's new pose.
     pub fn tick(&mut self, device: &Pose) -> Tick {
+        self.tick_step(device, 1.0 / self.opts.rate)
+    }
+
+    /// [`tick`](Self::tick) with the time since the last tick measured by the caller
+    /// (`dt` seconds, e.g. from the device's clock when its servo loop jitters): the step
+    /// and the device's velocity use it. A `dt` that is not positive and finite, or more
+    /// than ten periods, is replaced by one period.
+    pub fn tick_step(&mut self, device: &Pose, dt: f64) -> Tick {
         let start = Instant::now();
-        let h = 1.0 / self.opts.rate;
+        let period = 1.0 / self.opts.rate;
+        let h = if dt.is_finite() && dt > 0.0 && dt <= 10.0 * period {
+            dt
+        } else {
+            period
+        };
         let com = self.body.center_of_mass;
         let xd = device.transform_point(com);
         let qd = device.rotation;

@@ -1,0 +1,231 @@
+//! The library's haptic loop: virtual coupling, implicit step, deadline (docs/HAPTICS.md).
+
+use crate::error::{pointer, status, Fail};
+use crate::query::ist_pair;
+use crate::types::ist_pose;
+use crate::{mutable, reference};
+use innersphere::haptic::{Coupling, DeviceClass, DeviceLimits, HapticLoop, HapticOptions};
+use innersphere::Pair;
+use std::ffi::c_int;
+
+/// A desktop pen device (Geomagic Touch class: 3.3 N, rotations sensed only).
+pub const IST_DEVICE_TOUCH: c_int = 0;
+/// A parallel device (Force Dimension omega.6 class: 12 N, rotations sensed only).
+pub const IST_DEVICE_OMEGA: c_int = 1;
+
+/// Settings of a haptic loop. Units: mm, N, s, kg; torques in N·mm.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ist_haptic_params {
+    /// Device ticks per second (Hz).
+    pub rate: f64,
+    /// Most time one tick may take (s); the exact query gives way to the time-critical one
+    /// when it would not fit.
+    pub budget: f64,
+    /// Largest force sent (N).
+    pub max_force: f64,
+    /// Largest torque sent (N·mm); 0 for a device that does not actuate rotations.
+    pub max_torque: f64,
+    /// Stiffest spring the device renders (N/mm).
+    pub max_stiffness: f64,
+    /// Coupling stiffness (N/mm).
+    pub coupling_stiffness: f64,
+    /// Coupling damping (N·s/mm).
+    pub coupling_damping: f64,
+    /// Rotational coupling stiffness (N·mm/rad).
+    pub angular_stiffness: f64,
+    /// Rotational coupling damping (N·mm·s/rad).
+    pub angular_damping: f64,
+    /// Penalty force per penetration volume (N/mm³).
+    pub contact_stiffness: f64,
+    /// Contact damping (s), proportional to the contact stiffness.
+    pub contact_damping: f64,
+    /// Density of the tool (kg/mm³).
+    pub density: f64,
+    /// World pose of body A (fixed).
+    pub pose_a: ist_pose,
+    /// Where the tool (body B) starts, at rest.
+    pub start: ist_pose,
+}
+
+/// A haptic loop (opaque; one thread at a time: the device's servo thread).
+pub struct ist_haptic {
+    hl: HapticLoop,
+}
+
+/// What one tick did (world frame).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ist_haptic_output {
+    /// Force to send to the device (N), clamped to max_force.
+    pub force: [f64; 3],
+    /// Torque to send to the device (N·mm), clamped to max_torque.
+    pub torque: [f64; 3],
+    /// The tool's pose after the tick: draw this.
+    pub tool: ist_pose,
+    /// Penalty force on the tool (N).
+    pub contact_force: [f64; 3],
+    /// Penetration volume (mm³): exact, or what the time-critical query found.
+    pub volume: f64,
+    /// Upper bound on the volume (= volume unless budgeted).
+    pub volume_bound: f64,
+    /// Deepest leaf-sphere overlap (mm).
+    pub max_depth: f64,
+    /// Time the tick took (s).
+    pub compute_seconds: f64,
+    /// 1 when the time-critical query answered.
+    pub budgeted: c_int,
+    /// 1 when the tick took longer than its budget.
+    pub late: c_int,
+}
+
+/// The defaults of a device class (IST_DEVICE_TOUCH or IST_DEVICE_OMEGA) at 1 kHz, with A
+/// at the identity and the tool starting at the identity.
+///
+/// # Safety
+/// `out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn ist_haptic_params_default(
+    device_class: c_int,
+    out: *mut ist_haptic_params,
+) -> c_int {
+    status(|| {
+        let out = unsafe { mutable(out, "out") }?;
+        let class = match device_class {
+            IST_DEVICE_TOUCH => DeviceClass::Touch,
+            IST_DEVICE_OMEGA => DeviceClass::Omega,
+            c => {
+                return Err(Fail::arg(format!(
+                    "unknown device class {c} (IST_DEVICE_TOUCH or IST_DEVICE_OMEGA)"
+                )))
+            }
+        };
+        let o = HapticOptions::for_device(class);
+        let id = crate::query::ist_pose_identity();
+        *out = ist_haptic_params {
+            rate: o.rate,
+            budget: o.budget,
+            max_force: o.device.max_force,
+            max_torque: o.device.max_torque,
+            max_stiffness: o.device.max_stiffness,
+            coupling_stiffness: o.coupling.stiffness,
+            coupling_damping: o.coupling.damping,
+            angular_stiffness: o.coupling.angular_stiffness,
+            angular_damping: o.coupling.angular_damping,
+            contact_stiffness: o.contact_stiffness,
+            contact_damping: o.contact_damping,
+            density: o.density,
+            pose_a: id,
+            start: id,
+        };
+        Ok(())
+    })
+}
+
+/// A haptic loop on the trees of `pair` (it keeps its own pair: `pair` stays yours), with
+/// B as the tool. B's tree must hold mass properties (built by this version). NULL on error.
+///
+/// # Safety
+/// `pair` and `params` are NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn ist_haptic_new(
+    pair: *const ist_pair,
+    params: *const ist_haptic_params,
+) -> *mut ist_haptic {
+    pointer(|| {
+        let p = unsafe { reference(pair, "pair") }?;
+        let c = unsafe { reference(params, "params") }?;
+        let opts = HapticOptions {
+            rate: c.rate,
+            budget: c.budget,
+            device: DeviceLimits {
+                max_force: c.max_force,
+                max_torque: c.max_torque,
+                max_stiffness: c.max_stiffness,
+                max_damping: f64::INFINITY,
+            },
+            coupling: Coupling {
+                stiffness: c.coupling_stiffness,
+                damping: c.coupling_damping,
+                angular_stiffness: c.angular_stiffness,
+                angular_damping: c.angular_damping,
+            },
+            contact_stiffness: c.contact_stiffness,
+            contact_damping: c.contact_damping,
+            density: c.density,
+            max_patches: 8,
+        };
+        let own = Pair::new(p.pair.tree_a().clone(), p.pair.tree_b().clone());
+        let hl = HapticLoop::new(own, c.pose_a.to_pose()?, c.start.to_pose()?, opts)?;
+        Ok(Box::new(ist_haptic { hl }))
+    })
+}
+
+/// One device tick: the device's pose in (B's pose in the world), `dt` the seconds since
+/// the last tick (0: one period); the force and torque to send and the tool's pose out.
+/// Never allocates, never blocks. A NaN device pose is refused (IST_ERR_POSE) and the tool
+/// stays where it was.
+///
+/// # Safety
+/// Every pointer is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn ist_haptic_tick(
+    haptic: *mut ist_haptic,
+    device: *const ist_pose,
+    dt: f64,
+    out: *mut ist_haptic_output,
+) -> c_int {
+    status(|| {
+        let h = unsafe { mutable(haptic, "haptic") }?;
+        let d = unsafe { reference(device, "device") }?.to_pose()?;
+        let out = unsafe { mutable(out, "out") }?;
+        let t = h.hl.tick_step(&d, dt);
+        *out = ist_haptic_output {
+            force: t.force.to_array(),
+            torque: t.torque.to_array(),
+            tool: ist_pose::from_pose(&t.tool),
+            contact_force: t.contact_force.to_array(),
+            volume: t.volume,
+            volume_bound: t.volume_bound,
+            max_depth: t.max_depth,
+            compute_seconds: t.compute,
+            budgeted: t.budgeted as c_int,
+            late: t.late as c_int,
+        };
+        Ok(())
+    })
+}
+
+/// The energy the device has given the hand so far (J; at most 0 for a passive loop), and
+/// its largest value, through `now` and `max` (either may be NULL).
+///
+/// # Safety
+/// Every pointer is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn ist_haptic_energy(
+    haptic: *const ist_haptic,
+    now: *mut f64,
+    max: *mut f64,
+) -> c_int {
+    status(|| {
+        let h = unsafe { reference(haptic, "haptic") }?;
+        if let Some(n) = unsafe { now.as_mut() } {
+            *n = h.hl.energy_to_user();
+        }
+        if let Some(m) = unsafe { max.as_mut() } {
+            *m = h.hl.energy_to_user_max();
+        }
+        Ok(())
+    })
+}
+
+/// Frees a haptic loop (NULL is accepted).
+///
+/// # Safety
+/// `haptic` is NULL or from ist_haptic_new, not freed before.
+#[no_mangle]
+pub unsafe extern "C" fn ist_haptic_free(haptic: *mut ist_haptic) {
+    if !haptic.is_null() {
+        let _ = std::panic::catch_unwind(|| drop(unsafe { Box::from_raw(haptic) }));
+    }
+}

@@ -1,0 +1,116 @@
+//! The plain `#[repr(C)]` structs that cross the boundary, and their conversions.
+
+use crate::error::Fail;
+use innersphere::glam::{DQuat, DVec3};
+use innersphere::Pose;
+use std::ffi::c_int;
+
+/// A rigid pose: p' = R(q) p + t, q = {w, x, y, z} (normalised on use; it must not be zero).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ist_pose {
+    /// Translation (model units).
+    pub t: [f64; 3],
+    /// Rotation quaternion {w, x, y, z}.
+    pub q: [f64; 4],
+}
+
+impl ist_pose {
+    pub(crate) fn to_pose(self) -> Result<Pose, Fail> {
+        let [w, x, y, z] = self.q;
+        Pose::new(DVec3::from_array(self.t), DQuat::from_xyzw(x, y, z, w))
+            .map_err(|e| Fail(crate::error::IST_ERR_POSE, format!("bad pose: {e}")))
+    }
+
+    pub(crate) fn from_pose(p: &Pose) -> ist_pose {
+        let q = p.rotation;
+        ist_pose {
+            t: p.translation.to_array(),
+            q: [q.w, q.x, q.y, q.z],
+        }
+    }
+}
+
+/// Options of ist_tree_build, with the meaning of `ist build`'s flags.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ist_build_options {
+    /// Voxel edge length (model units); when > 0 it wins over `resolution`.
+    pub voxel_size: f64,
+    /// Voxels along the longest side of the mesh's bounding box (used when voxel_size is 0).
+    pub resolution: u32,
+    /// No inner sphere smaller than this (model units; 0 = down to 1e-4 voxel).
+    pub min_radius: f64,
+    /// Off-grid refinement steps of each sphere's centre (0 = the paper's packing).
+    pub refine_steps: u32,
+    /// Stop after this many spheres (0 = no limit).
+    pub max_spheres: u64,
+}
+
+/// Result of ist_distance (world frame).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ist_distance_result {
+    /// Distance between the two sphere packings (0 when they overlap).
+    pub distance: f64,
+    /// 1 when they overlap, else 0.
+    pub contact: c_int,
+    /// Closest point on A.
+    pub point_a: [f64; 3],
+    /// Closest point on B.
+    pub point_b: [f64; 3],
+}
+
+/// Result of ist_penetration (world frame).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ist_penetration_result {
+    /// Volume of the intersection of the two sphere packings (model units³).
+    pub volume: f64,
+    /// Largest overlap of two leaf spheres (model units).
+    pub max_depth: f64,
+    /// Unit contact normal: the direction B is pushed (zero without contact).
+    pub normal: [f64; 3],
+    /// Penalty force on B: stiffness × volume × normal (the force on A is its opposite).
+    pub force: [f64; 3],
+    /// Torque on A about A's centre of mass.
+    pub torque_a: [f64; 3],
+    /// Torque on B about B's centre of mass.
+    pub torque_b: [f64; 3],
+    /// Contact area (model units²): how fast the volume shrinks per unit of separation.
+    pub area: f64,
+    /// Number of contact patches (read them with ist_penetration_patch).
+    pub patch_count: usize,
+}
+
+/// One contact patch of the last ist_penetration (world frame).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ist_patch {
+    /// Volume-weighted centroid of the overlaps.
+    pub point: [f64; 3],
+    /// Unit direction from A into B.
+    pub normal: [f64; 3],
+    /// Largest overlap in the patch.
+    pub depth: f64,
+    /// Volume of the patch.
+    pub volume: f64,
+    /// Overlapping leaf pairs in the patch.
+    pub pairs: u32,
+}
+
+/// One contact of ist_multipoint (world frame).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ist_contact_point {
+    /// Point in the middle of the overlap.
+    pub point: [f64; 3],
+    /// Unit direction from A's sphere centre to B's.
+    pub normal: [f64; 3],
+    /// Overlap of the two spheres (> 0).
+    pub depth: f64,
+    /// Leaf (node index) of tree A.
+    pub leaf_a: u32,
+    /// Leaf (node index) of tree B.
+    pub leaf_b: u32,
+}

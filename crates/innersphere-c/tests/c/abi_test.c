@@ -1,0 +1,254 @@
+/* The C ABI against the Rust answers: prints every query's answer at every pose of
+ * DIR/poses.txt and the haptic loop's along DIR/device.txt in the format of
+ * `cargo run --example reference answer DIR` (run.sh diffs the two: bit for bit), then
+ * checks the error paths (bad paths, a corrupt file, NULL pointers, NaN poses, bad
+ * arguments). Written against include/innersphere.h only. */
+#include "innersphere.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int failures = 0;
+
+#define CHECK(cond, ...)                                                          \
+    do {                                                                          \
+        if (!(cond)) {                                                            \
+            fprintf(stderr, "FAILED (%s:%d): %s: ", __FILE__, __LINE__, #cond);   \
+            fprintf(stderr, __VA_ARGS__);                                         \
+            fprintf(stderr, " [last error: %s]\n", ist_last_error());             \
+            failures++;                                                           \
+        }                                                                         \
+    } while (0)
+
+static void bits(double x) {
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    printf(" %016llx", (unsigned long long)u);
+}
+
+static void v3(const double x[3]) {
+    bits(x[0]);
+    bits(x[1]);
+    bits(x[2]);
+}
+
+static int read_pose(FILE* f, ist_pose* p) {
+    double x[7];
+    for (int i = 0; i < 7; i++)
+        if (fscanf(f, "%lf", &x[i]) != 1) return 0;
+    for (int i = 0; i < 3; i++) p->t[i] = x[i];
+    for (int i = 0; i < 4; i++) p->q[i] = x[3 + i];
+    return 1;
+}
+
+static char* join(const char* dir, const char* file) {
+    size_t n = strlen(dir) + strlen(file) + 2;
+    char* s = malloc(n);
+    snprintf(s, n, "%s/%s", dir, file);
+    return s;
+}
+
+static void answers(const char* dir, ist_tree* a, ist_tree* b) {
+    ist_pair* pair = ist_pair_new(a, b);
+    CHECK(pair != NULL, "ist_pair_new");
+    char* path = join(dir, "poses.txt");
+    FILE* f = fopen(path, "r");
+    free(path);
+    ist_pose pa, pb;
+    for (int i = 0; f && read_pose(f, &pa) && read_pose(f, &pb); i++) {
+        ist_distance_result d;
+        CHECK(ist_distance(pair, &pa, &pb, &d) == IST_OK, "distance");
+        printf("%d distance", i);
+        bits(d.distance);
+        printf(" %d", d.contact);
+        v3(d.point_a);
+        v3(d.point_b);
+        printf("\n");
+        int in_contact = -1;
+        CHECK(ist_contact(pair, &pa, &pb, &in_contact) == IST_OK, "contact");
+        printf("%d contact %d\n", i, in_contact);
+        ist_penetration_result p;
+        CHECK(ist_penetration_with_stiffness(pair, &pa, &pb, 2.5, &p) == IST_OK, "penetration");
+        printf("%d penetration", i);
+        bits(p.volume);
+        bits(p.max_depth);
+        v3(p.normal);
+        v3(p.force);
+        v3(p.torque_a);
+        v3(p.torque_b);
+        bits(p.area);
+        printf(" %zu\n", p.patch_count);
+        for (size_t j = 0; j < p.patch_count; j++) {
+            ist_patch x;
+            CHECK(ist_penetration_patch(pair, j, &x) == IST_OK, "patch %zu", j);
+            printf("%d patch %zu", i, j);
+            v3(x.point);
+            v3(x.normal);
+            bits(x.depth);
+            bits(x.volume);
+            printf(" %u\n", x.pairs);
+        }
+        ist_contact_point cs[8];
+        size_t n = 99;
+        CHECK(ist_multipoint(pair, &pa, &pb, 8, cs, &n) == IST_OK, "multipoint");
+        printf("%d multipoint %zu\n", i, n);
+        for (size_t j = 0; j < n; j++) {
+            printf("%d contact_point %zu", i, j);
+            v3(cs[j].point);
+            v3(cs[j].normal);
+            bits(cs[j].depth);
+            printf(" %u %u\n", cs[j].leaf_a, cs[j].leaf_b);
+        }
+    }
+    if (f) fclose(f);
+
+    ist_haptic_params hp;
+    CHECK(ist_haptic_params_default(IST_DEVICE_OMEGA, &hp) == IST_OK, "params");
+    hp.budget = 1.0;
+    hp.contact_stiffness = 2.0;
+    path = join(dir, "device.txt");
+    f = fopen(path, "r");
+    free(path);
+    ist_pose dev;
+    CHECK(f && read_pose(f, &dev), "device file");
+    hp.start = dev;
+    ist_haptic* h = ist_haptic_new(pair, &hp);
+    CHECK(h != NULL, "ist_haptic_new");
+    for (int i = 0; h; i++) {
+        ist_haptic_output o;
+        CHECK(ist_haptic_tick(h, &dev, 0.001, &o) == IST_OK, "tick %d", i);
+        printf("%d tick", i);
+        v3(o.force);
+        v3(o.torque);
+        v3(o.tool.t);
+        for (int k = 0; k < 4; k++) bits(o.tool.q[k]);
+        bits(o.volume);
+        bits(o.max_depth);
+        printf("\n");
+        if (!read_pose(f, &dev)) break;
+    }
+    if (f) fclose(f);
+    double now = 1.0, max = 1.0;
+    CHECK(ist_haptic_energy(h, &now, &max) == IST_OK, "energy");
+    printf("energy");
+    bits(now);
+    printf("\n");
+    CHECK(max <= 1e-12, "energy to the hand rose to %g J", max);
+    ist_haptic_free(h);
+    ist_pair_free(pair);
+}
+
+static void errors(const char* dir, ist_tree* a, ist_tree* b) {
+    /* Bad paths and a corrupt file: NULL and a message. */
+    CHECK(ist_tree_load("/nonexistent/x.ist") == NULL, "missing file");
+    CHECK(strlen(ist_last_error()) > 0, "no message");
+    CHECK(ist_tree_load(NULL) == NULL, "NULL path");
+    CHECK(strstr(ist_last_error(), "NULL") != NULL, "message names NULL");
+    char* corrupt = join(dir, "corrupt.ist");
+    FILE* f = fopen(corrupt, "wb");
+    fputs("ISTREE garbage, not a tree", f);
+    fclose(f);
+    CHECK(ist_tree_load(corrupt) == NULL, "corrupt file");
+    free(corrupt);
+    char* notmesh = join(dir, "poses.txt");
+    CHECK(ist_tree_build(notmesh, NULL) == NULL, "not a mesh");
+    free(notmesh);
+    ist_build_options bo = ist_build_options_default();
+    bo.voxel_size = -1.0;
+    CHECK(ist_tree_build("/nonexistent.stl", &bo) == NULL, "bad options");
+
+    /* NULL pointers. */
+    ist_pair* pair = ist_pair_new(a, b);
+    ist_pose id = ist_pose_identity();
+    ist_distance_result d;
+    int c;
+    ist_penetration_result p;
+    ist_patch patch;
+    ist_contact_point cs[4];
+    size_t n;
+    CHECK(ist_pair_new(NULL, b) == NULL, "pair of NULL");
+    CHECK(ist_distance(NULL, &id, &id, &d) == IST_ERR_NULL, "NULL pair");
+    CHECK(ist_distance(pair, NULL, &id, &d) == IST_ERR_NULL, "NULL pose");
+    CHECK(ist_distance(pair, &id, &id, NULL) == IST_ERR_NULL, "NULL out");
+    CHECK(ist_contact(pair, &id, &id, NULL) == IST_ERR_NULL, "NULL in_contact");
+    CHECK(ist_penetration(pair, &id, NULL, &p) == IST_ERR_NULL, "NULL pose");
+    CHECK(ist_multipoint(pair, &id, &id, 4, NULL, &n) == IST_ERR_NULL, "NULL out");
+    CHECK(ist_multipoint(pair, &id, &id, 4, cs, NULL) == IST_ERR_NULL, "NULL count");
+    CHECK(ist_tree_save(NULL, "x.ist") == IST_ERR_NULL, "NULL tree");
+    CHECK(ist_pose_from_matrix(NULL, 1, &id) == IST_ERR_NULL, "NULL matrix");
+
+    /* NaN and bad poses, bad arguments. */
+    ist_pose nan_pose = id;
+    nan_pose.t[1] = NAN;
+    CHECK(ist_distance(pair, &id, &nan_pose, &d) == IST_ERR_POSE, "NaN pose");
+    ist_pose zero_q = id;
+    zero_q.q[0] = 0.0;
+    CHECK(ist_contact(pair, &zero_q, &id, &c) == IST_ERR_POSE, "zero quaternion");
+    CHECK(ist_multipoint(pair, &id, &id, 0, cs, &n) == IST_ERR_INVALID_ARGUMENT, "k = 0");
+    CHECK(ist_penetration_with_stiffness(pair, &id, &id, -1.0, &p) == IST_ERR_INVALID_ARGUMENT,
+          "negative stiffness");
+    CHECK(ist_penetration(pair, &id, &id, &p) == IST_OK, "penetration");
+    CHECK(ist_penetration_patch(pair, p.patch_count, &patch) == IST_ERR_INVALID_ARGUMENT,
+          "patch past the end");
+    double shear[16] = {1, 0.5, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    CHECK(ist_pose_from_matrix(shear, 1, &id) == IST_ERR_POSE, "not a rotation");
+    double m[16] = {0, 1, 0, 0, -1, 0, 0, 0, 0, 0, 1, 0, 1, 2, 3, 1}; /* column-major */
+    ist_pose from_m;
+    CHECK(ist_pose_from_matrix(m, 1, &from_m) == IST_OK, "matrix");
+    CHECK(from_m.t[0] == 1 && from_m.t[1] == 2 && from_m.t[2] == 3, "translation column");
+    CHECK(fabs(from_m.q[0] - sqrt(0.5)) < 1e-12 && fabs(from_m.q[3] - sqrt(0.5)) < 1e-12,
+          "quarter turn about z");
+    ist_haptic_params hp;
+    CHECK(ist_haptic_params_default(42, &hp) == IST_ERR_INVALID_ARGUMENT, "unknown class");
+    CHECK(ist_haptic_params_default(IST_DEVICE_TOUCH, &hp) == IST_OK, "touch");
+    hp.rate = 0.0;
+    CHECK(ist_haptic_new(pair, &hp) == NULL, "rate 0");
+    CHECK(ist_haptic_params_default(IST_DEVICE_TOUCH, &hp) == IST_OK, "touch");
+    ist_haptic* h = ist_haptic_new(pair, &hp);
+    ist_haptic_output o;
+    CHECK(h && ist_haptic_tick(h, &nan_pose, 0.001, &o) == IST_ERR_POSE, "NaN device");
+    CHECK(h && ist_haptic_tick(h, &id, 0.001, NULL) == IST_ERR_NULL, "NULL out");
+    ist_haptic_free(h);
+    ist_haptic_free(NULL);
+    ist_pair_free(pair);
+    ist_pair_free(NULL);
+    ist_tree_free(NULL);
+    CHECK(strlen(ist_version()) > 0, "version");
+}
+
+int main(int argc, char** argv) {
+    if (argc != 2) {
+        fprintf(stderr, "usage: %s DIR (from `reference make DIR`)\n", argv[0]);
+        return 2;
+    }
+    char* pa = join(argv[1], "a.ist");
+    char* pb = join(argv[1], "b.ist");
+    ist_tree* a = ist_tree_load(pa);
+    ist_tree* b = ist_tree_load(pb);
+    free(pa);
+    free(pb);
+    if (!a || !b) {
+        fprintf(stderr, "loading the trees: %s\n", ist_last_error());
+        return 1;
+    }
+    answers(argv[1], a, b);
+    errors(argv[1], a, b);
+    /* A tree saved and loaded back answers the same. */
+    char* again = join(argv[1], "again.ist");
+    CHECK(ist_tree_save(a, again) == IST_OK, "save");
+    ist_tree* a2 = ist_tree_load(again);
+    CHECK(a2 != NULL && ist_tree_leaf_count(a2) == ist_tree_leaf_count(a), "reload");
+    free(again);
+    ist_tree_free(a2);
+    ist_tree_free(a);
+    ist_tree_free(b);
+    if (failures) {
+        fprintf(stderr, "%d checks failed\n", failures);
+        return 1;
+    }
+    fprintf(stderr, "abi_test: all checks passed\n");
+    return 0;
+}

@@ -79,6 +79,7 @@ fn make(dir: &Path) {
     std::fs::write(dir.join("poses.txt"), s).unwrap();
     // A device trajectory of B (A at the identity): closing in, pressing, sliding, leaving.
     let mut d = String::new();
+    let mut csv = String::from("t,tx,ty,tz,qw,qx,qy,qz\n");
     for i in 0..600 {
         let t = i as f64 / 1000.0;
         let z = -2.0 + 2.3 * (t / 0.3).min(1.0) - 2.3 * ((t - 0.45) / 0.15).clamp(0.0, 1.0);
@@ -88,8 +89,10 @@ fn make(dir: &Path) {
         )
         .unwrap();
         let _ = writeln!(d, "{}", pose_line(&p));
+        let _ = writeln!(csv, "{t},{}", pose_line(&p).replace(' ', ","));
     }
     std::fs::write(dir.join("device.txt"), d).unwrap();
+    std::fs::write(dir.join("device.csv"), csv).unwrap();
 }
 
 fn answer(dir: &Path) -> String {

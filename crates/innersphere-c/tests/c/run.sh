@@ -24,3 +24,19 @@ if ! cmp -s "$OUT/rust.txt" "$OUT/c.txt"; then
   exit 1
 fi
 echo "ok: C answers equal the Rust answers bit for bit ($(wc -l < "$OUT/rust.txt") lines), no ASan/UBSan/leak report"
+
+# The README's C example compiles and runs (on the generated trees under its file names).
+awk '/^```c$/{f=1;next} /^```$/{f=0} f' README.md > "$OUT/readme.c"
+$CC -std=c99 -Wall -Wextra -Werror $SAN -Iinclude "$OUT/readme.c" "$LIB" -lpthread -ldl -lm -o "$OUT/readme"
+cp "$OUT/a.ist" "$OUT/maxilla.ist"
+cp "$OUT/b.ist" "$OUT/mandible.ist"
+(cd "$OUT" && ./readme) | grep -q "mm apart" || { echo "FAILED: the README's C example"; exit 1; }
+echo "ok: the README's C example"
+
+# The C++ servo-loop example (and its CHAI3D-style adapter, against stubs) on the same trees.
+make -s -C examples/cpp TARGET="$(cd "$TARGET" && pwd)" CXXFLAGS="-std=c++17 -O2 -Wall -Wextra -Werror $SAN"
+ASAN_OPTIONS=detect_leaks=1 examples/cpp/haptic_loop "$OUT/a.ist" "$OUT/b.ist" "$OUT/device.csv" > "$OUT/cpp.json"
+grep -q '"ticks": 600,' "$OUT/cpp.json" || { echo "FAILED: the C++ example"; cat "$OUT/cpp.json"; exit 1; }
+grep -q '"over_budget": 0,' "$OUT/cpp.json" || echo "warning: ticks over budget under the sanitizers: $(cat "$OUT/cpp.json")"
+echo "ok: C++ example: $(cat "$OUT/cpp.json")"
+rm -f examples/cpp/haptic_loop

@@ -21,6 +21,17 @@
  * haptic loop holds the temporal coherence of one motion: use each from one thread at a
  * time (one per haptic thread). Query and tick calls never allocate after their first
  * call with the same arguments' sizes, and never block.
+ *
+ * History: a pair answers from where its last queries left off (its kinetic front, its
+ * last contacts), so the same pose can give answers that differ with the pair's history:
+ * volume, force and torques in their last bits (another summation order), the grouping of
+ * overlaps into patches, which k contacts ist_multipoint keeps when more exist, and the
+ * witness points of an overlapping ist_distance. Contact flags and separated distances do
+ * not change. Call ist_pair_reset before a query for an answer that depends on the pose
+ * alone (as `ist query` gives).
+ *
+ * Precision: sphere centres and radii are stored in single precision; distances and
+ * points are exact for those spheres, to about 1e-7 relative.
  */
 
 #ifndef INNERSPHERE_H
@@ -31,183 +42,336 @@
 #include <stddef.h>
 #include <stdint.h>
 
-// Success.
+/*
+ Success.
+ */
 #define IST_OK 0
 
-// A required pointer argument was NULL.
+/*
+ A required pointer argument was NULL.
+ */
 #define IST_ERR_NULL 1
 
-// An argument is out of range or malformed (a path that is not UTF-8, k = 0, an index past
-// the end, a NaN option).
+/*
+ An argument is out of range or malformed (a path that is not UTF-8, k = 0, an index past
+ the end, a NaN option).
+ */
 #define IST_ERR_INVALID_ARGUMENT 2
 
-// A pose is not a rigid transform (non-finite, a quaternion that cannot be normalised, a
-// matrix that is not a rotation).
+/*
+ A pose is not a rigid transform (non-finite, a quaternion that cannot be normalised, a
+ matrix that is not a rotation).
+ */
 #define IST_ERR_POSE 3
 
-// A file could not be read or written.
+/*
+ A file could not be read or written.
+ */
 #define IST_ERR_IO 4
 
-// A mesh file could not be parsed, or the mesh is no usable solid.
+/*
+ A mesh file could not be parsed, or the mesh is no usable solid.
+ */
 #define IST_ERR_MESH 5
 
-// A tree file is corrupt, truncated or not a tree file.
+/*
+ A tree file is corrupt, truncated or not a tree file.
+ */
 #define IST_ERR_CORRUPT_TREE 6
 
-// The library panicked (a bug: please report it with ist_last_error()).
+/*
+ The library panicked (a bug: please report it with ist_last_error()).
+ */
 #define IST_ERR_PANIC 7
 
-// A desktop pen device (Geomagic Touch class: 3.3 N, rotations sensed only).
+/*
+ A desktop pen device (Geomagic Touch class: 3.3 N, rotations sensed only).
+ */
 #define IST_DEVICE_TOUCH 0
 
-// A parallel device (Force Dimension omega.6 class: 12 N, rotations sensed only).
+/*
+ A parallel device (Force Dimension omega.6 class: 12 N, rotations sensed only).
+ */
 #define IST_DEVICE_OMEGA 1
 
-// A haptic loop (opaque; one thread at a time: the device's servo thread).
+/*
+ A haptic loop (opaque; one thread at a time: the device's servo thread).
+ */
 typedef struct ist_haptic ist_haptic;
 
-// A pair of trees with the temporal coherence of one motion (opaque; one thread at a time).
+/*
+ A pair of trees with the temporal coherence of one motion (opaque; one thread at a time).
+ */
 typedef struct ist_pair ist_pair;
 
-// An Inner Sphere Tree (opaque; immutable, shareable between threads).
+/*
+ An Inner Sphere Tree (opaque; immutable, shareable between threads).
+ */
 typedef struct ist_tree ist_tree;
 
-// A rigid pose: p' = R(q) p + t, q = {w, x, y, z} (normalised on use; it must not be zero).
+/*
+ A rigid pose: p' = R(q) p + t, q = {w, x, y, z} (normalised on use; it must not be zero).
+ */
 typedef struct ist_pose {
-  // Translation (model units).
+  /*
+   Translation (model units).
+   */
   double t[3];
-  // Rotation quaternion {w, x, y, z}.
+  /*
+   Rotation quaternion {w, x, y, z}.
+   */
   double q[4];
 } ist_pose;
 
-// Settings of a haptic loop. Units: mm, N, s, kg; torques in N·mm.
+/*
+ Settings of a haptic loop. Units: mm, N, s, kg; torques in N·mm.
+ */
 typedef struct ist_haptic_params {
-  // Device ticks per second (Hz).
+  /*
+   Device ticks per second (Hz).
+   */
   double rate;
-  // Most time one tick may take (s); the exact query gives way to the time-critical one
-  // when it would not fit.
+  /*
+   Most time one tick may take (s); the exact query gives way to the time-critical one
+   when it would not fit.
+   */
   double budget;
-  // Largest force sent (N).
+  /*
+   Largest force sent (N).
+   */
   double max_force;
-  // Largest torque sent (N·mm); 0 for a device that does not actuate rotations.
+  /*
+   Largest torque sent (N·mm); 0 for a device that does not actuate rotations.
+   */
   double max_torque;
-  // Stiffest spring the device renders (N/mm).
+  /*
+   Stiffest spring the device renders (N/mm).
+   */
   double max_stiffness;
-  // Coupling stiffness (N/mm).
+  /*
+   Coupling stiffness (N/mm).
+   */
   double coupling_stiffness;
-  // Coupling damping (N·s/mm).
+  /*
+   Coupling damping (N·s/mm).
+   */
   double coupling_damping;
-  // Rotational coupling stiffness (N·mm/rad).
+  /*
+   Rotational coupling stiffness (N·mm/rad).
+   */
   double angular_stiffness;
-  // Rotational coupling damping (N·mm·s/rad).
+  /*
+   Rotational coupling damping (N·mm·s/rad).
+   */
   double angular_damping;
-  // Penalty force per penetration volume (N/mm³).
+  /*
+   Penalty force per penetration volume (N/mm³).
+   */
   double contact_stiffness;
-  // Contact damping (s), proportional to the contact stiffness.
+  /*
+   Contact damping (s), proportional to the contact stiffness.
+   */
   double contact_damping;
-  // Density of the tool (kg/mm³).
+  /*
+   Density of the tool (kg/mm³).
+   */
   double density;
-  // World pose of body A (fixed).
+  /*
+   World pose of body A (fixed).
+   */
   struct ist_pose pose_a;
-  // Where the tool (body B) starts, at rest.
+  /*
+   Where the tool (body B) starts, at rest.
+   */
   struct ist_pose start;
 } ist_haptic_params;
 
-// What one tick did (world frame).
+/*
+ What one tick did (world frame).
+ */
 typedef struct ist_haptic_output {
-  // Force to send to the device (N), clamped to max_force.
+  /*
+   Force to send to the device (N), clamped to max_force.
+   */
   double force[3];
-  // Torque to send to the device (N·mm), clamped to max_torque.
+  /*
+   Torque to send to the device (N·mm), clamped to max_torque.
+   */
   double torque[3];
-  // The tool's pose after the tick: draw this.
+  /*
+   The tool's pose after the tick: draw this.
+   */
   struct ist_pose tool;
-  // Penalty force on the tool (N).
+  /*
+   Penalty force on the tool (N).
+   */
   double contact_force[3];
-  // Penetration volume (mm³): exact, or what the time-critical query found.
+  /*
+   Penetration volume (mm³): exact, or what the time-critical query found.
+   */
   double volume;
-  // Upper bound on the volume (= volume unless budgeted).
+  /*
+   Upper bound on the volume (= volume unless budgeted).
+   */
   double volume_bound;
-  // Deepest leaf-sphere overlap (mm).
+  /*
+   Deepest leaf-sphere overlap (mm).
+   */
   double max_depth;
-  // Time the tick took (s).
+  /*
+   Time the tick took (s).
+   */
   double compute_seconds;
-  // 1 when the time-critical query answered.
+  /*
+   1 when the time-critical query answered.
+   */
   int budgeted;
-  // 1 when the tick took longer than its budget.
+  /*
+   1 when the tick took longer than its budget.
+   */
   int late;
 } ist_haptic_output;
 
-// Result of ist_distance (world frame).
+/*
+ Result of ist_distance (world frame).
+ */
 typedef struct ist_distance_result {
-  // Distance between the two sphere packings (0 when they overlap).
+  /*
+   Distance between the two sphere packings (0 when they overlap), computed from their
+   single-precision spheres.
+   */
   double distance;
-  // 1 when they overlap, else 0.
+  /*
+   1 when they overlap, else 0.
+   */
   int contact;
-  // Closest point on A.
+  /*
+   Closest point on A; when they overlap, a point of an overlapping leaf sphere of A
+   (which one depends on the pair's history).
+   */
   double point_a[3];
-  // Closest point on B.
+  /*
+   Closest point on B; when they overlap, a point of an overlapping leaf sphere of B.
+   */
   double point_b[3];
 } ist_distance_result;
 
-// Result of ist_penetration (world frame).
+/*
+ Result of ist_penetration (world frame).
+ */
 typedef struct ist_penetration_result {
-  // Volume of the intersection of the two sphere packings (model units³).
+  /*
+   Volume of the intersection of the two sphere packings (model units³).
+   */
   double volume;
-  // Largest overlap of two leaf spheres (model units).
+  /*
+   Largest overlap of two leaf spheres (model units).
+   */
   double max_depth;
-  // Unit contact normal: the direction B is pushed (zero without contact).
+  /*
+   Unit contact normal: the direction B is pushed (zero without contact).
+   */
   double normal[3];
-  // Penalty force on B: stiffness × volume × normal (the force on A is its opposite).
+  /*
+   Penalty force on B: stiffness × volume × normal (the force on A is its opposite).
+   */
   double force[3];
-  // Torque on A about A's centre of mass.
+  /*
+   Torque on A about A's centre of mass (that of the mesh the tree was built from,
+   stored in the tree file).
+   */
   double torque_a[3];
-  // Torque on B about B's centre of mass.
+  /*
+   Torque on B about B's centre of mass.
+   */
   double torque_b[3];
-  // Contact area (model units²): how fast the volume shrinks per unit of separation.
+  /*
+   Contact area (model units²): how fast the volume shrinks per unit of separation.
+   */
   double area;
-  // Number of contact patches (read them with ist_penetration_patch).
+  /*
+   Number of contact patches, at most 8 (overlaps are grouped with the nearest patch,
+   within 1/8 of the smaller root sphere's radius; beyond 8 patches, with the nearest
+   one); read them with ist_penetration_patch.
+   */
   size_t patch_count;
 } ist_penetration_result;
 
-// One contact patch of the last ist_penetration (world frame).
+/*
+ One contact patch of the last ist_penetration (world frame).
+ */
 typedef struct ist_patch {
-  // Volume-weighted centroid of the overlaps.
+  /*
+   Volume-weighted centroid of the overlaps.
+   */
   double point[3];
-  // Unit direction from A into B.
+  /*
+   Unit direction from A into B.
+   */
   double normal[3];
-  // Largest overlap in the patch.
+  /*
+   Largest overlap in the patch.
+   */
   double depth;
-  // Volume of the patch.
+  /*
+   Volume of the patch.
+   */
   double volume;
-  // Overlapping leaf pairs in the patch.
+  /*
+   Overlapping leaf pairs in the patch.
+   */
   uint32_t pairs;
 } ist_patch;
 
-// One contact of ist_multipoint (world frame).
+/*
+ One contact of ist_multipoint (world frame).
+ */
 typedef struct ist_contact_point {
-  // Point in the middle of the overlap.
+  /*
+   Point in the middle of the overlap.
+   */
   double point[3];
-  // Unit direction from A's sphere centre to B's.
+  /*
+   Unit direction from A's sphere centre to B's.
+   */
   double normal[3];
-  // Overlap of the two spheres (> 0).
+  /*
+   Overlap of the two spheres (> 0).
+   */
   double depth;
-  // Leaf (node index) of tree A.
+  /*
+   Leaf (node index) of tree A.
+   */
   uint32_t leaf_a;
-  // Leaf (node index) of tree B.
+  /*
+   Leaf (node index) of tree B.
+   */
   uint32_t leaf_b;
 } ist_contact_point;
 
-// Options of ist_tree_build, with the meaning of `ist build`'s flags.
+/*
+ Options of ist_tree_build, with the meaning of `ist build`'s flags.
+ */
 typedef struct ist_build_options {
-  // Voxel edge length (model units); when > 0 it wins over `resolution`.
+  /*
+   Voxel edge length (model units); when > 0 it wins over `resolution`.
+   */
   double voxel_size;
-  // Voxels along the longest side of the mesh's bounding box (used when voxel_size is 0).
+  /*
+   Voxels along the longest side of the mesh's bounding box (used when voxel_size is 0).
+   */
   uint32_t resolution;
-  // No inner sphere smaller than this (model units; 0 = down to 1e-4 voxel).
+  /*
+   No inner sphere smaller than this (model units; 0 = down to 1e-4 voxel).
+   */
   double min_radius;
-  // Off-grid refinement steps of each sphere's centre (0 = the paper's packing).
+  /*
+   Off-grid refinement steps of each sphere's centre (0 = the paper's packing).
+   */
   uint32_t refine_steps;
-  // Stop after this many spheres (0 = no limit).
+  /*
+   Stop after this many spheres (0 = no limit).
+   */
   uint64_t max_spheres;
 } ist_build_options;
 
@@ -215,148 +379,200 @@ typedef struct ist_build_options {
 extern "C" {
 #endif // __cplusplus
 
-// The library's version, e.g. "0.1.0" (static; do not free).
+/*
+ The library's version, e.g. "0.1.0" (static; do not free).
+ */
 const char *ist_version(void);
 
-// The message of the last failing call on this thread ("" when none failed yet). The
-// pointer stays valid until the next failing call on the same thread; do not free it.
+/*
+ The message of the last failing call on this thread ("" when none failed yet). The
+ pointer stays valid until the next failing call on the same thread; do not free it.
+ */
 const char *ist_last_error(void);
 
-// The defaults of a device class (IST_DEVICE_TOUCH or IST_DEVICE_OMEGA) at 1 kHz, with A
-// at the identity and the tool starting at the identity.
-//
-// # Safety
-// `out` is NULL or valid.
+/*
+ The defaults of a device class (IST_DEVICE_TOUCH or IST_DEVICE_OMEGA) at 1 kHz, with A
+ at the identity and the tool starting at the identity.
+
+ # Safety
+ `out` is NULL or valid.
+ */
 int ist_haptic_params_default(int device_class, struct ist_haptic_params *out);
 
-// A haptic loop on the trees of `pair` (it keeps its own pair: `pair` stays yours), with
-// B as the tool. B's tree must hold mass properties (built by this version). NULL on error.
-//
-// # Safety
-// `pair` and `params` are NULL or valid.
+/*
+ A haptic loop on the trees of `pair` (it keeps its own pair: `pair` stays yours), with
+ B as the tool. B's tree must hold mass properties (built by this version). NULL on error.
+
+ # Safety
+ `pair` and `params` are NULL or valid.
+ */
 struct ist_haptic *ist_haptic_new(const struct ist_pair *pair, const struct ist_haptic_params *params);
 
-// One device tick: the device's pose in (B's pose in the world), `dt` the seconds since
-// the last tick (0: one period); the force and torque to send and the tool's pose out.
-// Never allocates, never blocks. A NaN device pose is refused (IST_ERR_POSE) and the tool
-// stays where it was.
-//
-// # Safety
-// Every pointer is NULL or valid.
+/*
+ One device tick: the device's pose in (B's pose in the world), `dt` the seconds since
+ the last tick (0: one period); the force and torque to send and the tool's pose out.
+ Never allocates, never blocks. A NaN device pose is refused (IST_ERR_POSE) and the tool
+ stays where it was.
+
+ # Safety
+ Every pointer is NULL or valid.
+ */
 int ist_haptic_tick(struct ist_haptic *haptic, const struct ist_pose *device, double dt, struct ist_haptic_output *out);
 
-// The energy the device has given the hand so far (J; at most 0 for a passive loop), and
-// its largest value, through `now` and `max` (either may be NULL).
-//
-// # Safety
-// Every pointer is NULL or valid.
+/*
+ The energy the device has given the hand so far (J; at most 0 for a passive loop), and
+ its largest value, through `now` and `max` (either may be NULL).
+
+ # Safety
+ Every pointer is NULL or valid.
+ */
 int ist_haptic_energy(const struct ist_haptic *haptic, double *now, double *max);
 
-// Frees a haptic loop (NULL is accepted).
-//
-// # Safety
-// `haptic` is NULL or from ist_haptic_new, not freed before.
+/*
+ Frees a haptic loop (NULL is accepted).
+
+ # Safety
+ `haptic` is NULL or from ist_haptic_new, not freed before.
+ */
 void ist_haptic_free(struct ist_haptic *haptic);
 
-// A new pair of trees `a` (body A) and `b` (body B). NULL on error.
-//
-// # Safety
-// `a` and `b` are NULL or live trees.
+/*
+ A new pair of trees `a` (body A) and `b` (body B). NULL on error.
+
+ # Safety
+ `a` and `b` are NULL or live trees.
+ */
 struct ist_pair *ist_pair_new(const struct ist_tree *a, const struct ist_tree *b);
 
-// Frees a pair (NULL is accepted).
-//
-// # Safety
-// `pair` is NULL or from ist_pair_new, not freed before.
+/*
+ Frees a pair (NULL is accepted).
+
+ # Safety
+ `pair` is NULL or from ist_pair_new, not freed before.
+ */
 void ist_pair_free(struct ist_pair *pair);
 
-// Forgets the pair's temporal coherence (call between unrelated motions).
-//
-// # Safety
-// `pair` is NULL or a live pair.
+/*
+ Forgets the pair's temporal coherence (call between unrelated motions).
+
+ # Safety
+ `pair` is NULL or a live pair.
+ */
 int ist_pair_reset(struct ist_pair *pair);
 
-// Exact distance between the two sphere packings with the closest points (world frame).
-//
-// # Safety
-// Every pointer is NULL or valid.
+/*
+ Exact distance between the two sphere packings with the closest points (world frame).
+
+ # Safety
+ Every pointer is NULL or valid.
+ */
 int ist_distance(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, struct ist_distance_result *out);
 
-// First contact: `*in_contact` = 1 when the packings overlap, else 0.
-//
-// # Safety
-// Every pointer is NULL or valid.
+/*
+ First contact: `*in_contact` = 1 when the packings overlap, else 0.
+
+ # Safety
+ Every pointer is NULL or valid.
+ */
 int ist_contact(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, int *in_contact);
 
-// Penetration volume, normal, force (volume along the normal: stiffness 1), torques and
-// contact patches (read them with ist_penetration_patch).
-//
-// # Safety
-// Every pointer is NULL or valid.
+/*
+ Penetration volume, normal, force (volume along the normal: stiffness 1), torques and
+ contact patches (read them with ist_penetration_patch).
+
+ # Safety
+ Every pointer is NULL or valid.
+ */
 int ist_penetration(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, struct ist_penetration_result *out);
 
-// ist_penetration with a penalty stiffness: force per unit volume (e.g. N/mm³).
-//
-// # Safety
-// Every pointer is NULL or valid.
+/*
+ ist_penetration with a penalty stiffness: force per unit volume (e.g. N/mm³), finite
+ and not negative (else IST_ERR_INVALID_ARGUMENT).
+
+ # Safety
+ Every pointer is NULL or valid.
+ */
 int ist_penetration_with_stiffness(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, double stiffness, struct ist_penetration_result *out);
 
-// Patch `i` (< patch_count) of the pair's last ist_penetration.
-//
-// # Safety
-// Every pointer is NULL or valid.
+/*
+ Patch `i` (< patch_count) of the pair's last ist_penetration.
+
+ # Safety
+ Every pointer is NULL or valid.
+ */
 int ist_penetration_patch(const struct ist_pair *pair, size_t i, struct ist_patch *out);
 
-// Up to `k` contacts (one per pair of nodes at split depth 4), written to `out[0..*count]`;
-// `out` has room for `k`. k must be at least 1.
-//
-// # Safety
-// Every pointer is NULL or valid; `out` points to at least `k` elements.
+/*
+ Up to `k` contacts (one per pair of nodes at split depth 4), written to `out[0..*count]`;
+ `out` has room for `k`. k must be at least 1. The contacts still valid from the pair's
+ last multipoint come first; when more than k exist, which are kept depends on the
+ traversal and the pair's history (ist_pair_reset first for an answer from the pose
+ alone).
+
+ # Safety
+ Every pointer is NULL or valid; `out` points to at least `k` elements.
+ */
 int ist_multipoint(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, size_t k, struct ist_contact_point *out, size_t *count);
 
-// Fills `*out` from a 4×4 homogeneous matrix (OpenGL / OpenHaptics / CHAI3D), column-major
-// when `column_major` is non-zero, else row-major.
-//
-// # Safety
-// `m` is NULL or points to 16 doubles; `out` NULL or valid.
+/*
+ Fills `*out` from a 4×4 homogeneous matrix (OpenGL / OpenHaptics / CHAI3D), column-major
+ when `column_major` is non-zero, else row-major.
+
+ # Safety
+ `m` is NULL or points to 16 doubles; `out` NULL or valid.
+ */
 int ist_pose_from_matrix(const double *m, int column_major, struct ist_pose *out);
 
-// The identity pose.
+/*
+ The identity pose.
+ */
 struct ist_pose ist_pose_identity(void);
 
-// The library's default build options (128 voxels along the longest side, no minimum
-// radius, no refinement, no sphere limit).
+/*
+ The library's default build options (128 voxels along the longest side, no minimum
+ radius, no refinement, no sphere limit).
+ */
 struct ist_build_options ist_build_options_default(void);
 
-// Loads a tree file (`ist build`'s output). NULL on error (ist_last_error says why).
-//
-// # Safety
-// `path` is NULL or a NUL-terminated string.
+/*
+ Loads a tree file (`ist build`'s output). NULL on error (ist_last_error says why).
+
+ # Safety
+ `path` is NULL or a NUL-terminated string.
+ */
 struct ist_tree *ist_tree_load(const char *path);
 
-// Builds the tree of a mesh file (.stl, .obj, .ply, .off, optionally .gz) with `opts`
-// (NULL: ist_build_options_default()). Takes seconds to minutes. NULL on error.
-//
-// # Safety
-// `mesh_path` is NULL or a NUL-terminated string; `opts` is NULL or points to options.
+/*
+ Builds the tree of a mesh file (.stl, .obj, .ply, .off, optionally .gz) with `opts`
+ (NULL: ist_build_options_default()). Takes seconds to minutes. NULL on error.
+
+ # Safety
+ `mesh_path` is NULL or a NUL-terminated string; `opts` is NULL or points to options.
+ */
 struct ist_tree *ist_tree_build(const char *mesh_path, const struct ist_build_options *opts);
 
-// Writes `tree` to `path` (whole or not at all; never over an input of the same call).
-//
-// # Safety
-// `tree` is NULL or from ist_tree_load / ist_tree_build; `path` NULL or NUL-terminated.
+/*
+ Writes `tree` to `path` (whole or not at all; never over an input of the same call).
+
+ # Safety
+ `tree` is NULL or from ist_tree_load / ist_tree_build; `path` NULL or NUL-terminated.
+ */
 int ist_tree_save(const struct ist_tree *tree, const char *path);
 
-// Number of leaf spheres of `tree` (0 for NULL).
-//
-// # Safety
-// `tree` is NULL or a live tree.
+/*
+ Number of leaf spheres of `tree` (0 for NULL).
+
+ # Safety
+ `tree` is NULL or a live tree.
+ */
 size_t ist_tree_leaf_count(const struct ist_tree *tree);
 
-// Frees a tree (NULL is accepted). Pairs built on it keep their own reference.
-//
-// # Safety
-// `tree` is NULL or from ist_tree_load / ist_tree_build, not freed before.
+/*
+ Frees a tree (NULL is accepted). Pairs built on it keep their own reference.
+
+ # Safety
+ `tree` is NULL or from ist_tree_load / ist_tree_build, not freed before.
+ */
 void ist_tree_free(struct ist_tree *tree);
 
 #ifdef __cplusplus

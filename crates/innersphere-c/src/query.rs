@@ -123,7 +123,8 @@ pub unsafe extern "C" fn ist_penetration(
     unsafe { ist_penetration_with_stiffness(pair, pose_a, pose_b, 1.0, out) }
 }
 
-/// ist_penetration with a penalty stiffness: force per unit volume (e.g. N/mm³).
+/// ist_penetration with a penalty stiffness: force per unit volume (e.g. N/mm³), finite
+/// and not negative (else IST_ERR_INVALID_ARGUMENT).
 ///
 /// # Safety
 /// Every pointer is NULL or valid.
@@ -138,6 +139,7 @@ pub unsafe extern "C" fn ist_penetration_with_stiffness(
     status(|| {
         let (pair, a, b) = unsafe { args(pair, pose_a, pose_b) }?;
         let out = unsafe { mutable(out, "out") }?;
+        // Refused: NaN, infinite or negative.
         if !(stiffness.is_finite() && stiffness >= 0.0) {
             return Err(Fail::arg(format!(
                 "the stiffness must be finite and not negative, not {stiffness}"
@@ -194,7 +196,10 @@ pub unsafe extern "C" fn ist_penetration_patch(
 }
 
 /// Up to `k` contacts (one per pair of nodes at split depth 4), written to `out[0..*count]`;
-/// `out` has room for `k`. k must be at least 1.
+/// `out` has room for `k`. k must be at least 1. The contacts still valid from the pair's
+/// last multipoint come first; when more than k exist, which are kept depends on the
+/// traversal and the pair's history (ist_pair_reset first for an answer from the pose
+/// alone).
 ///
 /// # Safety
 /// Every pointer is NULL or valid; `out` points to at least `k` elements.

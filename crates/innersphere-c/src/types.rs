@@ -51,13 +51,15 @@ pub struct ist_build_options {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ist_distance_result {
-    /// Distance between the two sphere packings (0 when they overlap).
+    /// Distance between the two sphere packings (0 when they overlap), computed from their
+    /// single-precision spheres.
     pub distance: f64,
     /// 1 when they overlap, else 0.
     pub contact: c_int,
-    /// Closest point on A.
+    /// Closest point on A; when they overlap, a point of an overlapping leaf sphere of A
+    /// (which one depends on the pair's history).
     pub point_a: [f64; 3],
-    /// Closest point on B.
+    /// Closest point on B; when they overlap, a point of an overlapping leaf sphere of B.
     pub point_b: [f64; 3],
 }
 
@@ -73,13 +75,16 @@ pub struct ist_penetration_result {
     pub normal: [f64; 3],
     /// Penalty force on B: stiffness × volume × normal (the force on A is its opposite).
     pub force: [f64; 3],
-    /// Torque on A about A's centre of mass.
+    /// Torque on A about A's centre of mass (that of the mesh the tree was built from,
+    /// stored in the tree file).
     pub torque_a: [f64; 3],
     /// Torque on B about B's centre of mass.
     pub torque_b: [f64; 3],
     /// Contact area (model units²): how fast the volume shrinks per unit of separation.
     pub area: f64,
-    /// Number of contact patches (read them with ist_penetration_patch).
+    /// Number of contact patches, at most 8 (overlaps are grouped with the nearest patch,
+    /// within 1/8 of the smaller root sphere's radius; beyond 8 patches, with the nearest
+    /// one); read them with ist_penetration_patch.
     pub patch_count: usize,
 }
 

@@ -39,7 +39,7 @@ proptest! {
         let (pa, pb) = pair_poses(a, b, pose([1.0, 2.0, -0.5], qa), quat(qb[0], qb[1], qb[2], qb[3]), off * 0.9 * scale);
         let want = brute::penetration(a, &pa, b, &pb, stiffness);
         let mut pair = pair(a, b);
-        let opts = PenetrationOptions { stiffness, max_patches, patch_radius, safe_motion: false, tracking };
+        let opts = PenetrationOptions { stiffness, max_patches, patch_radius, safe_motion: false, tracking, linearize: false };
         let p = pair.penetration_with(&pa, &pb, &opts);
         let patches = pair.patches();
         prop_assert_eq!(p.pairs, want.pairs);

@@ -297,7 +297,7 @@ proptest! {
                 check_multipoint(&mut st[i], pa, pb, &r, &opts)?;
             }
             for (i, tracking) in [(6, Tracking::Front), (7, Tracking::Traversal)] {
-                let opts = PenetrationOptions { stiffness: 10.0, max_patches: 4, patch_radius: 0.0, safe_motion: true, tracking };
+                let opts = PenetrationOptions { stiffness: 10.0, max_patches: 4, patch_radius: 0.0, safe_motion: true, tracking, linearize: true };
                 check_penetration(&mut st[i], pa, pb, &r, &opts)?;
             }
         }

@@ -46,6 +46,7 @@ fn the_force_changes_as_the_stiffness_says() {
     let mut pair = Pair::new(a.clone(), b.clone());
     let opts = PenetrationOptions {
         stiffness: 100.0,
+        linearize: true,
         ..Default::default()
     };
     let pa = Pose::IDENTITY;
@@ -112,8 +113,12 @@ proptest! {
         let pa = Pose::new(DVec3::new(0.3, -0.2, 0.1), DQuat::from_rotation_z(0.4)).unwrap();
         let pb = pa.then(&pb);
         let mut pair = Pair::new(a.clone(), b.clone());
-        let opts = PenetrationOptions { stiffness: 3.0, ..Default::default() };
+        let opts = PenetrationOptions { stiffness: 3.0, linearize: true, ..Default::default() };
+        // Without linearize the sums are skipped: zero, and the rest unchanged.
+        let plain = Pair::new(a.clone(), b.clone()).penetration_with(&pa, &pb, &PenetrationOptions { stiffness: 3.0, ..Default::default() });
+        prop_assert_eq!(norm(&plain.stiffness), 0.0);
         let p = pair.penetration_with(&pa, &pb, &opts);
+        prop_assert_eq!((plain.volume, plain.force, plain.area), (p.volume, p.force, p.area));
         let k = p.stiffness.to_matrix6();
         let n = norm(&p.stiffness).max(1e-300);
         for (i, row) in k.iter().enumerate() {

@@ -25,6 +25,10 @@ if ! cmp -s "$OUT/rust.txt" "$OUT/c.txt"; then
 fi
 echo "ok: C answers equal the Rust answers bit for bit ($(wc -l < "$OUT/rust.txt") lines), no ASan/UBSan/leak report"
 
+# A C program written against the header alone agrees with `ist query --json`, bit for bit.
+cargo build --release -q -p ist
+bash crates/innersphere-c/tests/c/blind.sh "$OUT/a.ist" "$OUT/b.ist" | tail -1
+
 # The README's C example compiles and runs (on the generated trees under its file names).
 awk '/^```c$/{f=1;next} /^```$/{f=0} f' README.md > "$OUT/readme.c"
 $CC -std=c99 -Wall -Wextra -Werror $SAN -Iinclude "$OUT/readme.c" "$LIB" -lpthread -ldl -lm -o "$OUT/readme"

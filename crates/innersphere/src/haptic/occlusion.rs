@@ -117,6 +117,7 @@ pub fn occlude(
     let popts = PenetrationOptions {
         stiffness: opts.contact_stiffness,
         max_patches: 16,
+        linearize: true,
         ..Default::default()
     };
     let h = opts.step;

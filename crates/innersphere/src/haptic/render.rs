@@ -172,6 +172,7 @@ impl HapticLoop {
             penetration: PenetrationOptions {
                 stiffness: opts.contact_stiffness,
                 max_patches: opts.max_patches,
+                linearize: true,
                 ..Default::default()
             },
             opts,

@@ -29,7 +29,8 @@ pub struct BudgetedVolume {
     pub torque_b: DVec3,
     /// Contact area of the pairs found (as [`Penetration::area`](crate::Penetration::area)).
     pub area: f64,
-    /// Linearised wrench of the pairs found (as [`Penetration::stiffness`](crate::Penetration::stiffness)).
+    /// Linearised wrench of the pairs found (as [`Penetration::stiffness`](crate::Penetration::stiffness);
+    /// zero unless [`PenetrationOptions::linearize`](crate::PenetrationOptions::linearize) is set).
     pub stiffness: ContactStiffness,
 }
 
@@ -51,10 +52,14 @@ pub(crate) fn penetration_within(
     heap: &mut PairHeap,
     budget: u64,
     stiffness: f64,
+    linearize: bool,
 ) -> BudgetedVolume {
     heap.clear();
     let mut visits = 1u64;
-    let mut sums = Sums::default();
+    let mut sums = Sums {
+        linearize,
+        ..Sums::default()
+    };
     let c0 = ctx.xf(0);
     let (ov, _) = ctx.test(0, 0, c0);
     let va = &ia.subtree_volume;

@@ -323,7 +323,7 @@ impl Pair {
     }
 
     /// [`Pair::penetration_within`] with options: of [`PenetrationOptions`] only the
-    /// stiffness applies (the force of the pairs found).
+    /// stiffness (the force of the pairs found) and `linearize` apply.
     pub fn penetration_within_with(
         &mut self,
         pose_a: &Pose,
@@ -342,6 +342,7 @@ impl Pair {
             &mut self.heap,
             budget,
             opts.stiffness,
+            opts.linearize,
         )
     }
 

@@ -49,6 +49,10 @@ pub struct PenetrationOptions {
     pub safe_motion: bool,
     /// Where the overlapping leaf pairs come from (default [`Tracking::Auto`]).
     pub tracking: Tracking,
+    /// Also sum [`Penetration::stiffness`] (the linearised wrench an implicit integrator
+    /// needs; the haptic loop sets it). Off by default: it adds about a quarter to the
+    /// slowest frames of deep contact (measured on the jaw pair, see BENCHMARKS.md).
+    pub linearize: bool,
 }
 
 impl Default for PenetrationOptions {
@@ -59,6 +63,7 @@ impl Default for PenetrationOptions {
             patch_radius: 0.0,
             safe_motion: true,
             tracking: Tracking::Auto,
+            linearize: false,
         }
     }
 }
@@ -135,7 +140,7 @@ pub struct Penetration {
     /// (`−dV/dd` for a motion along every pair's own direction).
     pub area: f64,
     /// How the force and B's torque change as B moves: what an implicit integrator needs
-    /// (see [`ContactStiffness`]).
+    /// (see [`ContactStiffness`]). Zero unless [`PenetrationOptions::linearize`] is set.
     pub stiffness: ContactStiffness,
     /// 0 with penetration; otherwise a proved lower bound on the separation.
     pub distance: f64,
@@ -237,6 +242,8 @@ pub(crate) struct Sums {
     pub aus: DMat3,
     /// Σ a·s sᵀ.
     pub ass: DMat3,
+    /// Whether the three sums above are kept.
+    pub linearize: bool,
 }
 
 impl Default for Sums {
@@ -252,6 +259,7 @@ impl Default for Sums {
             auu: DMat3::ZERO,
             aus: DMat3::ZERO,
             ass: DMat3::ZERO,
+            linearize: false,
         }
     }
 }
@@ -282,10 +290,12 @@ impl Sums {
         self.vgu += s * v;
         self.max_depth = self.max_depth.max(depth);
         self.area += a;
-        let au = u * a;
-        self.auu += outer(au, u);
-        self.aus += outer(au, s);
-        self.ass += outer(s * a, s);
+        if self.linearize {
+            let au = u * a;
+            self.auu += outer(au, u);
+            self.aus += outer(au, s);
+            self.ass += outer(s * a, s);
+        }
         (v, p, u, depth)
     }
 
@@ -390,7 +400,10 @@ pub(crate) fn penetration(
     s.patches.clear();
     let mut visits = 0u64;
     let mut min_sep = f32::INFINITY;
-    let mut sums = Sums::default();
+    let mut sums = Sums {
+        linearize: opts.linearize,
+        ..Sums::default()
+    };
     let mut skipped = false;
     let use_front = match opts.tracking {
         Tracking::Front => true,

@@ -144,6 +144,8 @@ pub fn kinds() -> Vec<Kind> {
                     max_patches,
                     patch_radius,
                     stiffness: 2.0,
+                    // Both ways, without multiplying the cases.
+                    linearize: max_patches == 8,
                 }));
             }
         }

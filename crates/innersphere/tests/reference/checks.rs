@@ -322,6 +322,7 @@ pub fn check_all(
                 patch_radius: 0.0,
                 safe_motion: false,
                 tracking,
+                linearize: max_patches == 1,
             };
             check_penetration(&mut fresh(), pa, pb, &r, &opts)?;
         }

@@ -286,10 +286,6 @@ typedef struct ist_penetration_result {
    */
   double torque_b[3];
   /*
-   Contact area (model units²): how fast the volume shrinks per unit of separation.
-   */
-  double area;
-  /*
    Number of contact patches, at most 8 (overlaps are grouped with the nearest patch,
    within 1/8 of the smaller root sphere's radius; beyond 8 patches, with the nearest
    one); read them with ist_penetration_patch.

@@ -120,14 +120,13 @@ fn answer(dir: &Path) -> String {
         let q = pair.penetration_with(&pa, &pb, &opts);
         let _ = writeln!(
             out,
-            "{i} penetration {} {} {} {} {} {} {} {}",
+            "{i} penetration {} {} {} {} {} {} {}",
             bits(q.volume),
             bits(q.max_depth),
             v(q.normal),
             v(q.force),
             v(q.torque_a),
             v(q.torque_b),
-            bits(q.area),
             q.patch_count
         );
         for (j, x) in pair.patches().iter().enumerate() {

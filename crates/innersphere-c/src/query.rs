@@ -157,7 +157,6 @@ pub unsafe extern "C" fn ist_penetration_with_stiffness(
             force: p.force.to_array(),
             torque_a: p.torque_a.to_array(),
             torque_b: p.torque_b.to_array(),
-            area: p.area,
             patch_count: p.patch_count,
         };
         Ok(())

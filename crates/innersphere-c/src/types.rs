@@ -80,8 +80,6 @@ pub struct ist_penetration_result {
     pub torque_a: [f64; 3],
     /// Torque on B about B's centre of mass.
     pub torque_b: [f64; 3],
-    /// Contact area (model units²): how fast the volume shrinks per unit of separation.
-    pub area: f64,
     /// Number of contact patches, at most 8 (overlaps are grouped with the nearest patch,
     /// within 1/8 of the smaller root sphere's radius; beyond 8 patches, with the nearest
     /// one); read them with ist_penetration_patch.

@@ -79,7 +79,6 @@ static void answers(const char* dir, ist_tree* a, ist_tree* b) {
         v3(p.force);
         v3(p.torque_a);
         v3(p.torque_b);
-        bits(p.area);
         printf(" %zu\n", p.patch_count);
         for (size_t j = 0; j < p.patch_count; j++) {
             ist_patch x;

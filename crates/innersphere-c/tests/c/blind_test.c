@@ -193,8 +193,6 @@ int main(int argc, char **argv) {
     put_vec3("torque_a", pen.torque_a);
     fputs(", ", stdout);
     put_vec3("torque_b", pen.torque_b);
-    fputs(", ", stdout);
-    put_key_double("area", pen.area);
     printf(", \"patch_count\": %zu, \"patches\": [", pen.patch_count);
     for (j = 0; j < pen.patch_count; j++) {
         ist_patch patch;

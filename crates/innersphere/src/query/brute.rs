@@ -107,7 +107,7 @@ pub fn penetration(
     stiffness: f64,
 ) -> BrutePenetration {
     let (la, lb, rel) = leaves(a, pose_a, b, pose_b);
-    let mut sums = Sums::default();
+    let mut sums = Sums::<false>::default();
     for &i in &la {
         let n = i as usize;
         for &(j, c) in &lb {

@@ -54,12 +54,25 @@ pub(crate) fn penetration_within(
     stiffness: f64,
     linearize: bool,
 ) -> BudgetedVolume {
+    if linearize {
+        within::<true>(ctx, ia, ib, heap, budget, stiffness)
+    } else {
+        within::<false>(ctx, ia, ib, heap, budget, stiffness)
+    }
+}
+
+/// [`penetration_within`] with the sums of `L` (see [`Sums`]).
+fn within<const L: bool>(
+    ctx: &Ctx,
+    ia: &TreeInfo,
+    ib: &TreeInfo,
+    heap: &mut PairHeap,
+    budget: u64,
+    stiffness: f64,
+) -> BudgetedVolume {
     heap.clear();
     let mut visits = 1u64;
-    let mut sums = Sums {
-        linearize,
-        ..Sums::default()
-    };
+    let mut sums = Sums::<L>::default();
     let c0 = ctx.xf(0);
     let (ov, _) = ctx.test(0, 0, c0);
     let va = &ia.subtree_volume;
@@ -79,7 +92,7 @@ pub(crate) fn penetration_within(
             f
         }
     };
-    let leaf = |sums: &mut Sums, i: u32, j: u32, cb: [f32; 3]| {
+    let leaf = |sums: &mut Sums<L>, i: u32, j: u32, cb: [f32; 3]| {
         let n = &na[i as usize];
         sums.add([n.x, n.y, n.z], n.r, cb, nb[j as usize].r);
     };

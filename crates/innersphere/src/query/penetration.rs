@@ -49,9 +49,10 @@ pub struct PenetrationOptions {
     pub safe_motion: bool,
     /// Where the overlapping leaf pairs come from (default [`Tracking::Auto`]).
     pub tracking: Tracking,
-    /// Also sum [`Penetration::stiffness`] (the linearised wrench an implicit integrator
-    /// needs; the haptic loop sets it). Off by default: it adds about a quarter to the
-    /// slowest frames of deep contact (measured on the jaw pair, see BENCHMARKS.md).
+    /// Also sum [`Penetration::area`] and [`Penetration::stiffness`] (the linearised wrench
+    /// an implicit integrator needs; the haptic loop sets it). Off by default: it adds about
+    /// a quarter to the slowest frames of deep contact (measured on the jaw pair, see
+    /// BENCHMARKS.md).
     pub linearize: bool,
 }
 
@@ -137,7 +138,8 @@ pub struct Penetration {
     pub patch_count: usize,
     /// Contact area: the summed areas of the discs where the overlapping leaf spheres'
     /// boundaries meet, which is how fast the volume shrinks per unit of separation
-    /// (`−dV/dd` for a motion along every pair's own direction).
+    /// (`−dV/dd` for a motion along every pair's own direction). Zero unless
+    /// [`PenetrationOptions::linearize`] is set.
     pub area: f64,
     /// How the force and B's torque change as B moves: what an implicit integrator needs
     /// (see [`ContactStiffness`]). Zero unless [`PenetrationOptions::linearize`] is set.
@@ -224,9 +226,11 @@ fn cross_matrix(c: DVec3) -> DMat3 {
     )
 }
 
-/// Sums over the overlapping leaf pairs (A's frame).
+/// Sums over the overlapping leaf pairs (A's frame); with `L` also the contact area and the
+/// linearised wrench (a type parameter, so that the plain query's loop carries none of it:
+/// a run-time flag measured +15 % at the p99 of deep contact).
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Sums {
+pub(crate) struct Sums<const L: bool> {
     pub volume: f64,
     /// Σ v·u.
     pub vu: DVec3,
@@ -242,13 +246,11 @@ pub(crate) struct Sums {
     pub aus: DMat3,
     /// Σ a·s sᵀ.
     pub ass: DMat3,
-    /// Whether the three sums above are kept.
-    pub linearize: bool,
 }
 
-impl Default for Sums {
+impl<const L: bool> Default for Sums<L> {
     // By hand: glam's default matrix is the identity, not zero.
-    fn default() -> Sums {
+    fn default() -> Sums<L> {
         Sums {
             volume: 0.0,
             vu: DVec3::ZERO,
@@ -259,12 +261,11 @@ impl Default for Sums {
             auu: DMat3::ZERO,
             aus: DMat3::ZERO,
             ass: DMat3::ZERO,
-            linearize: false,
         }
     }
 }
 
-impl Sums {
+impl<const L: bool> Sums<L> {
     /// Adds one overlapping leaf pair (A's centre and radius, B's transformed centre and
     /// radius, all f32); returns its (volume, centroid, direction, depth).
     #[inline]
@@ -283,14 +284,14 @@ impl Sums {
         let p = ca + u * g;
         let depth = ra + rb - d;
         let s = p.cross(u);
-        let a = lens_area(ra, rb, d);
         self.pairs += 1;
         self.volume += v;
         self.vu += u * v;
         self.vgu += s * v;
         self.max_depth = self.max_depth.max(depth);
-        self.area += a;
-        if self.linearize {
+        if L {
+            let a = lens_area(ra, rb, d);
+            self.area += a;
             let au = u * a;
             self.auu += outer(au, u);
             self.aus += outer(au, s);
@@ -395,15 +396,31 @@ pub(crate) fn penetration(
     s: &mut PenetrationScratch,
     opts: &PenetrationOptions,
 ) -> Penetration {
+    if opts.linearize {
+        penetration_sums::<true>(ctx, ia, ib, desc, front, sep, s, opts)
+    } else {
+        penetration_sums::<false>(ctx, ia, ib, desc, front, sep, s, opts)
+    }
+}
+
+/// [`penetration`] with the sums of `L` (see [`Sums`]).
+#[allow(clippy::too_many_arguments)]
+fn penetration_sums<const L: bool>(
+    ctx: &Ctx,
+    ia: &TreeInfo,
+    ib: &TreeInfo,
+    desc: &mut Descent,
+    front: &mut Front,
+    sep: &mut Option<SeparationRecord>,
+    s: &mut PenetrationScratch,
+    opts: &PenetrationOptions,
+) -> Penetration {
     let pose_a = &ctx.pose_a;
     s.patch_acc.clear();
     s.patches.clear();
     let mut visits = 0u64;
     let mut min_sep = f32::INFINITY;
-    let mut sums = Sums {
-        linearize: opts.linearize,
-        ..Sums::default()
-    };
+    let mut sums = Sums::<L>::default();
     let mut skipped = false;
     let use_front = match opts.tracking {
         Tracking::Front => true,

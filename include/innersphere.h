@@ -405,8 +405,10 @@ int ist_haptic_params_default(int device_class, struct ist_haptic_params *out);
 struct ist_haptic *ist_haptic_new(const struct ist_pair *pair, const struct ist_haptic_params *params);
 
 /*
- One device tick: the device's pose in (B's pose in the world), `dt` the seconds since
- the last tick (0: one period); the force and torque to send and the tool's pose out.
+ One device tick: the device's pose in (B's pose in the world), `dt` the seconds between
+ this pose's sample and the previous one (0: one period; it must be the interval the pose
+ moved over, or the device's velocity comes out wrong); the force and torque to send and
+ the tool's pose out.
  Never allocates, never blocks. A NaN device pose is refused (IST_ERR_POSE) and the tool
  stays where it was.
 

@@ -13,6 +13,7 @@ mod occlude;
 mod progress;
 mod query;
 mod replay;
+mod view;
 
 use clap::{Parser, Subcommand};
 
@@ -50,6 +51,8 @@ enum Command {
     Haptic(haptic::Args),
     /// Close body B onto body A under a constant force until it rests: the bite.
     Occlude(occlude::Args),
+    /// A live 3D view in the browser: move B, watch contacts, forces, the inner spheres.
+    View(view::Args),
 }
 
 fn main() {
@@ -73,6 +76,7 @@ fn main() {
         Command::Query(a) => query::run(a),
         Command::Haptic(a) => haptic::run(a),
         Command::Occlude(a) => occlude::run(a),
+        Command::View(a) => view::run(a),
     };
     match result {
         Ok(code) => std::process::exit(code),

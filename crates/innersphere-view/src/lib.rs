@@ -1,0 +1,60 @@
+//! `ist view`: a local web server with a live 3D view of two bodies. A 1 kHz loop thread runs
+//! the library's queries (and, in haptic mode, its haptic loop) on body B's target pose and
+//! hands its state to the HTTP side through a lock-free triple buffer; the page (three.js,
+//! vendored and embedded) draws it at screen rate. The server holds no collision logic of
+//! its own: every answer comes from [`innersphere::Pair`] and
+//! [`innersphere::haptic::HapticLoop`]. `docs/VIEWER.md` describes the page and the API.
+
+mod assets;
+mod encode;
+mod http;
+mod sim;
+
+pub use http::{serve, ServeOptions};
+pub use sim::{LoopState, Mode};
+
+use innersphere::{BuildOptions, Mesh, Resolution, SharedTree, SphereTree};
+use innersphere_eval::motion::Motion;
+
+/// What the viewer shows: two trees, optionally their meshes, optionally a motion of B.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// Body A's tree (fixed at the identity).
+    pub a: SharedTree,
+    /// Body B's tree (moved).
+    pub b: SharedTree,
+    /// Body A's mesh, drawn when given.
+    pub mesh_a: Option<Mesh>,
+    /// Body B's mesh, drawn when given.
+    pub mesh_b: Option<Mesh>,
+    /// A motion of B in A's frame to play.
+    pub motion: Option<Motion>,
+}
+
+impl Scene {
+    /// The built-in scene: the generated tooth pair (meshes and trees at 64 cells) with a
+    /// generated 6 s chew, so that `ist view --demo` needs no file.
+    pub fn demo() -> innersphere::Result<Scene> {
+        let (upper, lower) = innersphere::shapes::tooth_pair(4);
+        let opts = BuildOptions {
+            resolution: Resolution::Cells(64),
+            ..Default::default()
+        };
+        let a = SphereTree::build(&upper, &opts)?;
+        let b = SphereTree::build(&lower, &opts)?;
+        let motion = innersphere_eval::motion::generate(
+            innersphere_eval::motion::Scenario::Chew,
+            6.0,
+            1,
+            &upper,
+            &lower,
+        )?;
+        Ok(Scene {
+            a: SharedTree::new(a),
+            b: SharedTree::new(b),
+            mesh_a: Some(upper),
+            mesh_b: Some(lower),
+            motion: Some(motion),
+        })
+    }
+}

@@ -1,0 +1,281 @@
+//! The 1 kHz loop thread: reads the control (B's target pose, the mode, the motion's play
+//! state) from the HTTP side, runs the library's queries (and its haptic loop in haptic
+//! mode) and publishes its state. Both directions go through triple buffers: the loop never
+//! waits for the HTTP side, and no tick allocates.
+
+use innersphere::glam::DVec3;
+use innersphere::haptic::{DeviceClass, HapticLoop, HapticOptions};
+use innersphere::{DistanceOptions, Pair, Patch, PenetrationOptions, Pose, SharedTree};
+use innersphere_eval::haptic::sample;
+use innersphere_eval::motion::Motion;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Patches kept in the state.
+pub const PATCHES: usize = 8;
+/// Tick times kept for the page's chart.
+pub const HISTORY: usize = 240;
+/// Ticks the p99 is taken over.
+const WINDOW: usize = 1000;
+
+/// What drives body B.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// B is where the page puts it.
+    Free,
+    /// The page's pose is a haptic device's; B is the coupled tool that stops at A.
+    Haptic,
+    /// B follows the motion (play, pause, scrub).
+    Motion,
+}
+
+impl Mode {
+    /// `free`, `haptic` or `motion`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Free => "free",
+            Mode::Haptic => "haptic",
+            Mode::Motion => "motion",
+        }
+    }
+}
+
+/// What the HTTP side asks of the loop.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Control {
+    pub target: Pose,
+    pub mode: Mode,
+    pub playing: bool,
+    /// A scrub: the motion time to jump to, applied when `seek_id` changes.
+    pub seek: f64,
+    pub seek_id: u64,
+}
+
+/// The loop's latest state (plain values: copied through the triple buffer).
+#[derive(Debug, Clone, Copy)]
+pub struct LoopState {
+    /// Seconds since the loop started.
+    pub t: f64,
+    /// The mode of this tick.
+    pub mode: Mode,
+    /// Where to draw B (the tool in haptic mode).
+    pub pose_b: Pose,
+    /// B's target: the page's or the motion's pose (the device's in haptic mode).
+    pub target_b: Pose,
+    /// Distance of the sphere packings (0 in contact).
+    pub distance: f64,
+    /// True when they overlap.
+    pub contact: bool,
+    /// Closest point on A.
+    pub point_a: DVec3,
+    /// Closest point on B.
+    pub point_b: DVec3,
+    /// Penetration volume.
+    pub volume: f64,
+    /// Deepest leaf overlap.
+    pub max_depth: f64,
+    /// Penalty force on B.
+    pub force: DVec3,
+    /// Torque on B.
+    pub torque: DVec3,
+    /// Contact patches (the first `patch_count`).
+    pub patches: [Patch; PATCHES],
+    /// How many of `patches` are set.
+    pub patch_count: usize,
+    /// Haptic mode: the force the device would render.
+    pub device_force: DVec3,
+    /// Ticks run.
+    pub ticks: u64,
+    /// Ticks whose work took over 1 ms.
+    pub over_1ms: u64,
+    /// Measured tick rate (Hz).
+    pub rate_hz: f64,
+    /// This tick's work (µs).
+    pub tick_us: f64,
+    /// 99th percentile of the last 1000 ticks' work (µs).
+    pub tick_us_p99: f64,
+    /// Slowest tick's work so far (µs).
+    pub tick_us_max: f64,
+    /// Recent tick times (µs), a ring: `history_us[history_next..]` then `[..history_next]`.
+    pub history_us: [f32; HISTORY],
+    /// Where the next tick time goes in the ring.
+    pub history_next: usize,
+    /// Motion time (s).
+    pub motion_t: f64,
+    /// Whether the motion plays.
+    pub playing: bool,
+}
+
+const NO_PATCH: Patch = Patch {
+    point: DVec3::ZERO,
+    normal: DVec3::ZERO,
+    depth: 0.0,
+    volume: 0.0,
+    pairs: 0,
+};
+
+impl LoopState {
+    pub(crate) fn initial(pose: Pose) -> LoopState {
+        LoopState {
+            t: 0.0,
+            mode: Mode::Free,
+            pose_b: pose,
+            target_b: pose,
+            distance: 0.0,
+            contact: false,
+            point_a: DVec3::ZERO,
+            point_b: DVec3::ZERO,
+            volume: 0.0,
+            max_depth: 0.0,
+            force: DVec3::ZERO,
+            torque: DVec3::ZERO,
+            patches: [NO_PATCH; PATCHES],
+            patch_count: 0,
+            device_force: DVec3::ZERO,
+            ticks: 0,
+            over_1ms: 0,
+            rate_hz: 0.0,
+            tick_us: 0.0,
+            tick_us_p99: 0.0,
+            tick_us_max: 0.0,
+            history_us: [0.0; HISTORY],
+            history_next: 0,
+            motion_t: 0.0,
+            playing: false,
+        }
+    }
+}
+
+/// The loop's inputs and outputs.
+pub(crate) struct LoopIo {
+    pub control: triple_buffer::Output<Control>,
+    pub state: triple_buffer::Input<LoopState>,
+    pub stop: Arc<AtomicBool>,
+}
+
+/// Runs the loop at `rate` Hz until `io.stop` is set.
+pub(crate) fn run(
+    a: SharedTree,
+    b: SharedTree,
+    motion: Option<Motion>,
+    stiffness: f64,
+    rate: f64,
+    mut io: LoopIo,
+) {
+    let mut pair = Pair::new(a.clone(), b.clone());
+    let haptic_opts = HapticOptions::for_device(DeviceClass::Omega);
+    let mut haptic: Option<HapticLoop> = None;
+    let dist = DistanceOptions::default();
+    let pen = PenetrationOptions {
+        stiffness,
+        max_patches: PATCHES,
+        ..Default::default()
+    };
+    let period = Duration::from_secs_f64(1.0 / rate);
+    let start = Instant::now();
+    let mut deadline = start;
+    let mut state = LoopState::initial(io.control.read().target);
+    let mut window = [0f32; WINDOW];
+    let mut scratch = [0f32; WINDOW];
+    let mut last_mode = Mode::Free;
+    let mut seek_id = 0u64;
+    let mut rate_from = (start, 0u64);
+    while !io.stop.load(Ordering::Relaxed) {
+        deadline += period;
+        let t0 = Instant::now();
+        let c = *io.control.read();
+        // Motion time.
+        if let Some(m) = &motion {
+            let len = m.duration().max(1e-9);
+            if c.seek_id != seek_id {
+                seek_id = c.seek_id;
+                state.motion_t = c.seek.clamp(0.0, len);
+            } else if c.playing && c.mode == Mode::Motion {
+                state.motion_t += 1.0 / rate;
+                if state.motion_t > len {
+                    state.motion_t = 0.0;
+                }
+            }
+            state.playing = c.playing;
+        }
+        let target = match (&motion, c.mode) {
+            (Some(m), Mode::Motion) => sample(m, m.frames[0].t + state.motion_t),
+            _ => c.target,
+        };
+        // Entering haptic mode puts the tool at rest at the device's pose (an allocation
+        // when the mode changes, never per tick).
+        if c.mode == Mode::Haptic && last_mode != Mode::Haptic {
+            haptic = HapticLoop::new(
+                Pair::new(a.clone(), b.clone()),
+                Pose::IDENTITY,
+                target,
+                haptic_opts,
+            )
+            .ok();
+        }
+        last_mode = c.mode;
+        let (pose_b, device_force) = match (c.mode, haptic.as_mut()) {
+            (Mode::Haptic, Some(h)) => {
+                let t = h.tick(&target);
+                (t.tool, t.force)
+            }
+            _ => (target, DVec3::ZERO),
+        };
+        let d = pair.distance_with(&Pose::IDENTITY, &pose_b, &dist);
+        let p = pair.penetration_with(&Pose::IDENTITY, &pose_b, &pen);
+        state.mode = c.mode;
+        state.pose_b = pose_b;
+        state.target_b = target;
+        state.distance = d.distance;
+        state.contact = d.overlapping;
+        state.point_a = d.point_a;
+        state.point_b = d.point_b;
+        state.volume = p.volume;
+        state.max_depth = p.max_depth;
+        state.force = p.force;
+        state.torque = p.torque_b;
+        state.patch_count = pair.patches().len().min(PATCHES);
+        for (s, q) in state.patches.iter_mut().zip(pair.patches()) {
+            *s = *q;
+        }
+        state.device_force = device_force;
+        // Timing.
+        let work = t0.elapsed().as_secs_f64() * 1e6;
+        let n = state.ticks as usize;
+        window[n % WINDOW] = work as f32;
+        state.ticks += 1;
+        state.over_1ms += (work > 1000.0) as u64;
+        state.tick_us = work;
+        state.tick_us_max = state.tick_us_max.max(work);
+        state.history_us[state.history_next] = work as f32;
+        state.history_next = (state.history_next + 1) % HISTORY;
+        if state.ticks % 100 == 0 {
+            let k = (state.ticks as usize).min(WINDOW);
+            scratch[..k].copy_from_slice(&window[..k]);
+            let i = ((k - 1) as f64 * 0.99).round() as usize;
+            let (_, v, _) = scratch[..k].select_nth_unstable_by(i, f32::total_cmp);
+            state.tick_us_p99 = *v as f64;
+        }
+        // The rate: ticks over the last half second or more.
+        let since = t0.duration_since(rate_from.0).as_secs_f64();
+        if since >= 0.5 {
+            state.rate_hz = (state.ticks - rate_from.1) as f64 / since;
+            rate_from = (t0, state.ticks);
+        }
+        state.t = t0.duration_since(start).as_secs_f64();
+        io.state.write(state);
+        // Sleep until just before the next tick, then spin: a plain sleep wakes up late.
+        if let Some(d) = deadline.checked_duration_since(Instant::now()) {
+            if d > Duration::from_micros(200) {
+                std::thread::sleep(d - Duration::from_micros(200));
+            }
+            while Instant::now() < deadline {
+                std::hint::spin_loop();
+            }
+        } else {
+            // Behind by more than a tick: do not try to catch up.
+            deadline = Instant::now();
+        }
+    }
+}

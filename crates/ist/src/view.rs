@@ -1,0 +1,93 @@
+//! `ist view`: the live 3D view in the browser (the innersphere-view crate's server).
+
+use anyhow::Context;
+use innersphere::SharedTree;
+use innersphere_eval::motion::Motion;
+use innersphere_view::{serve, Scene, ServeOptions};
+use std::path::PathBuf;
+
+/// Arguments of `ist view`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Tree file of body A (fixed, at the identity pose); with B, or --demo.
+    a: Option<PathBuf>,
+    /// Tree file of body B (moved).
+    b: Option<PathBuf>,
+    /// Body A's mesh, to draw its surface (without meshes the inner spheres are the picture).
+    #[arg(long)]
+    mesh_a: Option<PathBuf>,
+    /// Body B's mesh.
+    #[arg(long)]
+    mesh_b: Option<PathBuf>,
+    /// A motion of B in A's frame to play (CSV t,tx,ty,tz,qw,qx,qy,qz).
+    #[arg(long)]
+    motion: Option<PathBuf>,
+    /// Port on 127.0.0.1 (0: any free one).
+    #[arg(long, default_value_t = 8000)]
+    port: u16,
+    /// Start the system's browser on the page.
+    #[arg(long)]
+    open: bool,
+    /// Penetration force per unit volume (force unit per model unit³; 1 = ist query's).
+    #[arg(long, default_value_t = 1.0)]
+    stiffness: f64,
+    /// The built-in scene instead of files: the generated tooth pair with a chewing motion.
+    #[arg(long)]
+    demo: bool,
+}
+
+/// Runs the subcommand; returns the process exit code (it serves until interrupted).
+pub fn run(args: Args) -> anyhow::Result<i32> {
+    let scene = if args.demo {
+        if args.a.is_some() || args.b.is_some() {
+            anyhow::bail!("--demo takes no tree files");
+        }
+        Scene::demo()?
+    } else {
+        let (Some(a), Some(b)) = (&args.a, &args.b) else {
+            anyhow::bail!("give two tree files (A.ist B.ist), or --demo for the built-in scene");
+        };
+        let mesh = |p: &Option<PathBuf>, which: &str| -> anyhow::Result<_> {
+            p.as_ref()
+                .map(|p| crate::load_mesh(p).with_context(|| format!("loading {which}")))
+                .transpose()
+        };
+        Scene {
+            a: SharedTree::new(crate::load_tree(a)?),
+            b: SharedTree::new(crate::load_tree(b)?),
+            mesh_a: mesh(&args.mesh_a, "--mesh-a")?,
+            mesh_b: mesh(&args.mesh_b, "--mesh-b")?,
+            motion: args
+                .motion
+                .as_ref()
+                .map(|p| Motion::load(p).context("loading --motion"))
+                .transpose()?,
+        }
+    };
+    let opts = ServeOptions {
+        port: args.port,
+        stiffness: args.stiffness,
+        ..ServeOptions::default()
+    };
+    let open = args.open;
+    serve(scene, opts, move |addr| {
+        let url = format!("http://{addr}/");
+        println!("ist view: serving on {url} (127.0.0.1 only; Ctrl-C to stop)");
+        use std::io::Write as _;
+        let _ = std::io::stdout().flush();
+        if open {
+            let opener = if cfg!(target_os = "macos") {
+                "open"
+            } else {
+                "xdg-open"
+            };
+            if let Err(e) = std::process::Command::new(opener).arg(&url).spawn() {
+                eprintln!(
+                    "warning: could not start a browser ({opener}: {e}); open {url} yourself"
+                );
+            }
+        }
+    })
+    .map_err(|e| anyhow::anyhow!(e))?;
+    Ok(0)
+}

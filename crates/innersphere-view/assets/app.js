@@ -1,1 +1,938 @@
-/* placeholder until the page lands */
+// ist view — the page's script (an ES module, no build step, no framework).
+//
+// What it shows: body A fixed at the identity, body B at the pose the server's 1 kHz loop
+// reports (`pose_b`), and over them the loop's answers: the closest points (a line), the
+// contact patches (discs), force and torque (arrows), the loop's timing (numbers and a
+// chart), optionally the inner spheres of one body at one level of its tree.
+//
+// How B moves: a TransformControls gizmo on a proxy object stands for B's *target* pose
+// (`target_b`); dragging it, Shift-dragging on the canvas, or typing a pose POSTs
+// /api/pose. The server owns the truth: the page draws B where the state says (in haptic
+// mode the coupled tool, which stops at A, while the gizmo is the device).
+//
+// The HTTP API (JSON unless said; poses are [tx, ty, tz, qw, qx, qy, qz], p' = R(q)·p + t,
+// B's pose in A's frame; points, normals, force, torque in A's frame = the world here):
+//   GET  /api/info, /api/state, /api/events (SSE of the state), /api/spheres (binary),
+//   GET  /api/mesh (binary), POST /api/pose, /api/mode, /api/motion.
+//
+// For the end-to-end test the page exposes `window.__ist` (see `ist` below).
+
+import * as THREE from 'three';
+import { OrbitControls } from '/assets/vendor/OrbitControls.js';
+import { TransformControls } from '/assets/vendor/TransformControls.js';
+
+// ---------------------------------------------------------------------------------------
+// Small helpers
+// ---------------------------------------------------------------------------------------
+
+const $ = (id) => document.getElementById(id);
+
+/** JSON request; throws an Error carrying the server's `{"error": …}` message on 4xx/5xx. */
+async function api(path, body) {
+  const init = body === undefined
+    ? {}
+    : { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) };
+  const res = await fetch(path, init);
+  if (!res.ok) {
+    let msg = `${res.status} ${res.statusText}`;
+    try { msg = (await res.json()).error || msg; } catch { /* not JSON */ }
+    throw new Error(`${init.method || 'GET'} ${path}: ${msg}`);
+  }
+  return res.json();
+}
+
+/** Binary GET; resolves to null on 404 (e.g. a body without a mesh). */
+async function apiBinary(path) {
+  const res = await fetch(path);
+  if (res.status === 404) return null;
+  if (!res.ok) throw new Error(`GET ${path}: ${res.status} ${res.statusText}`);
+  return res.arrayBuffer();
+}
+
+let errorTimer = 0;
+/** Shows an error in the panel for a few seconds (and in the console). */
+function showError(err) {
+  console.error(err);
+  const el = $('error');
+  el.textContent = String(err && err.message ? err.message : err);
+  el.hidden = false;
+  clearTimeout(errorTimer);
+  errorTimer = setTimeout(() => { el.hidden = true; }, 6000);
+}
+
+/** A number for the panel: fixed digits for ordinary sizes, exponent for tiny ones. */
+function num(x, digits = 4) {
+  if (x === null || x === undefined || !Number.isFinite(x)) return '—';
+  if (x === 0) return '0';
+  const a = Math.abs(x);
+  if (a < 1e-3 || a >= 1e6) return x.toExponential(2);
+  return String(Number(x.toPrecision(digits)));
+}
+
+const v3 = (a) => new THREE.Vector3(a[0], a[1], a[2]);
+const len3 = (a) => Math.hypot(a[0], a[1], a[2]);
+
+/** Pose [tx,ty,tz,qw,qx,qy,qz] → (position, quaternion). three's Quaternion is (x,y,z,w). */
+function poseParts(p) {
+  const q = new THREE.Quaternion(p[4], p[5], p[6], p[3]);
+  if (q.lengthSq() > 0) q.normalize(); else q.identity();
+  return { t: new THREE.Vector3(p[0], p[1], p[2]), q };
+}
+
+/** Sets a (matrixAutoUpdate = false) object's matrix to the pose. */
+function setObjectPose(obj, p) {
+  const { t, q } = poseParts(p);
+  obj.matrix.compose(t, q, new THREE.Vector3(1, 1, 1));
+  obj.matrixWorldNeedsUpdate = true;
+}
+
+function posesClose(p, q, eps = 1e-6) {
+  if (!p || !q) return false;
+  for (let i = 0; i < 7; i++) if (Math.abs(p[i] - q[i]) > eps) return false;
+  return true;
+}
+
+/** Parses "tx ty tz qw qx qy qz" (spaces, commas or brackets) into 7 numbers, or throws. */
+function parsePose(text) {
+  const parts = text.replace(/[[\](),;]/g, ' ').trim().split(/\s+/).filter(Boolean).map(Number);
+  if (parts.length !== 7 || parts.some((x) => !Number.isFinite(x))) {
+    throw new Error('a pose is 7 numbers: tx ty tz qw qx qy qz');
+  }
+  return parts;
+}
+
+const formatPose = (p) => p.map((x, i) => (i < 3 ? x.toFixed(3) : x.toFixed(5))).join(' ');
+
+/**
+ * POSTs to one endpoint with at most one request in flight and at most one every
+ * `minGapMs`: a newer body replaces a queued one (only the latest pose matters while
+ * dragging). `send` resolves with the answer to the request that carried this body or a
+ * later one.
+ */
+class LatestOnlyPoster {
+  constructor(path, minGapMs, onAnswer) {
+    this.path = path;
+    this.minGapMs = minGapMs;
+    this.onAnswer = onAnswer;
+    this.inFlight = false;
+    this.queued = null; // { body, waiters: [{resolve, reject}] }
+    this.lastAt = -Infinity;
+    this.timer = 0;
+  }
+
+  send(body) {
+    return new Promise((resolve, reject) => {
+      const waiters = this.queued ? this.queued.waiters : [];
+      waiters.push({ resolve, reject });
+      this.queued = { body, waiters };
+      this.pump();
+    });
+  }
+
+  pump() {
+    if (this.inFlight || !this.queued || this.timer) return;
+    const wait = this.minGapMs - (performance.now() - this.lastAt);
+    if (wait > 0) {
+      this.timer = setTimeout(() => { this.timer = 0; this.pump(); }, wait);
+      return;
+    }
+    const { body, waiters } = this.queued;
+    this.queued = null;
+    this.inFlight = true;
+    this.lastAt = performance.now();
+    api(this.path, body)
+      .then((answer) => {
+        this.onAnswer(body, answer);
+        waiters.forEach((w) => w.resolve(answer));
+      })
+      .catch((err) => {
+        showError(err);
+        waiters.forEach((w) => w.reject(err));
+      })
+      .finally(() => {
+        this.inFlight = false;
+        this.pump();
+      });
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Test hooks
+// ---------------------------------------------------------------------------------------
+
+/** What the end-to-end test reads and drives. */
+const ist = {
+  ready: false, // true once a frame has rendered with both bodies loaded and a state
+  frames: 0, // rendered frames
+  state: null, // the latest state from the server
+  info: null, // /api/info
+  spheres: { shown: false, body: null, level: null, count: 0, loading: false },
+  screenOfB: () => screenOf(bodyCentreWorld('b')),
+  screenOfA: () => screenOf(bodyCentreWorld('a')),
+  setPose: (p7) => {
+    setProxyFromPose(p7);
+    return sendPose(p7);
+  },
+};
+window.__ist = ist;
+
+// ---------------------------------------------------------------------------------------
+// Scene
+// ---------------------------------------------------------------------------------------
+
+const renderer = new THREE.WebGLRenderer({ antialias: true });
+renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+renderer.setSize(window.innerWidth, window.innerHeight);
+renderer.setClearColor(0x1d2026);
+const canvas = renderer.domElement;
+canvas.id = 'view';
+document.body.prepend(canvas);
+
+const scene = new THREE.Scene();
+const camera = new THREE.PerspectiveCamera(40, window.innerWidth / window.innerHeight, 0.1, 10000);
+// The demo's teeth (and the jaw data) stand along +z: orbit about z. Must be set before
+// OrbitControls is made (it takes the up vector once, at construction).
+camera.up.set(0, 0, 1);
+scene.add(camera);
+
+scene.add(new THREE.HemisphereLight(0xffffff, 0x3a3f4a, 1.6));
+const headLight = new THREE.DirectionalLight(0xffffff, 1.6); // follows the camera
+headLight.position.set(0.3, 0.6, 1);
+camera.add(headLight);
+
+const orbit = new OrbitControls(camera, canvas);
+orbit.enableDamping = false; // no inertia: the view stops when the mouse does
+
+/** Body A: fixed, at the identity. */
+const bodyA = new THREE.Group();
+/** Body B: its matrix is the drawn pose (`pose_b`). */
+const bodyB = new THREE.Group();
+bodyB.matrixAutoUpdate = false;
+/** Haptic mode: a faint copy of B at the device pose (`target_b`). */
+const ghostB = new THREE.Group();
+ghostB.matrixAutoUpdate = false;
+ghostB.visible = false;
+scene.add(bodyA, bodyB, ghostB);
+const bodyGroup = { a: bodyA, b: bodyB };
+
+// Per body: bounding box (model frame), mesh (or null), its material.
+const bodies = {
+  a: { box: new THREE.Box3(), mesh: null, material: null, color: 0xe9dfc6 },
+  b: { box: new THREE.Box3(), mesh: null, material: null, color: 0x8fbde6 },
+};
+
+/** B's bounding-box centre in its model frame: the gizmo's pivot. */
+const pivotB = new THREE.Vector3();
+
+/**
+ * The gizmo's object: B's target pose, placed at B's centre (so that the rotate rings turn
+ * B about its middle, not about a model origin that may lie far from the bone):
+ * proxy = pose ∘ translate(pivotB), i.e. proxy.position = R·pivot + t, proxy.quaternion = q.
+ */
+const proxy = new THREE.Object3D();
+scene.add(proxy);
+
+function setProxyFromPose(p) {
+  const { t, q } = poseParts(p);
+  proxy.quaternion.copy(q);
+  proxy.position.copy(pivotB).applyQuaternion(q).add(t);
+  proxy.updateMatrixWorld();
+  updatePoseInput();
+}
+
+function poseFromProxy() {
+  const q = proxy.quaternion.clone().normalize();
+  const t = proxy.position.clone().sub(pivotB.clone().applyQuaternion(q));
+  return [t.x, t.y, t.z, q.w, q.x, q.y, q.z];
+}
+
+const gizmo = new TransformControls(camera, canvas);
+gizmo.setSize(0.9);
+gizmo.attach(proxy);
+scene.add(gizmo.getHelper());
+gizmo.addEventListener('dragging-changed', (e) => {
+  orbit.enabled = !e.value; // the gizmo's drag must not also orbit the view
+  dragging = e.value;
+});
+gizmo.addEventListener('objectChange', () => {
+  if (!gizmo.dragging) return;
+  updatePoseInput();
+  sendPose(poseFromProxy());
+});
+
+/** True while the user drags B (gizmo or Shift-drag): the server's target must not
+ *  snap the proxy back meanwhile. */
+let dragging = false;
+
+// ---------------------------------------------------------------------------------------
+// Overlays (drawn over the bodies: depthTest off, since contacts lie inside them)
+// ---------------------------------------------------------------------------------------
+
+const overlayOrder = 10;
+function overlay(obj) {
+  obj.renderOrder = overlayOrder;
+  obj.traverse((o) => {
+    if (o.material) { o.material.depthTest = false; o.material.transparent = true; }
+    o.renderOrder = overlayOrder;
+  });
+  scene.add(obj);
+  return obj;
+}
+
+// Closest points: a line and a dot at each end (shown while apart).
+const distLine = overlay(new THREE.Line(
+  new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(), new THREE.Vector3()]),
+  new THREE.LineBasicMaterial({ color: 0xffe24a }),
+));
+distLine.frustumCulled = false; // its points change every state; its bounding sphere does not
+const dotGeo = new THREE.SphereGeometry(1, 12, 8);
+const dotA = overlay(new THREE.Mesh(dotGeo, new THREE.MeshBasicMaterial({ color: 0xffe24a })));
+const dotB = overlay(new THREE.Mesh(dotGeo, new THREE.MeshBasicMaterial({ color: 0xffe24a })));
+
+// Contact patches: a pool of discs, one per patch, facing the patch normal.
+const discGeo = new THREE.CircleGeometry(1, 28);
+const discs = [];
+function disc(i) {
+  while (discs.length <= i) {
+    const m = overlay(new THREE.Mesh(discGeo, new THREE.MeshBasicMaterial({
+      color: 0xff5030, side: THREE.DoubleSide, opacity: 0.8,
+    })));
+    m.visible = false;
+    discs.push(m);
+  }
+  return discs[i];
+}
+
+// Force on B (at the patches' centroid), torque on B (at B's centre; the library gives it
+// about B's centre of mass), and in haptic mode the device force (at the device pose).
+function arrow(color) {
+  const a = overlay(new THREE.ArrowHelper(new THREE.Vector3(0, 0, 1), new THREE.Vector3(), 1, color));
+  a.visible = false;
+  return a;
+}
+const forceArrow = arrow(0xff3b3b);
+const torqueArrow = arrow(0x3bc8ff);
+const deviceArrow = arrow(0xffa020);
+
+/** Length scales for the arrows: a slowly decaying peak of each magnitude, so that an
+ *  arrow's length says "how strong compared with lately" and never leaves the view. */
+const peaks = { force: 0, torque: 0, device: 0 };
+
+/** Bodies' size (diagonal of the union of boxes), set when framing: scales the overlays. */
+let sceneSize = 10;
+
+function placeArrow(a, key, vec, origin) {
+  const m = vec ? len3(vec) : 0;
+  peaks[key] = Math.max(m, peaks[key] * 0.995);
+  if (!(m > 1e-12)) { a.visible = false; return; }
+  const maxLen = sceneSize * 0.35;
+  const len = maxLen * Math.max(0.15, m / peaks[key]);
+  a.position.copy(origin);
+  a.setDirection(v3(vec).divideScalar(m));
+  a.setLength(len, len * 0.22, len * 0.12);
+  a.visible = true;
+}
+
+// ---------------------------------------------------------------------------------------
+// Inner spheres: ONE InstancedMesh per layer (x, y, z, r per sphere, in the body's frame)
+// ---------------------------------------------------------------------------------------
+
+class SphereLayer {
+  constructor(name) {
+    this.name = name;
+    this.mesh = null;
+    this.body = null;
+    this.level = null;
+    this.count = 0;
+    this.serial = 0; // discards answers to requests a newer one replaced
+  }
+
+  /** Fetches the spheres of `body` at `level` and replaces the layer's mesh. */
+  async load(body, level) {
+    if (this.mesh && this.body === body && this.level === level) return;
+    const serial = ++this.serial;
+    const buf = await apiBinary(`/api/spheres?body=${body}&level=${level}`);
+    if (serial !== this.serial) return; // a newer request won
+    if (!buf || buf.byteLength % 16 !== 0) throw new Error(`bad sphere data for ${body} level ${level}`);
+    const s = new Float32Array(buf);
+    const n = s.length / 4;
+    // 20 triangles a sphere above 40k spheres, else 80: a 150k-sphere level stays drawable.
+    const geo = new THREE.IcosahedronGeometry(1, n > 40000 ? 0 : 1);
+    const mat = new THREE.MeshPhongMaterial({ color: 0xffffff, shininess: 20 });
+    const mesh = new THREE.InstancedMesh(geo, mat, Math.max(n, 1));
+    mesh.count = n;
+    mesh.frustumCulled = false; // the instances' extent is not the geometry's
+    const m = new THREE.Matrix4();
+    const c = new THREE.Color();
+    const base = new THREE.Color(body === 'a' ? 0xf0a040 : 0x40c0a0);
+    let rmax = 0;
+    for (let i = 0; i < n; i++) rmax = Math.max(rmax, s[4 * i + 3]);
+    for (let i = 0; i < n; i++) {
+      const r = s[4 * i + 3];
+      m.makeScale(r, r, r).setPosition(s[4 * i], s[4 * i + 1], s[4 * i + 2]);
+      mesh.setMatrixAt(i, m);
+      // Big spheres light, small ones dark: the packing's structure reads at a glance.
+      c.copy(base).multiplyScalar(0.45 + 0.55 * (rmax > 0 ? r / rmax : 1));
+      mesh.setColorAt(i, c);
+    }
+    mesh.instanceMatrix.needsUpdate = true;
+    if (mesh.instanceColor) mesh.instanceColor.needsUpdate = true;
+    this.dispose();
+    this.mesh = mesh;
+    this.body = body;
+    this.level = level;
+    this.count = n;
+    bodyGroup[body].add(mesh); // B's spheres follow B's pose
+  }
+
+  setVisible(v) { if (this.mesh) this.mesh.visible = v; }
+
+  dispose() {
+    if (!this.mesh) return;
+    this.mesh.parent?.remove(this.mesh);
+    this.mesh.geometry.dispose();
+    this.mesh.material.dispose();
+    this.mesh.dispose();
+    this.mesh = null;
+    this.count = 0;
+  }
+}
+
+/** The spheres the user looks at (panel: show, body, level). */
+const inspectLayer = new SphereLayer('inspect');
+/** The picture of a body that has no mesh: its leaves. */
+const standIn = { a: null, b: null };
+
+// ---------------------------------------------------------------------------------------
+// Loading: info, meshes, stand-in spheres
+// ---------------------------------------------------------------------------------------
+
+async function loadMesh(name) {
+  const buf = await apiBinary(`/api/mesh?body=${name}`);
+  if (!buf) return null;
+  const dv = new DataView(buf);
+  const nv = dv.getUint32(0, true);
+  const nt = dv.getUint32(4, true);
+  if (buf.byteLength !== 8 + nv * 12 + nt * 12) throw new Error(`bad mesh data for ${name}`);
+  const geo = new THREE.BufferGeometry();
+  geo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(buf, 8, nv * 3), 3));
+  geo.setIndex(new THREE.BufferAttribute(new Uint32Array(buf, 8 + nv * 12, nt * 3), 1));
+  geo.computeVertexNormals();
+  geo.computeBoundingBox();
+  return geo;
+}
+
+async function loadBody(name) {
+  const info = ist.info.bodies[name];
+  const b = bodies[name];
+  b.box.set(v3(info.bbox_min), v3(info.bbox_max));
+  const geo = info.has_mesh ? await loadMesh(name) : null;
+  if (geo) {
+    b.material = new THREE.MeshPhongMaterial({ color: b.color, shininess: 40, side: THREE.DoubleSide });
+    b.mesh = new THREE.Mesh(geo, b.material);
+    bodyGroup[name].add(b.mesh);
+  } else {
+    // No mesh: the leaves are the picture.
+    standIn[name] = new SphereLayer(`stand-in ${name}`);
+    await standIn[name].load(name, Math.max(0, info.levels - 1));
+  }
+  if (name === 'b') {
+    b.box.getCenter(pivotB);
+    // The ghost: B's mesh, faint, plus B's box outline (thin, readable over anything).
+    if (b.mesh) {
+      ghostB.add(new THREE.Mesh(b.mesh.geometry, new THREE.MeshBasicMaterial({
+        color: 0xc0d8ff, transparent: true, opacity: 0.18, depthWrite: false,
+      })));
+    }
+    ghostB.add(new THREE.Box3Helper(b.box.clone(), 0xc0d8ff));
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Camera framing
+// ---------------------------------------------------------------------------------------
+
+/** A body's box centre in the world (B's at its drawn pose). */
+function bodyCentreWorld(name) {
+  const c = bodies[name].box.getCenter(new THREE.Vector3());
+  if (name === 'b') { bodyB.updateMatrixWorld(); c.applyMatrix4(bodyB.matrixWorld); }
+  return c;
+}
+
+/** A world point in page CSS pixels. */
+function screenOf(p) {
+  camera.updateMatrixWorld();
+  const ndc = p.clone().project(camera);
+  const r = canvas.getBoundingClientRect();
+  return [r.left + (ndc.x + 1) / 2 * r.width, r.top + (1 - ndc.y) / 2 * r.height];
+}
+
+/** Points the camera at the union of A's box and B's box at its drawn pose. */
+function frameBodies() {
+  bodyB.updateMatrixWorld();
+  const box = bodies.a.box.clone().union(bodies.b.box.clone().applyMatrix4(bodyB.matrixWorld));
+  const centre = box.getCenter(new THREE.Vector3());
+  const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-3);
+  sceneSize = radius * 2;
+  const fov = THREE.MathUtils.degToRad(camera.fov);
+  const dist = radius / Math.sin(Math.min(fov, fov * camera.aspect) / 2) * 1.05;
+  const dir = new THREE.Vector3(0.55, -1, 0.45).normalize(); // front, right, a little above
+  camera.position.copy(centre).addScaledVector(dir, dist);
+  camera.near = dist / 100;
+  camera.far = dist * 100;
+  camera.updateProjectionMatrix();
+  orbit.target.copy(centre);
+  orbit.update();
+  dotA.scale.setScalar(sceneSize * 0.006);
+  dotB.scale.setScalar(sceneSize * 0.006);
+}
+
+// ---------------------------------------------------------------------------------------
+// Applying the server's answers
+// ---------------------------------------------------------------------------------------
+
+/** The last pose this page sent, and when: the state stream lags it by up to a frame or
+ *  two, and a stale state must not drag the proxy (and B) back. */
+let lastSent = null;
+
+/** Sends B's target pose (throttled, one request in flight, latest wins). */
+const posePoster = new LatestOnlyPoster('/api/pose', 16, (body, answer) => {
+  // In free mode B is at the target, so the answer is what to show now; in haptic and
+  // motion modes the state stream says where B really is.
+  if (!ist.state || ist.state.mode === 'free') {
+    showPose(body.pose_b);
+    showContact(answer);
+  }
+});
+function sendPose(p) {
+  lastSent = { pose: p, at: performance.now() };
+  return posePoster.send({ pose_b: p });
+}
+
+/** Draws B at `p`. */
+function showPose(p) {
+  setObjectPose(bodyB, p);
+}
+
+/** The contact quantities (a state or a /api/pose answer): overlays and panel numbers. */
+function showContact(s) {
+  // Panel.
+  $('distance').textContent = `${num(s.distance)} mm`;
+  $('volume').textContent = `${num(s.volume)} mm³`;
+  $('max-depth').textContent = `${num(s.max_depth)} mm`;
+  $('force').textContent = `${num(len3(s.force))} N`;
+  $('force').title = `(${s.force.map((x) => num(x, 3)).join(', ')})`;
+  $('torque').textContent = `${num(len3(s.torque))} N·mm`;
+  $('torque').title = `(${s.torque.map((x) => num(x, 3)).join(', ')})`;
+  $('patch-count').textContent = String(s.patches.length);
+  const contact = $('contact');
+  contact.classList.toggle('on', !!s.contact);
+  contact.textContent = s.contact ? 'contact' : 'apart';
+
+  // Closest points, while apart.
+  const apart = !s.contact && Number.isFinite(s.distance);
+  distLine.visible = dotA.visible = dotB.visible = apart;
+  if (apart) {
+    const pa = v3(s.point_a), pb = v3(s.point_b);
+    distLine.geometry.setFromPoints([pa, pb]);
+    dotA.position.copy(pa);
+    dotB.position.copy(pb);
+  }
+
+  // Patches: disc area ~ volume^(2/3) (radius = cbrt(volume)), colour from yellow
+  // (shallow) to red (the deepest of this state).
+  let wsum = 0;
+  const centroid = new THREE.Vector3();
+  const dmax = Math.max(s.max_depth || 0, ...s.patches.map((p) => p.depth), 1e-12);
+  s.patches.forEach((p, i) => {
+    const d = disc(i);
+    const r = THREE.MathUtils.clamp(Math.cbrt(Math.max(p.volume, 0)), sceneSize * 0.01, sceneSize * 0.15);
+    d.position.copy(v3(p.point));
+    const n = v3(p.normal);
+    if (n.lengthSq() > 0) d.quaternion.setFromUnitVectors(new THREE.Vector3(0, 0, 1), n.normalize());
+    d.scale.setScalar(r);
+    d.material.color.setHSL(0.16 * (1 - Math.min(p.depth / dmax, 1)), 1, 0.55);
+    d.visible = true;
+    centroid.addScaledVector(v3(p.point), p.volume);
+    wsum += p.volume;
+  });
+  for (let i = s.patches.length; i < discs.length; i++) discs[i].visible = false;
+
+  // Arrows: force at the patches' (volume-weighted) centroid, else at B's centre.
+  const centreB = bodyCentreWorld('b');
+  const forceAt = wsum > 0 ? centroid.divideScalar(wsum) : centreB;
+  placeArrow(forceArrow, 'force', s.force, forceAt);
+  placeArrow(torqueArrow, 'torque', s.torque, centreB);
+}
+
+/** Everything else in a state: loop numbers, chart, mode, motion, haptic ghost. */
+function showLoop(s) {
+  const l = s.loop;
+  if (l) {
+    $('rate').textContent = `${num(l.rate_hz, 5)} Hz`;
+    $('tick').textContent = `${num(l.tick_us, 3)} µs`;
+    $('tick').title = `p99 ${num(l.tick_us_p99, 3)} µs, max ${num(l.tick_us_max, 3)} µs, ${l.ticks} ticks`;
+    $('over').textContent = `${l.over_1ms} of ${l.ticks}`;
+    drawTickChart(l);
+  }
+  const modeSel = $('mode');
+  if (document.activeElement !== modeSel && modeSel.value !== s.mode) modeSel.value = s.mode;
+
+  const haptic = s.mode === 'haptic';
+  ghostB.visible = haptic;
+  $('device-force-row').hidden = !haptic;
+  if (haptic) {
+    setObjectPose(ghostB, s.target_b);
+    $('device-force').textContent = `${num(len3(s.device_force))} N`;
+    ghostB.updateMatrixWorld();
+    const at = bodies.b.box.getCenter(new THREE.Vector3()).applyMatrix4(ghostB.matrixWorld);
+    placeArrow(deviceArrow, 'device', s.device_force, at);
+  } else {
+    deviceArrow.visible = false;
+  }
+
+  if (s.motion) showMotion(s.motion);
+}
+
+/** A state from the stream (or a poll). */
+function applyState(s) {
+  ist.state = s;
+  // Right after this page sent a pose, the stream may still carry the previous target:
+  // in free mode such a state would pull B (and the proxy) back for a frame. Skip its
+  // pose and contact until the server's target catches up (or a second has passed).
+  const stale = lastSent && s.mode === 'free'
+    && performance.now() - lastSent.at < 1000 && !posesClose(s.target_b, lastSent.pose);
+  if (!stale) {
+    showPose(s.pose_b);
+    showContact(s);
+    if (!dragging) {
+      const cur = poseFromProxy();
+      if (!posesClose(cur, s.target_b, 1e-9)) setProxyFromPose(s.target_b);
+    }
+  }
+  showLoop(s);
+}
+
+// ---------------------------------------------------------------------------------------
+// Tick chart: the last ~240 tick times as bars, the 1 ms budget as a red line when in range
+// ---------------------------------------------------------------------------------------
+
+const chart = $('tick-chart');
+const chartCtx = chart.getContext('2d');
+let chartScale = 0; // µs at the top; grows at once, shrinks slowly (no jumpy rescaling)
+
+function drawTickChart(l) {
+  const h = l.history_us || [];
+  const W = chart.width, H = chart.height;
+  const g = chartCtx;
+  g.fillStyle = '#14161b';
+  g.fillRect(0, 0, W, H);
+  if (!h.length) return;
+  const top = Math.max(...h, l.tick_us_p99 || 0, 1) * 1.2;
+  chartScale = top > chartScale ? top : chartScale * 0.98 + top * 0.02;
+  const bw = W / 240;
+  for (let i = 0; i < h.length; i++) {
+    const v = h[i];
+    const bh = Math.min(H - 12, (v / chartScale) * (H - 12));
+    g.fillStyle = v > 1000 ? '#ff4d4d' : '#6cc3ff';
+    g.fillRect(W - (h.length - i) * bw, H - bh, Math.max(bw - 0.2, 0.6), bh);
+  }
+  // p99 (dashed) and the 1 ms budget (red) when they fit.
+  const yOf = (us) => H - (us / chartScale) * (H - 12);
+  if (l.tick_us_p99 > 0 && l.tick_us_p99 < chartScale) {
+    g.strokeStyle = '#e0e0e0'; g.setLineDash([3, 3]); g.beginPath();
+    g.moveTo(0, yOf(l.tick_us_p99)); g.lineTo(W, yOf(l.tick_us_p99)); g.stroke(); g.setLineDash([]);
+  }
+  if (chartScale > 1000) {
+    g.strokeStyle = '#ff4d4d'; g.beginPath(); g.moveTo(0, yOf(1000)); g.lineTo(W, yOf(1000)); g.stroke();
+  }
+  g.fillStyle = '#c8ccd4';
+  g.font = '10px sans-serif';
+  g.fillText(`${num(chartScale, 3)} µs`, 3, 10);
+  g.fillText(`p99 ${num(l.tick_us_p99, 3)}`, W - 70, 10);
+}
+
+// ---------------------------------------------------------------------------------------
+// Live state: server-sent events, falling back to polling
+// ---------------------------------------------------------------------------------------
+
+let pollTimer = 0;
+function connect() {
+  const es = new EventSource('/api/events');
+  es.onopen = () => { $('conn').textContent = 'live'; $('conn').className = 'conn live'; };
+  es.onmessage = (e) => {
+    try { applyState(JSON.parse(e.data)); } catch (err) { showError(err); }
+  };
+  es.onerror = () => {
+    // Poll /api/state instead, and try the stream again in a few seconds.
+    es.close();
+    $('conn').textContent = 'polling';
+    $('conn').className = 'conn poll';
+    startPolling();
+    setTimeout(() => { stopPolling(); connect(); }, 5000);
+  };
+}
+function startPolling() {
+  if (pollTimer) return;
+  const tick = async () => {
+    try { applyState(await api('/api/state')); } catch (err) {
+      $('conn').textContent = 'disconnected';
+      $('conn').className = 'conn off';
+    }
+    if (pollTimer) pollTimer = setTimeout(tick, 100);
+  };
+  pollTimer = setTimeout(tick, 0);
+}
+function stopPolling() { clearTimeout(pollTimer); pollTimer = 0; }
+
+// ---------------------------------------------------------------------------------------
+// Panel controls
+// ---------------------------------------------------------------------------------------
+
+function updatePoseInput() {
+  const el = $('pose-input');
+  if (document.activeElement !== el) el.value = formatPose(poseFromProxy());
+}
+
+function setGizmoMode(m) {
+  gizmo.setMode(m);
+  $('gizmo-translate').classList.toggle('active', m === 'translate');
+  $('gizmo-rotate').classList.toggle('active', m === 'rotate');
+}
+
+function setupPanel(info) {
+  // Mode: only what the server offers.
+  const modeSel = $('mode');
+  for (const m of info.modes) modeSel.add(new Option(m, m));
+  modeSel.addEventListener('change', async () => {
+    try {
+      await api('/api/mode', { mode: modeSel.value });
+    } catch (err) {
+      showError(err);
+      if (ist.state) modeSel.value = ist.state.mode;
+    }
+    modeSel.blur();
+  });
+
+  // Moving B.
+  $('gizmo-translate').addEventListener('click', () => setGizmoMode('translate'));
+  $('gizmo-rotate').addEventListener('click', () => setGizmoMode('rotate'));
+  const applyTyped = () => {
+    try {
+      const p = parsePose($('pose-input').value);
+      setProxyFromPose(p);
+      sendPose(p).catch(() => {}); // the poster already shows the error
+    } catch (err) { showError(err); }
+  };
+  $('pose-apply').addEventListener('click', applyTyped);
+  $('pose-input').addEventListener('keydown', (e) => { if (e.key === 'Enter') applyTyped(); });
+
+  window.addEventListener('keydown', (e) => {
+    if (e.target.closest && e.target.closest('input, select, textarea')) return;
+    if (e.key === 't') setGizmoMode('translate');
+    else if (e.key === 'r') setGizmoMode('rotate');
+    else if (e.key === 'f') frameBodies();
+  });
+
+  // Motion.
+  if (info.motion) {
+    $('motion-panel').hidden = false;
+    const tl = $('timeline');
+    tl.max = String(info.motion.seconds);
+    showMotion({ playing: false, t: 0, seconds: info.motion.seconds });
+    $('play').addEventListener('click', async () => {
+      const playing = !(ist.state && ist.state.motion && ist.state.motion.playing);
+      try {
+        // Playing means B follows the motion: switch to motion mode first if needed.
+        if (playing && ist.state && ist.state.mode !== 'motion') await api('/api/mode', { mode: 'motion' });
+        showMotion(await api('/api/motion', { playing }));
+      } catch (err) { showError(err); }
+    });
+    tl.addEventListener('pointerdown', () => { scrubbing = true; });
+    tl.addEventListener('pointerup', () => { scrubbing = false; });
+    tl.addEventListener('change', () => { scrubbing = false; });
+    tl.addEventListener('input', async () => {
+      $('motion-time').textContent = `${Number(tl.value).toFixed(3)} / ${info.motion.seconds.toFixed(3)} s`;
+      try {
+        if (ist.state && ist.state.mode !== 'motion' && info.modes.includes('motion')) {
+          await api('/api/mode', { mode: 'motion' });
+        }
+        await scrubPoster.send({ t: Number(tl.value) });
+      } catch { /* shown by the poster */ }
+    });
+  }
+
+  // Spheres.
+  const show = $('show-spheres');
+  const bodySel = $('sphere-body');
+  const level = $('level');
+  const anyMeshless = !info.bodies.a.has_mesh || !info.bodies.b.has_mesh;
+  // Without meshes, the leaves are the picture: show them from the start.
+  if (anyMeshless) {
+    show.checked = true;
+    bodySel.value = info.bodies.a.has_mesh ? 'b' : 'a';
+  }
+  const setLevelRange = () => {
+    const levels = info.bodies[bodySel.value].levels;
+    level.max = String(Math.max(0, levels - 1));
+    level.value = String(Math.max(0, levels - 1)); // the leaves: the spheres that count
+    $('level-value').textContent = level.value;
+  };
+  setLevelRange();
+  show.addEventListener('change', updateSpheres);
+  bodySel.addEventListener('change', () => { setLevelRange(); updateSpheres(); });
+  level.addEventListener('input', () => { $('level-value').textContent = level.value; updateSpheres(); });
+}
+
+let scrubbing = false;
+const scrubPoster = new LatestOnlyPoster('/api/motion', 16, (_body, answer) => showMotion(answer));
+
+function showMotion(m) {
+  $('play').textContent = m.playing ? 'pause' : 'play';
+  $('play').classList.toggle('active', !!m.playing);
+  if (!scrubbing) {
+    $('timeline').value = String(m.t);
+    $('motion-time').textContent = `${m.t.toFixed(3)} / ${m.seconds.toFixed(3)} s`;
+  }
+}
+
+/** Shows or hides the inspected spheres, (re)loads them, and makes the meshes see-through
+ *  while they are shown. */
+async function updateSpheres() {
+  const shown = $('show-spheres').checked;
+  const body = $('sphere-body').value;
+  const level = Number($('level').value);
+  ist.spheres = { shown, body, level, count: inspectLayer.count, loading: shown };
+  for (const name of ['a', 'b']) {
+    const m = bodies[name].material;
+    if (!m) continue;
+    m.transparent = shown;
+    m.opacity = shown ? 0.28 : 1;
+    m.depthWrite = !shown;
+    m.needsUpdate = true;
+  }
+  if (!shown) {
+    inspectLayer.setVisible(false);
+    for (const name of ['a', 'b']) standIn[name]?.setVisible(true);
+    $('sphere-count').textContent = '—';
+    return;
+  }
+  $('sphere-count').textContent = 'loading…';
+  try {
+    await inspectLayer.load(body, level);
+  } catch (err) {
+    showError(err);
+    return;
+  }
+  // A later change may have come in while loading: only the latest one writes the panel.
+  if ($('sphere-body').value !== body || Number($('level').value) !== level || !$('show-spheres').checked) return;
+  inspectLayer.setVisible(true);
+  // A stand-in showing the same spheres would only fight with them in the depth buffer.
+  for (const name of ['a', 'b']) {
+    standIn[name]?.setVisible(!(name === body && standIn[name].level === level));
+  }
+  $('sphere-count').textContent = `${inspectLayer.count.toLocaleString('en')} spheres (${body.toUpperCase()}, level ${level})`;
+  ist.spheres = { shown, body, level, count: inspectLayer.count, loading: false };
+}
+
+// ---------------------------------------------------------------------------------------
+// Shift-drag: move B's target in the camera's view plane (no gizmo needed)
+// ---------------------------------------------------------------------------------------
+
+/** Pointer position in normalized device coordinates. */
+function ndcOf(e) {
+  const r = canvas.getBoundingClientRect();
+  return new THREE.Vector2(((e.clientX - r.left) / r.width) * 2 - 1, -((e.clientY - r.top) / r.height) * 2 + 1);
+}
+
+function setupShiftDrag() {
+  const ray = new THREE.Raycaster();
+  let drag = null; // { plane, startHit, startPos, pointerId }
+  const hit = (e, plane) => {
+    ray.setFromCamera(ndcOf(e), camera);
+    return ray.ray.intersectPlane(plane, new THREE.Vector3());
+  };
+  // Capture phase on window: runs before OrbitControls' and the gizmo's listeners on the
+  // canvas, so that a Shift-drag neither orbits the view nor grabs a gizmo handle.
+  window.addEventListener('pointerdown', (e) => {
+    if (!e.shiftKey || e.button !== 0 || e.target !== canvas) return;
+    e.stopPropagation();
+    e.preventDefault();
+    const normal = camera.getWorldDirection(new THREE.Vector3());
+    const plane = new THREE.Plane().setFromNormalAndCoplanarPoint(normal, proxy.position);
+    const startHit = hit(e, plane);
+    if (!startHit) return;
+    drag = { plane, startHit, startPos: proxy.position.clone(), pointerId: e.pointerId };
+    dragging = true;
+  }, true);
+  window.addEventListener('pointermove', (e) => {
+    if (!drag || e.pointerId !== drag.pointerId) return;
+    e.stopPropagation();
+    const h = hit(e, drag.plane);
+    if (!h) return;
+    proxy.position.copy(drag.startPos).add(h.sub(drag.startHit));
+    proxy.updateMatrixWorld();
+    updatePoseInput();
+    sendPose(poseFromProxy()).catch(() => {});
+  }, true);
+  const end = (e) => {
+    if (!drag || e.pointerId !== drag.pointerId) return;
+    e.stopPropagation();
+    drag = null;
+    dragging = false;
+  };
+  window.addEventListener('pointerup', end, true);
+  window.addEventListener('pointercancel', end, true);
+}
+
+// ---------------------------------------------------------------------------------------
+// Render loop
+// ---------------------------------------------------------------------------------------
+
+let loaded = false; // meshes (or stand-in spheres) of both bodies are in the scene
+let framed = false; // the camera has been framed on the bodies (needs B's first pose)
+
+function onResize() {
+  camera.aspect = window.innerWidth / window.innerHeight;
+  camera.updateProjectionMatrix();
+  renderer.setSize(window.innerWidth, window.innerHeight);
+}
+window.addEventListener('resize', onResize);
+
+function frame() {
+  requestAnimationFrame(frame);
+  if (loaded && ist.state && !framed) { frameBodies(); framed = true; }
+  orbit.update();
+  renderer.render(scene, camera);
+  ist.frames++;
+  if (!ist.ready && loaded && framed) ist.ready = true; // this frame showed the bodies
+}
+
+// ---------------------------------------------------------------------------------------
+// Start
+// ---------------------------------------------------------------------------------------
+
+async function main() {
+  requestAnimationFrame(frame);
+  try {
+    ist.info = await api('/api/info');
+  } catch (err) {
+    showError(err);
+    $('conn').textContent = 'no server';
+    return;
+  }
+  setupPanel(ist.info);
+  setupShiftDrag();
+  connect();
+  try {
+    await Promise.all([loadBody('a'), loadBody('b')]);
+  } catch (err) {
+    showError(err);
+  }
+  // B's pivot is known now: put the proxy where the latest state says.
+  if (ist.state) setProxyFromPose(ist.state.target_b);
+  loaded = true;
+  if ($('show-spheres').checked) updateSpheres();
+}
+
+main();

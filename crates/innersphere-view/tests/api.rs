@@ -1,0 +1,220 @@
+//! The HTTP API against the library, on the built-in scene: `POST /api/pose` answers what a
+//! fresh pair answers (the same as `ist query`), the state streams, the loop runs, and bad
+//! requests get a 4xx with a message, never a panic or a file outside the embedded ones.
+
+use innersphere::{DistanceOptions, Pair, PenetrationOptions, Pose};
+use innersphere_view::{serve, Scene, ServeOptions};
+use serde_json::Value;
+use std::io::{Read, Write};
+use std::net::{SocketAddr, TcpStream};
+use std::sync::OnceLock;
+use std::time::Duration;
+
+struct Server {
+    addr: SocketAddr,
+    scene: Scene,
+}
+
+fn server() -> &'static Server {
+    static S: OnceLock<Server> = OnceLock::new();
+    S.get_or_init(|| {
+        let scene = Scene::demo().unwrap();
+        let (tx, rx) = std::sync::mpsc::channel();
+        let s = scene.clone();
+        std::thread::spawn(move || {
+            let opts = ServeOptions {
+                port: 0,
+                ..Default::default()
+            };
+            serve(s, opts, move |addr| tx.send(addr).unwrap()).unwrap();
+        });
+        let addr = rx.recv_timeout(Duration::from_secs(30)).unwrap();
+        Server { addr, scene }
+    })
+}
+
+/// (status, body) of one request.
+fn request(method: &str, path: &str, body: &str) -> (u16, Vec<u8>) {
+    let mut s = TcpStream::connect(server().addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+    write!(
+        s,
+        "{method} {path} HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\nContent-Length: {}\r\n\r\n{body}",
+        body.len()
+    )
+    .unwrap();
+    let mut out = Vec::new();
+    s.read_to_end(&mut out).unwrap();
+    let text = String::from_utf8_lossy(&out);
+    let code: u16 = text.split_whitespace().nth(1).unwrap().parse().unwrap();
+    let start = out.windows(4).position(|w| w == b"\r\n\r\n").unwrap() + 4;
+    let mut body = out[start..].to_vec();
+    if text
+        .to_ascii_lowercase()
+        .contains("transfer-encoding: chunked")
+    {
+        body = dechunk(&body);
+    }
+    (code, body)
+}
+
+fn dechunk(mut b: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    loop {
+        let eol = b.windows(2).position(|w| w == b"\r\n").unwrap();
+        let n = usize::from_str_radix(std::str::from_utf8(&b[..eol]).unwrap().trim(), 16).unwrap();
+        if n == 0 {
+            return out;
+        }
+        out.extend_from_slice(&b[eol + 2..eol + 2 + n]);
+        b = &b[eol + 4 + n..];
+    }
+}
+
+fn json(method: &str, path: &str, body: &str) -> (u16, Value) {
+    let (c, b) = request(method, path, body);
+    (c, serde_json::from_slice(&b).unwrap_or(Value::Null))
+}
+
+fn close(a: &Value, b: f64) -> bool {
+    a.as_f64() == Some(b)
+}
+
+#[test]
+fn a_posted_pose_is_answered_as_a_fresh_pair_answers() {
+    let s = server();
+    for p7 in [
+        [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+        [0.2, -0.1, -0.3, 1.0, 0.02, 0.0, 0.0],
+        [0.0, 0.0, -4.0, 1.0, 0.0, 0.0, 0.1],
+    ] {
+        let body = format!("{{\"pose_b\": {}}}", serde_json::to_string(&p7).unwrap());
+        let (code, v) = json("POST", "/api/pose", &body);
+        assert_eq!(code, 200, "{v}");
+        let pose = Pose::from_array(p7).unwrap();
+        let mut pair = Pair::new(s.scene.a.clone(), s.scene.b.clone());
+        let d = pair.distance_with(
+            &Pose::IDENTITY,
+            &pose,
+            &DistanceOptions {
+                coherence: false,
+                ..Default::default()
+            },
+        );
+        let q = pair.penetration_with(
+            &Pose::IDENTITY,
+            &pose,
+            &PenetrationOptions {
+                safe_motion: false,
+                ..Default::default()
+            },
+        );
+        assert!(close(&v["distance"], d.distance), "{v}");
+        assert_eq!(v["contact"], d.overlapping);
+        assert!(close(&v["volume"], q.volume));
+        assert!(close(&v["max_depth"], q.max_depth));
+        for i in 0..3 {
+            assert!(close(&v["force"][i], q.force[i]));
+            assert!(close(&v["torque"][i], q.torque_b[i]));
+            assert!(close(&v["point_a"][i], d.point_a[i]));
+        }
+        assert_eq!(v["patches"].as_array().unwrap().len(), pair.patches().len());
+    }
+}
+
+#[test]
+fn the_loop_runs_and_its_state_streams() {
+    let (code, info) = json("GET", "/api/info", "");
+    assert_eq!(code, 200);
+    assert!(info["bodies"]["a"]["leaves"].as_u64().unwrap() > 100);
+    std::thread::sleep(Duration::from_millis(600));
+    let (code, st) = json("GET", "/api/state", "");
+    assert_eq!(code, 200);
+    let rate = st["loop"]["rate_hz"].as_f64().unwrap();
+    assert!(rate > 500.0 && rate < 1500.0, "loop rate {rate} Hz");
+    assert!(st["loop"]["ticks"].as_u64().unwrap() > 300);
+    // Modes and motion.
+    assert_eq!(json("POST", "/api/mode", r#"{"mode":"haptic"}"#).0, 200);
+    assert_eq!(json("POST", "/api/motion", r#"{"t": 1.5}"#).0, 200);
+    assert_eq!(json("POST", "/api/mode", r#"{"mode":"free"}"#).0, 200);
+    // The event stream sends state lines.
+    let mut s = TcpStream::connect(server().addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    write!(s, "GET /api/events HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
+    let mut buf = vec![0u8; 8192];
+    let mut got = Vec::new();
+    while !String::from_utf8_lossy(&got).contains("\"loop\"") {
+        let n = s.read(&mut buf).unwrap();
+        assert!(n > 0, "the stream ended");
+        got.extend_from_slice(&buf[..n]);
+    }
+    assert!(String::from_utf8_lossy(&got).contains("data: {"));
+    // Page, assets, binary data.
+    let (code, page) = request("GET", "/", "");
+    assert_eq!(code, 200);
+    assert!(!page.is_empty());
+    assert_eq!(
+        request("GET", "/assets/vendor/three.module.min.js", "").0,
+        200
+    );
+    let (code, sph) = request("GET", "/api/spheres?body=b&level=3", "");
+    assert_eq!(code, 200);
+    assert_eq!(sph.len() % 16, 0);
+    let (code, mesh) = request("GET", "/api/mesh?body=a", "");
+    assert_eq!(code, 200);
+    let v = u32::from_le_bytes(mesh[..4].try_into().unwrap()) as usize;
+    let t = u32::from_le_bytes(mesh[4..8].try_into().unwrap()) as usize;
+    assert_eq!(mesh.len(), 8 + 12 * v + 12 * t);
+}
+
+#[test]
+fn bad_requests_get_a_4xx_with_a_message() {
+    let cases: &[(&str, &str, &str, u16)] = &[
+        ("POST", "/api/pose", r#"{"pose_b": [1, 2]}"#, 400),
+        (
+            "POST",
+            "/api/pose",
+            r#"{"pose_b": [0, 0, 0, 0, 0, 0, 0]}"#,
+            400,
+        ),
+        (
+            "POST",
+            "/api/pose",
+            r#"{"pose_b": [0, 0, 0, 1, 0, 0, "x"]}"#,
+            400,
+        ),
+        ("POST", "/api/pose", "not json", 400),
+        (
+            "POST",
+            "/api/pose",
+            r#"{"pose_b": [1e300, 0, 0, 1, 0, 0, 0]}"#,
+            200,
+        ),
+        ("POST", "/api/mode", r#"{"mode": "dance"}"#, 400),
+        ("POST", "/api/motion", r#"{"t": "soon"}"#, 400),
+        ("POST", "/api/motion", r#"{}"#, 400),
+        ("GET", "/api/spheres?body=c", "", 400),
+        ("GET", "/api/spheres?body=a&level=-1", "", 400),
+        ("GET", "/api/spheres", "", 400),
+        ("GET", "/api/mesh?body=z", "", 400),
+        ("GET", "/assets/../../Cargo.toml", "", 404),
+        ("GET", "/assets/%2e%2e/Cargo.toml", "", 404),
+        ("GET", "/etc/passwd", "", 404),
+        ("DELETE", "/api/state", "", 405),
+        ("GET", "/api/pose", "", 405),
+    ];
+    for (m, p, b, want) in cases {
+        let (code, v) = json(m, p, b);
+        assert_eq!(code, *want, "{m} {p} {b}: {v}");
+        if *want >= 400 {
+            assert!(
+                v["error"].as_str().is_some_and(|e| !e.is_empty()),
+                "{m} {p}: {v}"
+            );
+        }
+    }
+    let big = format!("{{\"pose_b\": [{}]}}", "0,".repeat(40_000));
+    assert_eq!(request("POST", "/api/pose", &big).0, 413);
+    // Still serving.
+    assert_eq!(json("GET", "/api/state", "").0, 200);
+}

@@ -53,6 +53,7 @@ pub(crate) fn state(s: &LoopState, motion_seconds: Option<f64>) -> Value {
             "ticks": s.ticks,
             "over_1ms": s.over_1ms,
             "history_us": history,
+            "realtime": s.realtime,
         },
         "motion": motion_seconds.map(|len| json!({"playing": s.playing, "t": s.motion_t, "seconds": len})),
     })

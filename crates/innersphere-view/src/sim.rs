@@ -105,6 +105,9 @@ pub struct LoopState {
     pub motion_t: f64,
     /// Whether the motion plays.
     pub playing: bool,
+    /// Whether the loop thread got real-time scheduling (SCHED_FIFO), as haptic loops ask
+    /// for: without it other threads (the HTTP side, the browser) can preempt a tick.
+    pub realtime: bool,
 }
 
 const NO_PATCH: Patch = Patch {
@@ -143,6 +146,7 @@ impl LoopState {
             history_next: 0,
             motion_t: 0.0,
             playing: false,
+            realtime: false,
         }
     }
 }
@@ -181,6 +185,7 @@ pub(crate) fn run(
     let mut last_mode = Mode::Free;
     let mut seek_id = 0u64;
     let mut rate_from = (start, 0u64);
+    state.realtime = realtime_priority();
     while !io.stop.load(Ordering::Relaxed) {
         deadline += period;
         let t0 = Instant::now();
@@ -222,15 +227,25 @@ pub(crate) fn run(
             }
             _ => (target, DVec3::ZERO),
         };
-        let d = pair.distance_with(&Pose::IDENTITY, &pose_b, &dist);
+        // Penetration first; the distance only while apart (in contact it is 0, and the
+        // patches say where): one query per tick where the work is largest.
         let p = pair.penetration_with(&Pose::IDENTITY, &pose_b, &pen);
+        if p.pairs > 0 {
+            state.distance = 0.0;
+            state.contact = true;
+            let c = pair.patches().first().map_or(DVec3::ZERO, |q| q.point);
+            state.point_a = c;
+            state.point_b = c;
+        } else {
+            let d = pair.distance_with(&Pose::IDENTITY, &pose_b, &dist);
+            state.distance = d.distance;
+            state.contact = d.overlapping;
+            state.point_a = d.point_a;
+            state.point_b = d.point_b;
+        }
         state.mode = c.mode;
         state.pose_b = pose_b;
         state.target_b = target;
-        state.distance = d.distance;
-        state.contact = d.overlapping;
-        state.point_a = d.point_a;
-        state.point_b = d.point_b;
         state.volume = p.volume;
         state.max_depth = p.max_depth;
         state.force = p.force;
@@ -277,5 +292,22 @@ pub(crate) fn run(
             // Behind by more than a tick: do not try to catch up.
             deadline = Instant::now();
         }
+    }
+}
+
+/// Asks for real-time (FIFO) scheduling of the calling thread, as haptic servo loops do;
+/// true when granted (root or CAP_SYS_NICE on Linux), false elsewhere.
+fn realtime_priority() -> bool {
+    #[cfg(target_os = "linux")]
+    {
+        // SAFETY: plain system calls on the current thread with a valid parameter.
+        unsafe {
+            let p = libc::sched_param { sched_priority: 20 };
+            libc::pthread_setschedparam(libc::pthread_self(), libc::SCHED_FIFO, &p) == 0
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        false
     }
 }

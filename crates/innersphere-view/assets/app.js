@@ -173,6 +173,15 @@ const ist = {
     setProxyFromPose(p7);
     return sendPose(p7);
   },
+  /** What the overlays show now (visible patch discs, arrows, closest-point line). */
+  overlays: () => ({
+    discs: discs.filter((d) => d.visible).length,
+    force: forceArrow.visible,
+    torque: torqueArrow.visible,
+    device: deviceArrow.visible,
+    ghost: ghostB.visible,
+    line: distLine.visible,
+  }),
 };
 window.__ist = ist;
 
@@ -247,7 +256,7 @@ function poseFromProxy() {
 }
 
 const gizmo = new TransformControls(camera, canvas);
-gizmo.setSize(0.9);
+gizmo.setSize(0.8);
 gizmo.attach(proxy);
 scene.add(gizmo.getHelper());
 gizmo.addEventListener('dragging-changed', (e) => {
@@ -314,21 +323,28 @@ const forceArrow = arrow(0xff3b3b);
 const torqueArrow = arrow(0x3bc8ff);
 const deviceArrow = arrow(0xffa020);
 
-/** Length scales for the arrows: a slowly decaying peak of each magnitude, so that an
- *  arrow's length says "how strong compared with lately" and never leaves the view. */
-const peaks = { force: 0, torque: 0, device: 0 };
+/** Length scales for the arrows. Forces here span decades (a graze gives 1e-4, a deep
+ *  push 1e2), so an arrow's length is logarithmic around the recent typical magnitude
+ *  (an average of log10 m over a few seconds): typical → 0.6 of the longest arrow, 100×
+ *  more → the longest, 100× less → 0.2, never shorter than 0.12 nor longer than 1. The
+ *  panel gives the numbers; the arrow shows direction and "weak or strong lately". */
+const refLog = { force: null, torque: null, device: null };
 
 /** Bodies' size (diagonal of the union of boxes), set when framing: scales the overlays. */
 let sceneSize = 10;
 
-function placeArrow(a, key, vec, origin) {
+/** Sets arrow `a` to show `vec`: its tail at `at`, or with `tipAt` its tip there. */
+function placeArrow(a, key, vec, at, tipAt = false) {
   const m = vec ? len3(vec) : 0;
-  peaks[key] = Math.max(m, peaks[key] * 0.995);
   if (!(m > 1e-12)) { a.visible = false; return; }
-  const maxLen = sceneSize * 0.35;
-  const len = maxLen * Math.max(0.15, m / peaks[key]);
-  a.position.copy(origin);
-  a.setDirection(v3(vec).divideScalar(m));
+  const lg = Math.log10(m);
+  refLog[key] = refLog[key] === null ? lg : refLog[key] + (lg - refLog[key]) * 0.02;
+  const frac = THREE.MathUtils.clamp(0.6 + 0.2 * (lg - refLog[key]), 0.12, 1);
+  const len = sceneSize * 0.35 * frac;
+  const dir = v3(vec).divideScalar(m);
+  a.position.copy(at);
+  if (tipAt) a.position.addScaledVector(dir, -len);
+  a.setDirection(dir);
   a.setLength(len, len * 0.22, len * 0.12);
   a.visible = true;
 }
@@ -474,8 +490,11 @@ function frameBodies() {
   const centre = box.getCenter(new THREE.Vector3());
   const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-3);
   sceneSize = radius * 2;
+  // Fit the sphere around the boxes into the free part of the view (vertical field of
+  // view, or the horizontal one of the free part when that is narrower).
   const fov = THREE.MathUtils.degToRad(camera.fov);
-  const dist = radius / Math.sin(Math.min(fov, fov * camera.aspect) / 2) * 1.05;
+  const hfov = 2 * Math.atan(Math.tan(fov / 2) * freeWidth() / window.innerHeight);
+  const dist = radius / Math.sin(Math.min(fov, hfov) / 2) * 1.05;
   const dir = new THREE.Vector3(0.55, -1, 0.45).normalize(); // front, right, a little above
   camera.position.copy(centre).addScaledVector(dir, dist);
   camera.near = dist / 100;
@@ -499,14 +518,39 @@ let lastSent = null;
 const posePoster = new LatestOnlyPoster('/api/pose', 16, (body, answer) => {
   // In free mode B is at the target, so the answer is what to show now; in haptic and
   // motion modes the state stream says where B really is.
-  if (!ist.state || ist.state.mode === 'free') {
+  const mode = currentMode();
+  if (!mode || mode === 'free') {
     showPose(body.pose_b);
     showContact(answer);
   }
 });
 function sendPose(p) {
   lastSent = { pose: p, at: performance.now() };
+  leaveMotionMode();
   return posePoster.send({ pose_b: p });
+}
+
+/** The mode this page last asked for (for a second: until the state stream shows it),
+ *  else the state's. */
+let modeAsked = null; // { mode, at }
+function currentMode() {
+  if (modeAsked && performance.now() - modeAsked.at < 1000) return modeAsked.mode;
+  return ist.state ? ist.state.mode : null;
+}
+function setMode(mode) {
+  modeAsked = { mode, at: performance.now() };
+  return api('/api/mode', { mode });
+}
+
+/** Moving B by hand while the motion drives it would do nothing (the loop follows the
+ *  motion): the first hand move switches the server to free mode. */
+let leavingMotion = false;
+function leaveMotionMode() {
+  if (leavingMotion || currentMode() !== 'motion') return;
+  leavingMotion = true;
+  setMode('free')
+    .catch(showError)
+    .finally(() => { setTimeout(() => { leavingMotion = false; }, 200); });
 }
 
 /** Draws B at `p`. */
@@ -558,10 +602,12 @@ function showContact(s) {
   });
   for (let i = s.patches.length; i < discs.length; i++) discs[i].visible = false;
 
-  // Arrows: force at the patches' (volume-weighted) centroid, else at B's centre.
+  // Arrows: the force on B pushing at the patches' (volume-weighted) centroid — its tip
+  // there, so that it reads as "A pushes B here" and stays clear of B's gizmo — else at
+  // B's centre; the torque on B (about its centre of mass) at B's centre.
   const centreB = bodyCentreWorld('b');
-  const forceAt = wsum > 0 ? centroid.divideScalar(wsum) : centreB;
-  placeArrow(forceArrow, 'force', s.force, forceAt);
+  if (wsum > 0) placeArrow(forceArrow, 'force', s.force, centroid.divideScalar(wsum), true);
+  else placeArrow(forceArrow, 'force', s.force, centreB);
   placeArrow(torqueArrow, 'torque', s.torque, centreB);
 }
 
@@ -576,7 +622,8 @@ function showLoop(s) {
     drawTickChart(l);
   }
   const modeSel = $('mode');
-  if (document.activeElement !== modeSel && modeSel.value !== s.mode) modeSel.value = s.mode;
+  const mode = currentMode() || s.mode; // what was just asked for, not a state that predates it
+  if (document.activeElement !== modeSel && modeSel.value !== mode) modeSel.value = mode;
 
   const haptic = s.mode === 'haptic';
   ghostB.visible = haptic;
@@ -597,10 +644,12 @@ function showLoop(s) {
 /** A state from the stream (or a poll). */
 function applyState(s) {
   ist.state = s;
-  // Right after this page sent a pose, the stream may still carry the previous target:
-  // in free mode such a state would pull B (and the proxy) back for a frame. Skip its
-  // pose and contact until the server's target catches up (or a second has passed).
-  const stale = lastSent && s.mode === 'free'
+  lastStateAt = performance.now();
+  // Right after this page sent a pose, the stream may still carry the previous target
+  // (or, while leaving motion mode, the motion's): such a state would pull B (and the
+  // proxy) back for a frame. Skip its pose and contact until the server's target catches
+  // up (or a second has passed).
+  const stale = lastSent && (s.mode === 'free' || leavingMotion)
     && performance.now() - lastSent.at < 1000 && !posesClose(s.target_b, lastSent.pose);
   if (!stale) {
     showPose(s.pose_b);
@@ -619,26 +668,33 @@ function applyState(s) {
 
 const chart = $('tick-chart');
 const chartCtx = chart.getContext('2d');
-let chartScale = 0; // µs at the top; grows at once, shrinks slowly (no jumpy rescaling)
+let chartScale = 0; // µs at the top of the chart
 
+/** Bars of the recent tick times. The scale follows the bulk of the ticks (twice their
+ *  95th percentile), not the rare spike: a spike is clipped to the top and drawn orange
+ *  (red when it missed the 1 ms budget), so that a single slow tick does not flatten
+ *  the rest. The dashed line is the loop's p99 (over the last 1000 ticks), the red line
+ *  the 1 ms budget when it is within the scale. */
 function drawTickChart(l) {
   const h = l.history_us || [];
-  const W = chart.width, H = chart.height;
+  const W = chart.width, H = chart.height, top = 12;
   const g = chartCtx;
   g.fillStyle = '#14161b';
   g.fillRect(0, 0, W, H);
   if (!h.length) return;
-  const top = Math.max(...h, l.tick_us_p99 || 0, 1) * 1.2;
-  chartScale = top > chartScale ? top : chartScale * 0.98 + top * 0.02;
+  const sorted = [...h].sort((x, y) => x - y);
+  const p95 = sorted[Math.min(sorted.length - 1, Math.floor(sorted.length * 0.95))];
+  const want = Math.max(2 * p95, (l.tick_us_p99 || 0) * 1.2, 2);
+  // Grow at once, shrink gently: the bars do not jump with every state.
+  chartScale = want > chartScale ? want : chartScale * 0.9 + want * 0.1;
+  const yOf = (us) => H - Math.min(us / chartScale, 1) * (H - top);
   const bw = W / 240;
   for (let i = 0; i < h.length; i++) {
     const v = h[i];
-    const bh = Math.min(H - 12, (v / chartScale) * (H - 12));
-    g.fillStyle = v > 1000 ? '#ff4d4d' : '#6cc3ff';
-    g.fillRect(W - (h.length - i) * bw, H - bh, Math.max(bw - 0.2, 0.6), bh);
+    g.fillStyle = v > 1000 ? '#ff4d4d' : v > chartScale ? '#ffa64d' : '#6cc3ff';
+    const y = yOf(v);
+    g.fillRect(W - (h.length - i) * bw, y, Math.max(bw - 0.2, 0.6), H - y);
   }
-  // p99 (dashed) and the 1 ms budget (red) when they fit.
-  const yOf = (us) => H - (us / chartScale) * (H - 12);
   if (l.tick_us_p99 > 0 && l.tick_us_p99 < chartScale) {
     g.strokeStyle = '#e0e0e0'; g.setLineDash([3, 3]); g.beginPath();
     g.moveTo(0, yOf(l.tick_us_p99)); g.lineTo(W, yOf(l.tick_us_p99)); g.stroke(); g.setLineDash([]);
@@ -648,8 +704,10 @@ function drawTickChart(l) {
   }
   g.fillStyle = '#c8ccd4';
   g.font = '10px sans-serif';
-  g.fillText(`${num(chartScale, 3)} µs`, 3, 10);
-  g.fillText(`p99 ${num(l.tick_us_p99, 3)}`, W - 70, 10);
+  g.fillText(`${num(chartScale, 2)} µs`, 3, 10);
+  g.textAlign = 'right';
+  g.fillText(`p99 ${num(l.tick_us_p99, 3)} µs`, W - 3, 10);
+  g.textAlign = 'left';
 }
 
 // ---------------------------------------------------------------------------------------
@@ -685,6 +743,14 @@ function startPolling() {
 }
 function stopPolling() { clearTimeout(pollTimer); pollTimer = 0; }
 
+// A stream that is open but silent (a proxy buffering it, say) raises no error: if no state
+// came for two seconds, fetch one now and then.
+let lastStateAt = 0;
+setInterval(async () => {
+  if (pollTimer || performance.now() - lastStateAt < 2000) return;
+  try { applyState(await api('/api/state')); } catch { /* the panel shows the connection */ }
+}, 1000);
+
 // ---------------------------------------------------------------------------------------
 // Panel controls
 // ---------------------------------------------------------------------------------------
@@ -706,9 +772,10 @@ function setupPanel(info) {
   for (const m of info.modes) modeSel.add(new Option(m, m));
   modeSel.addEventListener('change', async () => {
     try {
-      await api('/api/mode', { mode: modeSel.value });
+      await setMode(modeSel.value);
     } catch (err) {
       showError(err);
+      modeAsked = null;
       if (ist.state) modeSel.value = ist.state.mode;
     }
     modeSel.blur();
@@ -744,7 +811,7 @@ function setupPanel(info) {
       const playing = !(ist.state && ist.state.motion && ist.state.motion.playing);
       try {
         // Playing means B follows the motion: switch to motion mode first if needed.
-        if (playing && ist.state && ist.state.mode !== 'motion') await api('/api/mode', { mode: 'motion' });
+        if (playing && currentMode() !== 'motion') await setMode('motion');
         showMotion(await api('/api/motion', { playing }));
       } catch (err) { showError(err); }
     });
@@ -754,9 +821,7 @@ function setupPanel(info) {
     tl.addEventListener('input', async () => {
       $('motion-time').textContent = `${Number(tl.value).toFixed(3)} / ${info.motion.seconds.toFixed(3)} s`;
       try {
-        if (ist.state && ist.state.mode !== 'motion' && info.modes.includes('motion')) {
-          await api('/api/mode', { mode: 'motion' });
-        }
+        if (currentMode() !== 'motion' && info.modes.includes('motion')) await setMode('motion');
         await scrubPoster.send({ t: Number(tl.value) });
       } catch { /* shown by the poster */ }
     });
@@ -892,10 +957,24 @@ function setupShiftDrag() {
 let loaded = false; // meshes (or stand-in spheres) of both bodies are in the scene
 let framed = false; // the camera has been framed on the bodies (needs B's first pose)
 
+/** Width of the window the panel leaves free on the left (the whole width when the
+ *  window is too narrow for that to help). */
+function freeWidth() {
+  const W = window.innerWidth;
+  const P = $('panel').getBoundingClientRect().width + 16;
+  return W > 2.5 * P ? W - P : W;
+}
+
+/** Sizes the canvas to the window and centres the view on the part the panel leaves free:
+ *  the projection is that of a window wider by the panel's width, of which the canvas
+ *  shows the right-hand part (PerspectiveCamera.setViewOffset). */
 function onResize() {
-  camera.aspect = window.innerWidth / window.innerHeight;
+  const W = window.innerWidth, H = window.innerHeight;
+  const P = W - freeWidth();
+  renderer.setSize(W, H);
+  if (P > 0) camera.setViewOffset(W + P, H, P, 0, W, H); // also sets the aspect
+  else { camera.clearViewOffset(); camera.aspect = W / H; }
   camera.updateProjectionMatrix();
-  renderer.setSize(window.innerWidth, window.innerHeight);
 }
 window.addEventListener('resize', onResize);
 
@@ -913,6 +992,7 @@ function frame() {
 // ---------------------------------------------------------------------------------------
 
 async function main() {
+  onResize();
   requestAnimationFrame(frame);
   try {
     ist.info = await api('/api/info');

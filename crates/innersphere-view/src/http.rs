@@ -191,8 +191,9 @@ fn handle(app: &Arc<App>, mut req: Request) {
             Ok(v) => motion(app, &v),
             Err(r) => r,
         },
-        (_, p) if p.starts_with("/api/") || p == "/" || p.starts_with("/assets/") => {
-            error(405, format!("{method} is not allowed on {p}"))
+        (_, "/" | "/index.html" | "/api/info" | "/api/state" | "/api/spheres" | "/api/mesh")
+        | (_, "/api/pose" | "/api/mode" | "/api/motion" | "/api/events") => {
+            error(405, format!("{method} is not allowed on {path}"))
         }
         (_, p) => error(404, format!("nothing at {p}")),
     };

@@ -202,6 +202,8 @@ fn bad_requests_get_a_4xx_with_a_message() {
         ("GET", "/etc/passwd", "", 404),
         ("DELETE", "/api/state", "", 405),
         ("GET", "/api/pose", "", 405),
+        ("GET", "/api/nope", "", 404),
+        ("POST", "/assets/app.js", "", 404),
     ];
     for (m, p, b, want) in cases {
         let (code, v) = json(m, p, b);

@@ -1,0 +1,345 @@
+"""Type stubs of the native module innersphere._innersphere (re-exported by innersphere)."""
+
+import os
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union, final
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+__all__ = [
+    "DistanceResult",
+    "Haptic",
+    "Pair",
+    "PenetrationResult",
+    "Tick",
+    "Tree",
+    "__version__",
+    "load_motion",
+]
+
+#: A pose: a 4×4 homogeneous matrix (row-major ``m[row, col]``, translation in the last
+#: column, last row exactly ``0 0 0 1``) or 7 numbers ``(tx, ty, tz, qw, qx, qy, qz)``
+#: (the quaternion is normalised). Applied to a tree's model coordinates as ``p' = R p + t``.
+_PoseLike = Union[npt.ArrayLike, Sequence[float]]
+#: A batch of poses: an ``(N, 7)`` or ``(N, 4, 4)`` array-like.
+_PosesLike = npt.ArrayLike
+#: A file path.
+_PathLike = Union[str, bytes, "os.PathLike[str]", "os.PathLike[bytes]"]
+#: A mesh: a file path, a ``(vertices (n, 3) float, faces (m, 3) int)`` pair, or an object
+#: with ``.vertices`` and ``.faces`` (a ``trimesh.Trimesh``).
+_MeshLike = Union[_PathLike, Tuple[npt.ArrayLike, npt.ArrayLike], Sequence[npt.ArrayLike], Any]
+
+_FloatArray = npt.NDArray[np.float64]
+
+@final
+class Tree:
+    """An Inner Sphere Tree: the inner-sphere packing of one rigid model and its
+    bounding-sphere hierarchy, ready for queries (shared read-only by every Pair that uses
+    it). Lengths are in the mesh's own model units (mm for the jaw scans).
+
+    Make one with ``Tree.build`` or ``Tree.load``. Trees pickle (through the file's bytes).
+    """
+
+    @staticmethod
+    def build(
+        path_or_mesh: _MeshLike,
+        *,
+        voxel_size: Optional[float] = None,
+        resolution: Optional[int] = None,
+        min_radius: float = 0.0,
+        refine_steps: int = 0,
+        fanout: int = 4,
+        progress: bool = False,
+        preset: Optional[str] = None,
+    ) -> "Tree":
+        """Builds the Inner Sphere Tree of a closed triangle mesh.
+
+        path_or_mesh: a mesh file (STL, OBJ, PLY or OFF, optionally .gz), a pair
+            ``(vertices (n, 3) float, faces (m, 3) int)``, or an object with ``.vertices``
+            and ``.faces`` (a ``trimesh.Trimesh``). Arrays are welded as the file loaders
+            do, so they give the tree of the same mesh read from a file.
+        voxel_size: edge of the voxel grid's cells (model units); exclusive with resolution.
+        resolution: cells along the longest side of the bounding box (2..4096); the default
+            when neither is given is 128 cells.
+        min_radius: no inner sphere smaller than this (model units; 0 = no floor).
+        refine_steps: off-grid refinement steps per sphere (0 = the paper's packing; the
+            calibrated setting is 8).
+        fanout: most children per inner node (2..32).
+        progress: print each stage's progress to standard error.
+        preset: start from ``ist build --preset NAME``: "fast", "default", "fine", "jaw"
+            (0.1 mm voxels, 0.05 mm minimum radius, 8 steps; jaw scans in mm) or
+            "jaw-fast"; options given (or differing from their defaults) override it.
+
+        Warnings of the build (open mesh, flipped faces, ...) are issued as UserWarnings
+        and kept in ``tree.report``. Raises ValueError for a bad option or mesh, OSError
+        when the file cannot be read.
+        """
+    @staticmethod
+    def load(path: _PathLike) -> "Tree":
+        """Reads a tree file (.ist) written by ``Tree.save`` or ``ist build``. Raises
+        OSError when it cannot be read, ValueError when it is no valid tree file."""
+    def save(self, path: _PathLike) -> None:
+        """Writes the tree file (through a temporary file renamed into place). Raises
+        OSError when it cannot be written."""
+    def to_bytes(self) -> bytes:
+        """The tree file's bytes."""
+    @staticmethod
+    def from_bytes(data: bytes) -> "Tree":
+        """A tree from a tree file's bytes (checked as ``Tree.load`` checks a file)."""
+    @property
+    def spheres(self) -> _FloatArray:
+        """The inner spheres (leaves): shape (leaf_count, 4), rows (x, y, z, r)."""
+    @property
+    def nodes(self) -> _FloatArray:
+        """Every node's sphere, breadth first from the root: shape (node_count, 4)."""
+    @property
+    def node_count(self) -> int:
+        """Number of nodes, leaves included."""
+    @property
+    def leaf_count(self) -> int:
+        """Number of inner spheres (leaves)."""
+    @property
+    def depth(self) -> int:
+        """Largest leaf depth (the root is at depth 0)."""
+    @property
+    def meta(self) -> Dict[str, Any]:
+        """Build parameters and facts about the source mesh: fanout, voxel_size, min_radius,
+        mesh_volume, center_of_mass, bbox_min, bbox_max, coverage, mesh_closed, built_by,
+        inertia."""
+    @property
+    def report(self) -> Optional[Dict[str, Any]]:
+        """The build report (spheres, coverage, stage times, warnings, ...) of a tree built
+        in this process; None for a loaded tree."""
+
+@final
+class DistanceResult:
+    """The answer of ``Pair.distance`` (world frame)."""
+
+    @property
+    def distance(self) -> float:
+        """Minimum distance between the sphere packings (0 when they overlap; with
+        ``signed=True`` minus the deepest leaf overlap)."""
+    @property
+    def contact(self) -> bool:
+        """True when the packings overlap."""
+    @property
+    def point_a(self) -> _FloatArray:
+        """Closest point on A's sphere, shape (3,)."""
+    @property
+    def point_b(self) -> _FloatArray:
+        """Closest point on B's sphere, shape (3,)."""
+    @property
+    def normal(self) -> _FloatArray:
+        """Unit direction from A's sphere centre to B's, shape (3,)."""
+    @property
+    def lower_bound(self) -> float:
+        """A proved lower bound on the exact answer (= distance without tolerances)."""
+    @property
+    def leaf_a(self) -> int:
+        """A's leaf (node index) of the closest pair."""
+    @property
+    def leaf_b(self) -> int:
+        """B's leaf (node index) of the closest pair."""
+    @property
+    def visits(self) -> int:
+        """Node pairs whose distance was computed."""
+    def to_dict(self) -> Dict[str, Any]:
+        """The fields as a dict (the keys of ``ist query --json``)."""
+
+@final
+class PenetrationResult:
+    """The answer of ``Pair.penetration`` (world frame)."""
+
+    @property
+    def volume(self) -> float:
+        """Penetration volume (model units³): the volume of the intersection of the two
+        sphere unions."""
+    @property
+    def max_depth(self) -> float:
+        """Largest leaf-pair overlap (model units)."""
+    @property
+    def normal(self) -> _FloatArray:
+        """Contact normal (unit, zeros without penetration), shape (3,)."""
+    @property
+    def force(self) -> _FloatArray:
+        """Force on B: stiffness × volume × normal, shape (3,)."""
+    @property
+    def torque_a(self) -> _FloatArray:
+        """Torque on A about A's centre of mass, shape (3,)."""
+    @property
+    def torque_b(self) -> _FloatArray:
+        """Torque on B about B's centre of mass, shape (3,)."""
+    @property
+    def patches(self) -> List[Dict[str, Any]]:
+        """Contact patches: dicts with point (3,), normal (3,), depth, volume, pairs."""
+    @property
+    def pairs(self) -> int:
+        """Number of overlapping leaf pairs."""
+    @property
+    def contact(self) -> bool:
+        """True when at least one leaf pair overlaps."""
+    @property
+    def distance(self) -> float:
+        """0 with penetration, else a proved lower bound on the separation."""
+    @property
+    def visits(self) -> int:
+        """Node pairs tested."""
+    def to_dict(self) -> Dict[str, Any]:
+        """The fields as a dict (the keys of ``ist query --json``)."""
+
+@final
+class Pair:
+    """Two trees and all per-pair state of their queries.
+
+    Every query takes B's pose and optionally A's (``pose_a=``, default the identity). The
+    pair starts each query from what the last ones found (fast along a motion); call
+    ``reset()`` or use a new Pair for a query from scratch (what ``ist query`` runs). One
+    thread at a time per pair; trees are shared freely.
+    """
+
+    def __new__(cls, tree_a: Tree, tree_b: Tree) -> "Pair": ...
+    @property
+    def tree_a(self) -> Tree: ...
+    @property
+    def tree_b(self) -> Tree: ...
+    def distance(
+        self,
+        pose_b: _PoseLike,
+        *,
+        pose_a: Optional[_PoseLike] = None,
+        signed: bool = False,
+        abs_tol: float = 0.0,
+        rel_tol: float = 0.0,
+    ) -> DistanceResult:
+        """Exact minimum distance between the inner-sphere packings, with closest points."""
+    def contact(self, pose_b: _PoseLike, *, pose_a: Optional[_PoseLike] = None) -> bool:
+        """Whether the packings overlap."""
+    def multipoint(
+        self,
+        pose_b: _PoseLike,
+        k: int = 16,
+        *,
+        pose_a: Optional[_PoseLike] = None,
+        split_depth: int = 4,
+    ) -> _FloatArray:
+        """Up to k contact points, shape (count, 3); details in ``pair.contacts``."""
+    @property
+    def contacts(self) -> Dict[str, npt.NDArray[Any]]:
+        """The last multipoint's contacts: point (n, 3), normal (n, 3), depth (n,),
+        leaf_a (n,), leaf_b (n,)."""
+    def penetration(
+        self,
+        pose_b: _PoseLike,
+        stiffness: float = 1.0,
+        *,
+        pose_a: Optional[_PoseLike] = None,
+        max_patches: int = 8,
+    ) -> PenetrationResult:
+        """Penetration volume, normal, penalty force, torques and contact patches."""
+    def reset(self) -> None:
+        """Forgets all temporal coherence: the next query starts from scratch."""
+    def distance_many(
+        self, poses: _PosesLike, *, pose_a: Optional[Union[_PoseLike, _PosesLike]] = None
+    ) -> _FloatArray:
+        """``distance`` for each pose of B in order, carrying the pair's state (on a new or
+        reset pair: ``ist replay``'s distances). Returns shape (N,)."""
+    def contact_many(
+        self, poses: _PosesLike, *, pose_a: Optional[Union[_PoseLike, _PosesLike]] = None
+    ) -> npt.NDArray[np.bool_]:
+        """``contact`` for each pose of B in order: shape (N,) bool."""
+    def penetration_many(
+        self,
+        poses: _PosesLike,
+        stiffness: float = 1.0,
+        *,
+        pose_a: Optional[Union[_PoseLike, _PosesLike]] = None,
+    ) -> Dict[str, npt.NDArray[Any]]:
+        """``penetration`` for each pose of B in order: a dict of arrays volume (N,),
+        max_depth (N,), force (N, 3), torque (N, 3) (on B), torque_a (N, 3), normal (N, 3),
+        pairs (N,), contact (N,)."""
+
+@final
+class Tick:
+    """What one haptic tick did (mm, N, s)."""
+
+    @property
+    def force(self) -> _FloatArray:
+        """Force to send to the device (N), shape (3,)."""
+    @property
+    def torque(self) -> _FloatArray:
+        """Torque to send to the device (N·mm), shape (3,)."""
+    @property
+    def tool(self) -> _FloatArray:
+        """The tool's pose after the tick: (tx, ty, tz, qw, qx, qy, qz)."""
+    @property
+    def tool_matrix(self) -> _FloatArray:
+        """The tool's pose after the tick as a 4×4 matrix."""
+    @property
+    def contact_force(self) -> _FloatArray:
+        """Penalty force of the contact on the tool (N), shape (3,)."""
+    @property
+    def volume(self) -> float:
+        """Penetration volume (mm³)."""
+    @property
+    def volume_bound(self) -> float:
+        """Upper bound on the penetration volume (= volume unless budgeted)."""
+    @property
+    def max_depth(self) -> float:
+        """Deepest leaf-pair overlap (mm)."""
+    @property
+    def patches(self) -> int:
+        """Contact patches (exact path only)."""
+    @property
+    def budgeted(self) -> bool:
+        """True when the time-critical query answered."""
+    @property
+    def compute(self) -> float:
+        """Time the tick took (s)."""
+    @property
+    def late(self) -> bool:
+        """True when the tick took longer than its budget."""
+    def to_dict(self) -> Dict[str, Any]:
+        """The fields as a dict."""
+
+@final
+class Haptic:
+    """The 6-DOF haptic loop: tool B coupled to the device's pose by a spring-damper and
+    pushed out of A (fixed at pose_a) by the penalty wrench. Units: mm, N, s, kg."""
+
+    def __new__(
+        cls,
+        pair: Pair,
+        device: str = "omega",
+        rate: float = 1000.0,
+        start: Optional[_PoseLike] = None,
+        *,
+        pose_a: Optional[_PoseLike] = None,
+        budget: Optional[float] = None,
+    ) -> "Haptic":
+        """device: "omega" (12 N) or "touch" (3.3 N); rate in Hz; start: the tool's pose
+        at rest (default identity); budget: most seconds per tick (default one period)."""
+    def tick(self, device_pose: _PoseLike, dt: float = 0.0) -> Tick:
+        """One device tick: the device's pose in, the force to send out (dt: seconds since
+        the last tick; 0 = one period). A NaN pose raises ValueError."""
+    @property
+    def energy_to_user(self) -> float:
+        """Energy delivered to the hand so far (J); at most zero for a passive loop."""
+    @property
+    def energy_to_user_max(self) -> float:
+        """The largest value energy_to_user has had (J)."""
+    @property
+    def tool(self) -> _FloatArray:
+        """The tool's current pose (tx, ty, tz, qw, qx, qy, qz)."""
+    @property
+    def rate(self) -> float: ...
+    @property
+    def budget(self) -> float: ...
+    @property
+    def mass(self) -> float:
+        """The tool's mass (kg)."""
+
+def load_motion(path: _PathLike) -> Tuple[_FloatArray, _FloatArray]:
+    """Reads a motion file (CSV ``t,tx,ty,tz,qw,qx,qy,qz``, optionally .gz): returns the
+    times (N,) and the poses (N, 7) of B in A's frame, as ``ist replay --motion`` reads
+    them. Raises OSError when unreadable, ValueError (with the line) when invalid."""

@@ -1,0 +1,261 @@
+//! Conversions shared by the classes: library errors to Python exceptions, Python poses to
+//! [`Pose`]s, vectors and JSON values to Python objects.
+
+use innersphere::glam::DVec3;
+use innersphere::{Error, MatrixOrder, Pose};
+use numpy::ndarray::{ArrayViewD, Axis};
+use numpy::{AllowTypeChange, IxDyn, PyArray1, PyArrayLike, PyArrayMethods};
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict, PyList};
+use std::path::{Path, PathBuf};
+
+/// What a pose may be, said in errors.
+const POSE_FORMS: &str = "a 4×4 homogeneous matrix or 7 numbers (tx, ty, tz, qw, qx, qy, qz)";
+
+/// A library error as a Python exception: the operating system's errors on a file become
+/// `OSError` (its subclass for the errno, e.g. `FileNotFoundError`, with the file name), all
+/// others `ValueError`, each with the library's message.
+pub(crate) fn error(e: Error) -> PyErr {
+    match e {
+        Error::Io { path, source } => io_error(&path, &source),
+        Error::Output(_) => PyOSError::new_err(e.to_string()),
+        other => PyValueError::new_err(other.to_string()),
+    }
+}
+
+/// `OSError(errno, message, filename)` (which Python turns into the errno's subclass), or a
+/// plain `OSError` with the library's message when there is no errno.
+pub(crate) fn io_error(path: &Path, source: &std::io::Error) -> PyErr {
+    let file = path.display().to_string();
+    match source.raw_os_error() {
+        Some(errno) => {
+            // Rust's message ends in " (os error N)", which the errno already says.
+            let text = source.to_string();
+            let text = match text.rfind(" (os error ") {
+                Some(i) => text[..i].to_string(),
+                None => text,
+            };
+            PyOSError::new_err((errno, text, file))
+        }
+        None => PyOSError::new_err(format!("{file}: {source}")),
+    }
+}
+
+/// A path argument: `str`, `bytes` or `os.PathLike` (`bytes` decoded as `os.fsdecode` does).
+pub(crate) fn path(obj: &Bound<'_, PyAny>) -> PyResult<PathBuf> {
+    let os = obj.py().import("os")?;
+    let p = os.call_method1("fspath", (obj,))?;
+    if p.is_instance_of::<PyBytes>() {
+        return os.call_method1("fsdecode", (p,))?.extract();
+    }
+    p.extract()
+}
+
+/// Any array-like of numbers as an f64 array of any shape, or `ValueError` naming `what`
+/// and `expected`.
+pub(crate) fn float_array<'py>(
+    obj: &Bound<'py, PyAny>,
+    what: &str,
+    expected: &str,
+) -> PyResult<PyArrayLike<'py, f64, IxDyn, AllowTypeChange>> {
+    obj.extract::<PyArrayLike<'py, f64, IxDyn, AllowTypeChange>>()
+        .map_err(|e| {
+            let ty = obj
+                .get_type()
+                .name()
+                .map(|n| n.to_string())
+                .unwrap_or_else(|_| "?".into());
+            PyValueError::new_err(format!(
+                "{what}: expected {expected}, got a {ty} that is not an array of numbers ({e})"
+            ))
+        })
+}
+
+/// One pose from a view of shape (7,) or (4, 4): `Err(message)` when it is no rigid pose.
+fn pose_of_view(v: &ArrayViewD<'_, f64>) -> Result<Pose, String> {
+    let result = match v.shape() {
+        [7] => {
+            let mut a = [0.0; 7];
+            for (slot, x) in a.iter_mut().zip(v.iter()) {
+                *slot = *x;
+            }
+            Pose::from_array(a)
+        }
+        [4, 4] => {
+            // Row-major as numpy indexes it: m[row, col], the translation in the last column.
+            let mut m = [0.0; 16];
+            for (slot, x) in m.iter_mut().zip(v.iter()) {
+                *slot = *x;
+            }
+            Pose::from_matrix4(&m, MatrixOrder::RowMajor)
+        }
+        s => return Err(format!("expected {POSE_FORMS}, got shape {}", shape(s))),
+    };
+    result.map_err(|e| format!("invalid pose: {e}"))
+}
+
+/// A shape as Python prints it: `(3,)`, `(4, 4)`.
+pub(crate) fn shape(s: &[usize]) -> String {
+    match s {
+        [n] => format!("({n},)"),
+        _ => format!(
+            "({})",
+            s.iter()
+                .map(|n| n.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+/// A pose argument: a 4×4 homogeneous matrix (numpy's row-major `m[row, col]`, translation in
+/// the last column, last row exactly `0 0 0 1`) or 7 numbers `(tx, ty, tz, qw, qx, qy, qz)`
+/// (the quaternion is normalised, as `ist query --pose-b` does). `ValueError` otherwise.
+pub(crate) fn pose(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Pose> {
+    let arr = float_array(obj, what, POSE_FORMS)?;
+    let view = arr.as_array();
+    pose_of_view(&view).map_err(|m| PyValueError::new_err(format!("{what}: {m}")))
+}
+
+/// An optional pose argument: `None` is the identity.
+pub(crate) fn pose_or_identity(obj: Option<&Bound<'_, PyAny>>, what: &str) -> PyResult<Pose> {
+    match obj {
+        None => Ok(Pose::IDENTITY),
+        Some(o) if o.is_none() => Ok(Pose::IDENTITY),
+        Some(o) => pose(o, what),
+    }
+}
+
+/// A batch of poses: an `(N, 7)` or `(N, 4, 4)` array-like. `ValueError` naming the first
+/// bad pose otherwise.
+pub(crate) fn poses(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Pose>> {
+    const FORMS: &str = "an (N, 7) array of (tx, ty, tz, qw, qx, qy, qz) or an (N, 4, 4) array of homogeneous matrices";
+    let arr = float_array(obj, what, FORMS)?;
+    let view = arr.as_array();
+    let ok = matches!(view.shape(), [_, 7] | [_, 4, 4]);
+    if !ok {
+        return Err(PyValueError::new_err(format!(
+            "{what}: expected {FORMS}, got shape {}",
+            shape(view.shape())
+        )));
+    }
+    // The common case, a C-contiguous (N, 7) array, without a view per row.
+    if let (Some(flat), [_, 7]) = (view.as_slice(), view.shape()) {
+        return flat
+            .chunks_exact(7)
+            .enumerate()
+            .map(|(i, c)| {
+                Pose::from_array(c.try_into().expect("7 numbers"))
+                    .map_err(|e| PyValueError::new_err(format!("{what}[{i}]: invalid pose: {e}")))
+            })
+            .collect();
+    }
+    view.axis_iter(Axis(0))
+        .enumerate()
+        .map(|(i, row)| {
+            pose_of_view(&row).map_err(|m| PyValueError::new_err(format!("{what}[{i}]: {m}")))
+        })
+        .collect()
+}
+
+/// Body A's poses for a batch of `n`: `None` (identity), one pose for all, or `n` poses.
+pub(crate) enum PosesA {
+    /// The same pose on every frame.
+    One(Pose),
+    /// One pose per frame.
+    Each(Vec<Pose>),
+}
+
+impl PosesA {
+    /// Reads `pose_a` of a batch of `n` poses.
+    pub(crate) fn new(obj: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<PosesA> {
+        let Some(obj) = obj.filter(|o| !o.is_none()) else {
+            return Ok(PosesA::One(Pose::IDENTITY));
+        };
+        let arr = float_array(
+            obj,
+            "pose_a",
+            "one pose (a 4×4 matrix or 7 numbers) or one per pose of the batch",
+        )?;
+        // (7,) and (4, 4) are one pose; (N, 7) and (N, 4, 4) one per frame.
+        let one = matches!(arr.as_array().shape(), [_] | [4, 4]);
+        drop(arr);
+        if one {
+            return Ok(PosesA::One(pose(obj, "pose_a")?));
+        }
+        let all = poses(obj, "pose_a")?;
+        if all.len() != n {
+            return Err(PyValueError::new_err(format!(
+                "pose_a: {} poses for a batch of {n}",
+                all.len()
+            )));
+        }
+        Ok(PosesA::Each(all))
+    }
+
+    /// A's pose on frame `i`.
+    #[inline]
+    pub(crate) fn at(&self, i: usize) -> &Pose {
+        match self {
+            PosesA::One(p) => p,
+            PosesA::Each(v) => &v[i],
+        }
+    }
+}
+
+/// A vector as a numpy array of shape (3,).
+pub(crate) fn vec3<'py>(py: Python<'py>, v: DVec3) -> Bound<'py, PyArray1<f64>> {
+    PyArray1::from_slice(py, &v.to_array())
+}
+
+/// A pose as a numpy array `(tx, ty, tz, qw, qx, qy, qz)`.
+pub(crate) fn pose7<'py>(py: Python<'py>, p: &Pose) -> Bound<'py, PyArray1<f64>> {
+    PyArray1::from_slice(py, &p.to_array())
+}
+
+/// A pose as a 4×4 numpy matrix (row-major, `m[row, col]`).
+pub(crate) fn pose44<'py>(py: Python<'py>, p: &Pose) -> PyResult<Bound<'py, PyAny>> {
+    let m = p.to_matrix4(MatrixOrder::RowMajor);
+    Ok(PyArray1::from_slice(py, &m).reshape([4, 4])?.into_any())
+}
+
+/// A JSON value as plain Python objects (dict, list, str, float, int, bool, None).
+pub(crate) fn json<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
+    use serde_json::Value;
+    Ok(match v {
+        Value::Null => py.None().into_bound(py),
+        Value::Bool(b) => b.into_pyobject(py)?.to_owned().into_any(),
+        Value::Number(n) => match (n.as_i64(), n.as_u64()) {
+            (Some(i), _) => i.into_pyobject(py)?.into_any(),
+            (None, Some(u)) => u.into_pyobject(py)?.into_any(),
+            _ => n.as_f64().unwrap_or(f64::NAN).into_pyobject(py)?.into_any(),
+        },
+        Value::String(s) => s.into_pyobject(py)?.into_any(),
+        Value::Array(a) => {
+            let list = PyList::empty(py);
+            for x in a {
+                list.append(json(py, x)?)?;
+            }
+            list.into_any()
+        }
+        Value::Object(o) => {
+            let d = PyDict::new(py);
+            for (k, x) in o {
+                d.set_item(k, json(py, x)?)?;
+            }
+            d.into_any()
+        }
+    })
+}
+
+/// A finite, non-negative number argument, or `ValueError`.
+pub(crate) fn non_negative(x: f64, what: &str) -> PyResult<f64> {
+    if x.is_finite() && x >= 0.0 {
+        Ok(x)
+    } else {
+        Err(PyValueError::new_err(format!(
+            "{what} must be a finite number ≥ 0, not {x}"
+        )))
+    }
+}

@@ -1,0 +1,525 @@
+//! `innersphere.Pair` and its results: every query kind, single and batched.
+
+use crate::convert::{non_negative, pose, pose_or_identity, poses, vec3, PosesA};
+use crate::tree::Tree;
+use innersphere::glam::DVec3;
+use innersphere::{
+    Distance, DistanceOptions, MultipointOptions, Patch, Penetration, PenetrationOptions, Pose,
+};
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+/// The answer of Pair.distance: the exact minimum distance between the two inner-sphere
+/// packings, with the closest points (world frame).
+#[pyclass(module = "innersphere", name = "DistanceResult", frozen)]
+pub struct DistanceResult {
+    d: Distance,
+}
+
+#[pymethods]
+impl DistanceResult {
+    /// Minimum distance between the packings (0 when they overlap; with signed=True minus
+    /// the deepest leaf-pair overlap). With tolerances: within max(abs_tol, rel_tol·true)
+    /// above the true minimum.
+    #[getter]
+    fn distance(&self) -> f64 {
+        self.d.distance
+    }
+    /// True when the packings overlap.
+    #[getter]
+    fn contact(&self) -> bool {
+        self.d.overlapping
+    }
+    /// Closest point on A's sphere (world), shape (3,).
+    #[getter]
+    fn point_a<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec3(py, self.d.point_a)
+    }
+    /// Closest point on B's sphere (world), shape (3,).
+    #[getter]
+    fn point_b<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec3(py, self.d.point_b)
+    }
+    /// Unit direction from A's sphere centre to B's (world), shape (3,).
+    #[getter]
+    fn normal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec3(py, self.d.normal)
+    }
+    /// A proved lower bound on the exact answer (equal to distance without tolerances).
+    #[getter]
+    fn lower_bound(&self) -> f64 {
+        self.d.lower_bound
+    }
+    /// The leaf (node index) of A of the closest pair.
+    #[getter]
+    fn leaf_a(&self) -> u32 {
+        self.d.leaf_a
+    }
+    /// The leaf (node index) of B of the closest pair.
+    #[getter]
+    fn leaf_b(&self) -> u32 {
+        self.d.leaf_b
+    }
+    /// Node pairs whose distance was computed.
+    #[getter]
+    fn visits(&self) -> u64 {
+        self.d.visits
+    }
+    /// The fields as a dict (the keys of `ist query --json --query distance`).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("distance", self.d.distance)?;
+        d.set_item("contact", self.d.overlapping)?;
+        d.set_item("lower_bound", self.d.lower_bound)?;
+        d.set_item("point_a", self.point_a(py))?;
+        d.set_item("point_b", self.point_b(py))?;
+        d.set_item("normal", self.normal(py))?;
+        d.set_item("leaf_a", self.d.leaf_a)?;
+        d.set_item("leaf_b", self.d.leaf_b)?;
+        d.set_item("visits", self.d.visits)?;
+        Ok(d)
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "DistanceResult(distance={}, contact={}, point_a={:?}, point_b={:?})",
+            self.d.distance,
+            if self.d.overlapping { "True" } else { "False" },
+            self.d.point_a.to_array(),
+            self.d.point_b.to_array()
+        )
+    }
+}
+
+/// The answer of Pair.penetration: the penetration volume (the volume of the intersection of
+/// the two sphere unions, exact), the penalty force and torques, the contact patches.
+#[pyclass(module = "innersphere", name = "PenetrationResult", frozen)]
+pub struct PenetrationResult {
+    p: Penetration,
+    patches: Vec<Patch>,
+}
+
+/// A patch as a dict of plain values and (3,) arrays.
+fn patch_dict<'py>(py: Python<'py>, q: &Patch) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("point", vec3(py, q.point))?;
+    d.set_item("normal", vec3(py, q.normal))?;
+    d.set_item("depth", q.depth)?;
+    d.set_item("volume", q.volume)?;
+    d.set_item("pairs", q.pairs)?;
+    Ok(d)
+}
+
+#[pymethods]
+impl PenetrationResult {
+    /// Penetration volume (model units³): the summed lens volumes of the overlapping leaf
+    /// pairs.
+    #[getter]
+    fn volume(&self) -> f64 {
+        self.p.volume
+    }
+    /// Largest leaf-pair overlap ra + rb − d (model units); 0 without contact.
+    #[getter]
+    fn max_depth(&self) -> f64 {
+        self.p.max_depth
+    }
+    /// Contact normal (world, unit; zeros without penetration), shape (3,).
+    #[getter]
+    fn normal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec3(py, self.p.normal)
+    }
+    /// Force on B (world): stiffness × volume × normal; the force on A is its opposite.
+    #[getter]
+    fn force<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec3(py, self.p.force)
+    }
+    /// Torque on A about A's centre of mass (world), shape (3,).
+    #[getter]
+    fn torque_a<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec3(py, self.p.torque_a)
+    }
+    /// Torque on B about B's centre of mass (world), shape (3,).
+    #[getter]
+    fn torque_b<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec3(py, self.p.torque_b)
+    }
+    /// The contact patches: a list of dicts with point (3,), normal (3,) (from A into B),
+    /// depth, volume and pairs.
+    #[getter]
+    fn patches<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let list = PyList::empty(py);
+        for q in &self.patches {
+            list.append(patch_dict(py, q)?)?;
+        }
+        Ok(list)
+    }
+    /// Number of overlapping leaf pairs.
+    #[getter]
+    fn pairs(&self) -> usize {
+        self.p.pairs
+    }
+    /// True when at least one leaf pair overlaps.
+    #[getter]
+    fn contact(&self) -> bool {
+        self.p.pairs > 0
+    }
+    /// 0 with penetration; otherwise a proved lower bound on the separation (not the
+    /// distance: Pair.distance gives that).
+    #[getter]
+    fn distance(&self) -> f64 {
+        self.p.distance
+    }
+    /// Node pairs tested.
+    #[getter]
+    fn visits(&self) -> u64 {
+        self.p.visits
+    }
+    /// The fields as a dict (the keys of `ist query --json --query penetration`).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("volume", self.p.volume)?;
+        d.set_item("pairs", self.p.pairs)?;
+        d.set_item("max_depth", self.p.max_depth)?;
+        d.set_item("contact", self.p.pairs > 0)?;
+        d.set_item("distance", self.p.distance)?;
+        d.set_item("normal", self.normal(py))?;
+        d.set_item("force", self.force(py))?;
+        d.set_item("torque", self.torque_b(py))?;
+        d.set_item("torque_a", self.torque_a(py))?;
+        d.set_item("torque_b", self.torque_b(py))?;
+        d.set_item("patches", self.patches(py)?)?;
+        d.set_item("visits", self.p.visits)?;
+        Ok(d)
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "PenetrationResult(volume={}, max_depth={}, force={:?}, patches={})",
+            self.p.volume,
+            self.p.max_depth,
+            self.p.force.to_array(),
+            self.patches.len()
+        )
+    }
+}
+
+/// Two trees and all per-pair state of their queries (temporal coherence, scratch memory).
+///
+/// Pair(tree_a, tree_b). Every query takes B's pose (pose_b) and optionally A's (pose_a=,
+/// default the identity), each a 4×4 homogeneous matrix (numpy, row-major, translation in
+/// the last column) or 7 numbers (tx, ty, tz, qw, qx, qy, qz), applied to the tree's model
+/// coordinates (p' = R p + t); answers are in the world frame.
+///
+/// The pair remembers what the last queries found and starts the next from it (as a haptic
+/// loop wants: consecutive poses of a motion are fast). The answers do not depend on it,
+/// except that a far pair may be answered within the library's far-field tolerance; call
+/// reset() (or use a new Pair) for a query from scratch, which is what `ist query` runs.
+/// One thread at a time per pair; trees are shared freely.
+#[pyclass(module = "innersphere", name = "Pair")]
+pub struct Pair {
+    inner: innersphere::Pair,
+    a: Py<Tree>,
+    b: Py<Tree>,
+}
+
+impl Pair {
+    /// The Rust pair's trees, for a new pair of the same trees.
+    pub(crate) fn fresh(&self) -> innersphere::Pair {
+        innersphere::Pair::new(self.inner.tree_a().clone(), self.inner.tree_b().clone())
+    }
+}
+
+/// The stiffness argument, checked as `ist query --stiffness`.
+fn stiffness_arg(stiffness: f64) -> PyResult<f64> {
+    non_negative(stiffness, "the stiffness")
+}
+
+/// B's and A's poses of a batch.
+fn batch(
+    poses_b: &Bound<'_, PyAny>,
+    pose_a: Option<&Bound<'_, PyAny>>,
+) -> PyResult<(Vec<Pose>, PosesA)> {
+    let b = poses(poses_b, "poses")?;
+    let a = PosesA::new(pose_a, b.len())?;
+    Ok((b, a))
+}
+
+/// `n` rows of 3 as an (n, 3) float64 array.
+fn rows3(py: Python<'_>, v: Vec<[f64; 3]>) -> PyResult<Bound<'_, PyArray2<f64>>> {
+    let n = v.len();
+    let flat: Vec<f64> = v.into_iter().flatten().collect();
+    PyArray1::from_vec(py, flat).reshape([n, 3])
+}
+
+#[pymethods]
+impl Pair {
+    #[new]
+    fn new(tree_a: Py<Tree>, tree_b: Py<Tree>) -> Pair {
+        let inner =
+            innersphere::Pair::new(tree_a.get().shared.clone(), tree_b.get().shared.clone());
+        Pair {
+            inner,
+            a: tree_a,
+            b: tree_b,
+        }
+    }
+
+    /// Tree A.
+    #[getter]
+    fn tree_a(&self, py: Python<'_>) -> Py<Tree> {
+        self.a.clone_ref(py)
+    }
+
+    /// Tree B.
+    #[getter]
+    fn tree_b(&self, py: Python<'_>) -> Py<Tree> {
+        self.b.clone_ref(py)
+    }
+
+    /// Exact minimum distance between the two inner-sphere packings, with the closest
+    /// points, as a DistanceResult (.distance, .contact, .point_a, .point_b, .normal, ...).
+    /// signed=True reports minus the deepest leaf overlap instead of 0 when they overlap
+    /// (slower); abs_tol / rel_tol stop once the answer is proved within that absolute /
+    /// relative error.
+    #[pyo3(signature = (pose_b, *, pose_a=None, signed=false, abs_tol=0.0, rel_tol=0.0))]
+    fn distance(
+        &mut self,
+        py: Python<'_>,
+        pose_b: &Bound<'_, PyAny>,
+        pose_a: Option<&Bound<'_, PyAny>>,
+        signed: bool,
+        abs_tol: f64,
+        rel_tol: f64,
+    ) -> PyResult<DistanceResult> {
+        let pb = pose(pose_b, "pose_b")?;
+        let pa = pose_or_identity(pose_a, "pose_a")?;
+        let opts = DistanceOptions {
+            abs_tolerance: non_negative(abs_tol, "abs_tol")?,
+            rel_tolerance: non_negative(rel_tol, "rel_tol")?,
+            signed,
+            ..Default::default()
+        };
+        let inner = &mut self.inner;
+        let d = py.detach(|| inner.distance_with(&pa, &pb, &opts));
+        Ok(DistanceResult { d })
+    }
+
+    /// Whether the two packings overlap (first contact, from the kinetic front).
+    #[pyo3(signature = (pose_b, *, pose_a=None))]
+    fn contact(
+        &mut self,
+        py: Python<'_>,
+        pose_b: &Bound<'_, PyAny>,
+        pose_a: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<bool> {
+        let pb = pose(pose_b, "pose_b")?;
+        let pa = pose_or_identity(pose_a, "pose_a")?;
+        let inner = &mut self.inner;
+        Ok(py.detach(|| inner.contact(&pa, &pb).in_contact()))
+    }
+
+    /// Up to k contact points (world), at most one below each pair of nodes at split_depth:
+    /// a float64 array of shape (count, 3), empty when the bodies are apart. Their depths,
+    /// normals and leaves are in pair.contacts until the next multipoint query.
+    #[pyo3(signature = (pose_b, k=16, *, pose_a=None, split_depth=4))]
+    fn multipoint<'py>(
+        &mut self,
+        py: Python<'py>,
+        pose_b: &Bound<'py, PyAny>,
+        k: i64,
+        pose_a: Option<&Bound<'py, PyAny>>,
+        split_depth: i64,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let pb = pose(pose_b, "pose_b")?;
+        let pa = pose_or_identity(pose_a, "pose_a")?;
+        if k < 1 {
+            return Err(PyValueError::new_err(format!(
+                "k must be at least 1 (the most contacts multipoint reports), not {k}"
+            )));
+        }
+        let split_depth = u32::try_from(split_depth).map_err(|_| {
+            PyValueError::new_err(format!("split_depth must be ≥ 0, not {split_depth}"))
+        })?;
+        let opts = MultipointOptions {
+            k: k as usize,
+            split_depth,
+            ..Default::default()
+        };
+        let inner = &mut self.inner;
+        py.detach(|| inner.multipoint(&pa, &pb, &opts));
+        let points = self
+            .inner
+            .contacts()
+            .iter()
+            .map(|c| c.point.to_array())
+            .collect();
+        rows3(py, points)
+    }
+
+    /// The contacts of the last multipoint query as a dict of arrays: point (n, 3),
+    /// normal (n, 3) (from A's sphere centre to B's), depth (n,), leaf_a (n,), leaf_b (n,).
+    #[getter]
+    fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let c = self.inner.contacts();
+        let d = PyDict::new(py);
+        d.set_item(
+            "point",
+            rows3(py, c.iter().map(|c| c.point.to_array()).collect())?,
+        )?;
+        d.set_item(
+            "normal",
+            rows3(py, c.iter().map(|c| c.normal.to_array()).collect())?,
+        )?;
+        d.set_item("depth", PyArray1::from_iter(py, c.iter().map(|c| c.depth)))?;
+        d.set_item(
+            "leaf_a",
+            PyArray1::from_iter(py, c.iter().map(|c| c.leaf_a)),
+        )?;
+        d.set_item(
+            "leaf_b",
+            PyArray1::from_iter(py, c.iter().map(|c| c.leaf_b)),
+        )?;
+        Ok(d)
+    }
+
+    /// Penetration volume with the contact normal, the penalty force (stiffness × volume, on
+    /// B), the torques about both centres of mass and up to max_patches contact patches, as
+    /// a PenetrationResult (.volume, .max_depth, .normal, .force, .torque_a, .torque_b,
+    /// .patches, ...).
+    #[pyo3(signature = (pose_b, stiffness=1.0, *, pose_a=None, max_patches=8))]
+    fn penetration(
+        &mut self,
+        py: Python<'_>,
+        pose_b: &Bound<'_, PyAny>,
+        stiffness: f64,
+        pose_a: Option<&Bound<'_, PyAny>>,
+        max_patches: i64,
+    ) -> PyResult<PenetrationResult> {
+        let pb = pose(pose_b, "pose_b")?;
+        let pa = pose_or_identity(pose_a, "pose_a")?;
+        let max_patches = usize::try_from(max_patches).map_err(|_| {
+            PyValueError::new_err(format!("max_patches must be ≥ 0, not {max_patches}"))
+        })?;
+        let opts = PenetrationOptions {
+            stiffness: stiffness_arg(stiffness)?,
+            max_patches,
+            ..Default::default()
+        };
+        let inner = &mut self.inner;
+        let p = py.detach(|| inner.penetration_with(&pa, &pb, &opts));
+        Ok(PenetrationResult {
+            p,
+            patches: self.inner.patches().to_vec(),
+        })
+    }
+
+    /// Forgets all temporal coherence (last contacts, closest pair, proved separation,
+    /// fronts): the next query starts from scratch, as `ist query` does. Keeps the memory.
+    fn reset(&mut self) {
+        self.inner.reset();
+    }
+
+    /// Pair.distance for each pose of B in poses, an (N, 7) or (N, 4, 4) array, in order and
+    /// carrying the pair's state from pose to pose (as `ist replay` does: on a new or reset
+    /// pair the distances equal its `distance` column). pose_a: None (identity), one pose, or
+    /// N poses. Returns the (N,) float64 distances (0 where the packings overlap). Loops in
+    /// Rust with the interpreter released.
+    #[pyo3(signature = (poses, *, pose_a=None))]
+    fn distance_many<'py>(
+        &mut self,
+        py: Python<'py>,
+        poses: &Bound<'py, PyAny>,
+        pose_a: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let (pb, pa) = batch(poses, pose_a)?;
+        let inner = &mut self.inner;
+        let out: Vec<f64> = py.detach(|| {
+            pb.iter()
+                .enumerate()
+                .map(|(i, b)| inner.distance(pa.at(i), b).distance)
+                .collect()
+        });
+        Ok(PyArray1::from_vec(py, out))
+    }
+
+    /// Pair.contact for each pose of B (an (N, 7) or (N, 4, 4) array), in order, carrying
+    /// the pair's state: an (N,) bool array. Interpreter released.
+    #[pyo3(signature = (poses, *, pose_a=None))]
+    fn contact_many<'py>(
+        &mut self,
+        py: Python<'py>,
+        poses: &Bound<'py, PyAny>,
+        pose_a: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        let (pb, pa) = batch(poses, pose_a)?;
+        let inner = &mut self.inner;
+        let out: Vec<bool> = py.detach(|| {
+            pb.iter()
+                .enumerate()
+                .map(|(i, b)| inner.contact(pa.at(i), b).in_contact())
+                .collect()
+        });
+        Ok(PyArray1::from_vec(py, out))
+    }
+
+    /// Pair.penetration for each pose of B (an (N, 7) or (N, 4, 4) array), in order,
+    /// carrying the pair's state (on a new or reset pair the volumes equal `ist replay
+    /// --query penetration`'s). Returns a dict of numpy arrays: volume (N,), max_depth (N,),
+    /// force (N, 3), torque (N, 3) (on B, about its centre of mass), torque_a (N, 3),
+    /// normal (N, 3), pairs (N,) int64, contact (N,) bool. Interpreter released.
+    #[pyo3(signature = (poses, stiffness=1.0, *, pose_a=None))]
+    fn penetration_many<'py>(
+        &mut self,
+        py: Python<'py>,
+        poses: &Bound<'py, PyAny>,
+        stiffness: f64,
+        pose_a: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let (pb, pa) = batch(poses, pose_a)?;
+        let opts = PenetrationOptions {
+            stiffness: stiffness_arg(stiffness)?,
+            ..Default::default()
+        };
+        let inner = &mut self.inner;
+        let out: Vec<Penetration> = py.detach(|| {
+            pb.iter()
+                .enumerate()
+                .map(|(i, b)| inner.penetration_with(pa.at(i), b, &opts))
+                .collect()
+        });
+        let v3 = |f: fn(&Penetration) -> DVec3| -> Vec<[f64; 3]> {
+            out.iter().map(|p| f(p).to_array()).collect()
+        };
+        let d = PyDict::new(py);
+        d.set_item(
+            "volume",
+            PyArray1::from_iter(py, out.iter().map(|p| p.volume)),
+        )?;
+        d.set_item(
+            "max_depth",
+            PyArray1::from_iter(py, out.iter().map(|p| p.max_depth)),
+        )?;
+        d.set_item("force", rows3(py, v3(|p| p.force))?)?;
+        d.set_item("torque", rows3(py, v3(|p| p.torque_b))?)?;
+        d.set_item("torque_a", rows3(py, v3(|p| p.torque_a))?)?;
+        d.set_item("normal", rows3(py, v3(|p| p.normal))?)?;
+        d.set_item(
+            "pairs",
+            PyArray1::from_iter(py, out.iter().map(|p| p.pairs as i64)),
+        )?;
+        d.set_item(
+            "contact",
+            PyArray1::from_iter(py, out.iter().map(|p| p.pairs > 0)),
+        )?;
+        Ok(d)
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let (a, b) = (self.a.bind(py).get(), self.b.bind(py).get());
+        format!(
+            "Pair(tree_a=Tree(node_count={}), tree_b=Tree(node_count={}))",
+            a.shared.len(),
+            b.shared.len()
+        )
+    }
+}

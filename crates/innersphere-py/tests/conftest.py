@@ -1,0 +1,48 @@
+"""Shared fixtures: generated meshes and trees (no data files needed), the `ist` CLI."""
+
+import os
+
+import pytest
+
+import innersphere
+from helpers import Ist, box_mesh, find_ist, icosphere
+
+
+# --- fixtures ------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="session")
+def meshes():
+    v, f = icosphere(2, 1.0)
+    # B: an ellipsoid (semi-axes 0.6, 0.45, 0.35), so that the refined packing has many
+    # spheres (a ball's is one).
+    return {"box": box_mesh(), "sphere": icosphere(2, 0.6), "ellipsoid": (v * [0.6, 0.45, 0.35], f)}
+
+
+@pytest.fixture(scope="session")
+def trees(meshes):
+    """A (the box [-1, 1]³, plain packing) and B (the ellipsoid, refined packing), built from
+    arrays."""
+    a = innersphere.Tree.build(meshes["box"], resolution=24)
+    b = innersphere.Tree.build(meshes["ellipsoid"], resolution=24, refine_steps=4, min_radius=0.01)
+    return a, b
+
+
+@pytest.fixture(scope="session")
+def tree_files(trees, tmp_path_factory):
+    d = tmp_path_factory.mktemp("trees")
+    a, b = d / "box.ist", d / "ellipsoid.ist"
+    trees[0].save(a)
+    trees[1].save(b)
+    return a, b
+
+
+@pytest.fixture(scope="session")
+def ist():
+    exe = find_ist()
+    if exe is None:
+        msg = "the ist CLI was not found (build it: cargo build --release -p ist, or set IST_BIN)"
+        if os.environ.get("INNERSPHERE_REQUIRE_IST"):
+            pytest.fail(msg)
+        pytest.skip(msg)
+    return Ist(exe)

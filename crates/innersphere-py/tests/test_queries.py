@@ -1,0 +1,165 @@
+"""Every single query against `ist query --json` on the same trees and poses: identical
+numbers (`ist query` runs each query on a fresh pair, so the pair is reset before each)."""
+
+import numpy as np
+import pytest
+
+import innersphere
+from helpers import POSES, pose_matrix
+
+
+def same(a, b):
+    """Bit-for-bit equal numbers (arrays, lists, scalars)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    assert a.shape == b.shape
+    assert np.array_equal(a, b), (a, b)
+
+
+@pytest.fixture(scope="module")
+def pair(trees):
+    return innersphere.Pair(*trees)
+
+
+@pytest.mark.parametrize("i", range(len(POSES)))
+def test_distance_equals_cli(pair, tree_files, ist, i):
+    want = ist.query(*tree_files, POSES[i], "distance")
+    pair.reset()
+    got = pair.distance(POSES[i])
+    same(got.distance, want["distance"])
+    assert got.contact == want["contact"]
+    same(got.lower_bound, want["lower_bound"])
+    same(got.point_a, want["point_a"])
+    same(got.point_b, want["point_b"])
+    same(got.normal, want["normal"])
+    assert (got.leaf_a, got.leaf_b, got.visits) == (want["leaf_a"], want["leaf_b"], want["visits"])
+    assert got.point_a.shape == (3,) and got.point_a.dtype == np.float64
+    d = got.to_dict()
+    for k in ("distance", "contact", "lower_bound", "leaf_a", "leaf_b", "visits"):
+        assert d[k] == want[k]
+
+
+@pytest.mark.parametrize("opts", [("--signed",), ("--abs-tol", "0.05"), ("--rel-tol", "0.1")])
+@pytest.mark.parametrize("i", [2, 3, 6])
+def test_distance_options_equal_cli(pair, tree_files, ist, opts, i):
+    want = ist.query(*tree_files, POSES[i], "distance", *opts)
+    kw = {"--signed": {"signed": True}, "--abs-tol": {"abs_tol": 0.05}, "--rel-tol": {"rel_tol": 0.1}}[opts[0]]
+    pair.reset()
+    got = pair.distance(POSES[i], **kw)
+    same(got.distance, want["distance"])
+    same(got.lower_bound, want["lower_bound"])
+    same(got.point_b, want["point_b"])
+
+
+@pytest.mark.parametrize("i", range(len(POSES)))
+def test_contact_equals_cli(pair, tree_files, ist, i):
+    want = ist.query(*tree_files, POSES[i], "contact")
+    pair.reset()
+    assert pair.contact(POSES[i]) is want["contact"]
+
+
+@pytest.mark.parametrize("k", [16, 3])
+@pytest.mark.parametrize("i", range(len(POSES)))
+def test_multipoint_equals_cli(pair, tree_files, ist, i, k):
+    want = ist.query(*tree_files, POSES[i], "multipoint", "--k", k)
+    pair.reset()
+    points = pair.multipoint(POSES[i], k=k)
+    assert points.shape == (len(want["contacts"]), 3)
+    assert len(points) <= k
+    c = pair.contacts
+    if want["contacts"]:
+        same(points, [w["point"] for w in want["contacts"]])
+        same(c["point"], points)
+        same(c["normal"], [w["normal"] for w in want["contacts"]])
+        same(c["depth"], [w["depth"] for w in want["contacts"]])
+        assert list(c["leaf_a"]) == [w["leaf_a"] for w in want["contacts"]]
+        assert list(c["leaf_b"]) == [w["leaf_b"] for w in want["contacts"]]
+    else:
+        assert not want["contact"]
+
+
+@pytest.mark.parametrize("stiffness", [1.0, 2.5])
+@pytest.mark.parametrize("i", range(len(POSES)))
+def test_penetration_equals_cli(pair, tree_files, ist, i, stiffness):
+    want = ist.query(*tree_files, POSES[i], "penetration", "--stiffness", stiffness)
+    pair.reset()
+    got = pair.penetration(POSES[i], stiffness=stiffness)
+    same(got.volume, want["volume"])
+    same(got.max_depth, want["max_depth"])
+    same(got.normal, want["normal"])
+    same(got.force, want["force"])
+    same(got.torque_a, want["torque_a"])
+    same(got.torque_b, want["torque_b"])
+    same(got.distance, want["distance"])
+    assert (got.pairs, got.contact, got.visits) == (want["pairs"], want["contact"], want["visits"])
+    assert len(got.patches) == len(want["patches"])
+    for p, w in zip(got.patches, want["patches"]):
+        same(p["point"], w["point"])
+        same(p["normal"], w["normal"])
+        same(p["depth"], w["depth"])
+        same(p["volume"], w["volume"])
+        assert p["pairs"] == w["pairs"]
+    d = got.to_dict()
+    same(d["torque"], want["torque"])
+
+
+def test_some_poses_touch_and_some_do_not(pair):
+    """The poses cover both sides of contact (else the tests above prove little)."""
+    pair.reset()
+    hits = [pair.contact(p) for p in POSES]
+    assert any(hits) and not all(hits)
+    pair.reset()
+    assert pair.penetration(POSES[-1]).volume > 0.1
+
+
+@pytest.mark.parametrize("i", range(len(POSES)))
+def test_matrix_pose_equals_seven_numbers(pair, i):
+    pair.reset()
+    a = pair.distance(POSES[i])
+    pair.reset()
+    b = pair.distance(pose_matrix(POSES[i]))
+    assert b.distance == pytest.approx(a.distance, abs=1e-6)
+    assert b.contact == a.contact
+    pair.reset()
+    pa = pair.penetration(POSES[i])
+    pair.reset()
+    pb = pair.penetration(pose_matrix(POSES[i]))
+    assert pb.volume == pytest.approx(pa.volume, rel=1e-5, abs=1e-9)
+
+
+def test_identity_matrix_is_bitwise_the_identity(pair):
+    pair.reset()
+    a = pair.penetration([0, 0, 0, 1, 0, 0, 0])
+    pair.reset()
+    b = pair.penetration(np.eye(4))
+    assert a.volume == b.volume
+
+
+def test_pose_a_moves_a(pair):
+    """Both bodies moved by the same rigid motion: the same distance, points moved along."""
+    move = [0.3, -2.0, 1.0, 0.0, 0.0, 0.0, 1.0]  # 180° about z, then a translation
+    m = pose_matrix(move)
+    for p in POSES[2:6]:
+        pair.reset()
+        base = pair.distance(p)
+        pair.reset()
+        both = pair.distance(m @ pose_matrix(p), pose_a=move)
+        assert both.distance == pytest.approx(base.distance, abs=1e-5)
+        moved = m[:3, :3] @ base.point_a + m[:3, 3]
+        if base.distance > 0:
+            assert np.allclose(both.point_a, moved, atol=1e-4)
+
+
+def test_coherent_answers_equal_fresh_ones(trees):
+    """The pair's carried state speeds queries up; it does not change near answers."""
+    warm = innersphere.Pair(*trees)
+    for p in POSES[2:]:
+        fresh = innersphere.Pair(*trees)
+        assert warm.distance(p).distance == fresh.distance(p).distance
+        assert warm.contact(p) == fresh.contact(p)
+        assert warm.penetration(p).volume == fresh.penetration(p).volume
+
+
+def test_pair_keeps_its_trees(trees):
+    pair = innersphere.Pair(*trees)
+    assert pair.tree_a is trees[0] and pair.tree_b is trees[1]
+    assert "Pair(" in repr(pair)

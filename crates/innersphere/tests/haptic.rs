@@ -274,10 +274,11 @@ fn a_tiny_budget_is_kept_by_the_time_critical_query() {
     .unwrap();
     let n = 2000;
     let mut late = 0;
+    let mut budgeted = 0;
     let mut times = vec![];
     for i in 0..n {
         let t = hl.tick(&on_slab(1.0 - 0.3 * (i as f64 / n as f64)));
-        assert!(t.budgeted, "tick {i} was exact");
+        budgeted += t.budgeted as usize;
         assert!(t.volume <= t.volume_bound);
         assert!(t.force.is_finite() && t.tool.translation.is_finite());
         late += t.late as usize;
@@ -291,6 +292,8 @@ fn a_tiny_budget_is_kept_by_the_time_critical_query() {
         times[n / 2]
     );
     assert!(times[n / 2] < 0.9 * budget, "median {} s", times[n / 2]);
+    // The contact is far too large for the budget: the time-critical path answers.
+    assert!(budgeted * 10 >= n * 9, "{budgeted} of {n} ticks budgeted");
     // The contact pushed the tool up, out of the slab.
     assert!(hl.state().pose.translation.z > on_slab(1.0).translation.z);
 }
@@ -371,5 +374,44 @@ fn occlusion_refuses_bad_options() {
             occlude(&mut pair, &Pose::IDENTITY, &on_slab(-1.0), &o).is_err(),
             "{o:?}"
         );
+    }
+}
+
+#[test]
+fn a_budget_too_small_for_the_contact_never_lets_the_tool_sink() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    // The device held 1 mm inside the slab; where the tool rests with the exact query, and
+    // with budgets that do not reach one leaf pair of this contact.
+    let rest = |budget: f64| {
+        let mut o = options();
+        o.budget = budget;
+        let mut hl = HapticLoop::new(
+            Pair::new(a.clone(), b.clone()),
+            Pose::IDENTITY,
+            on_slab(-0.2),
+            o,
+        )
+        .unwrap();
+        let mut t = hl.tick(&on_slab(1.0));
+        for _ in 0..3000 {
+            t = hl.tick(&on_slab(1.0));
+        }
+        t
+    };
+    let exact = rest(1.0);
+    assert!(!exact.budgeted);
+    for budget in [100e-6, 20e-6, 10e-6] {
+        let t = rest(budget);
+        assert!(t.budgeted);
+        // Held out of the slab (the unrefined node pairs push as their bounds), never
+        // deeper than the exact rest.
+        assert!(
+            t.tool.translation.z >= exact.tool.translation.z - 1e-3,
+            "budget {budget} s: tool at z = {} below the exact rest {}",
+            t.tool.translation.z,
+            exact.tool.translation.z
+        );
+        assert!(t.force.length() > 0.5 * exact.force.length());
     }
 }

@@ -11,6 +11,10 @@ use std::time::{Duration, Instant};
 /// figure measured on the jaw trees (see [`Pair::penetration_within`]).
 const FIRST_VISIT_COST: f64 = 75e-9;
 
+/// Complete time-critical ticks in a row before the exact query is tried again (the very
+/// first one, before any exact query, counts at once).
+const RETURN_AFTER: u32 = 50;
+
 /// The contact of one tick.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct ContactSample {
@@ -41,6 +45,8 @@ pub(crate) struct Deadline {
     next: usize,
     /// Measured seconds per node-pair test of the time-critical query.
     per_visit: f64,
+    /// Time-critical ticks in a row that found everything.
+    complete_run: u32,
 }
 
 impl Deadline {
@@ -49,6 +55,7 @@ impl Deadline {
             exact: [f64::INFINITY; 4],
             next: 0,
             per_visit: FIRST_VISIT_COST,
+            complete_run: 0,
         }
     }
 
@@ -96,10 +103,17 @@ impl Deadline {
             self.per_visit = 0.8 * self.per_visit + 0.2 * (t / w.visits as f64);
         }
         if w.complete {
-            // Everything was found in the budget: the exact query (cheaper per frame, on
-            // its front) is expected to fit next time.
-            self.exact = [predicted.min(t); 4];
+            // Everything was found in the budget: after enough such ticks in a row the exact
+            // query (cheaper per frame, on its front) is expected to fit. Not at once: the
+            // two paths feel the surface a little apart, and flipping between them every few
+            // ticks would be felt as a buzz.
+            self.complete_run += 1;
+            if self.complete_run >= RETURN_AFTER || self.exact.iter().all(|e| e.is_infinite()) {
+                self.exact = [predicted.min(t); 4];
+                self.complete_run = 0;
+            }
         } else {
+            self.complete_run = 0;
             // Decay, so that a contact that shrank is eventually tried exactly again.
             for e in &mut self.exact {
                 *e *= 0.999;

@@ -21,13 +21,17 @@ pub struct BudgetedVolume {
     pub complete: bool,
     /// Largest overlap `ra + rb − d` among the leaf pairs found.
     pub max_depth: f64,
-    /// Contact normal of the pairs found (world; as [`Penetration::normal`](crate::Penetration::normal)).
+    /// Contact normal (world; as [`Penetration::normal`](crate::Penetration::normal)) of
+    /// the pairs found and, when the budget ran out, the node pairs left unrefined, each
+    /// counted as one overlap of its bound volume along its centres' direction.
     pub normal: DVec3,
-    /// Penalty force on B from the pairs found: `stiffness × volume × normal` (world).
+    /// Penalty force on B (world) of the same: `stiffness × V × normal` with `V` the volume
+    /// found plus the unrefined bounds (at most `upper_bound`). An over-estimate while the
+    /// query is incomplete, so that a contact too large for the budget still pushes back.
     pub force: DVec3,
-    /// Torque on B about its centre of mass from the pairs found (world).
+    /// Torque on B about its centre of mass (world) of the same.
     pub torque_b: DVec3,
-    /// Contact area of the pairs found (as [`Penetration::area`](crate::Penetration::area)).
+    /// Contact area of the same (as [`Penetration::area`](crate::Penetration::area)).
     pub area: f64,
     /// Linearised wrench of the pairs found (as [`Penetration::stiffness`](crate::Penetration::stiffness);
     /// zero unless [`PenetrationOptions::linearize`](crate::PenetrationOptions::linearize) is set).
@@ -132,6 +136,14 @@ fn within<const L: bool>(
     let rest: f64 = heap.entries().iter().map(|e| -e.key as f64).sum();
     let complete = heap.len() == 0;
     let found = sums.volume;
+    let found_depth = sums.max_depth;
+    // The force of an unfinished query: the pairs found, plus each unrefined node pair as
+    // one overlap of its bound volume (else a contact too large for the budget would push
+    // with nothing, and a haptic tool would sink through it).
+    for e in heap.entries() {
+        let n = &na[e.a as usize];
+        sums.add_coarse([n.x, n.y, n.z], n.r, e.c, nb[e.b as usize].r, -e.key as f64);
+    }
     let com_a = ia.center_of_mass;
     let com_b = ctx.rel.transform_point(ib.center_of_mass);
     let (n, f, _, tb) = sums.wrench(stiffness, com_a, com_b);
@@ -145,7 +157,7 @@ fn within<const L: bool>(
         },
         visits,
         complete,
-        max_depth: sums.max_depth,
+        max_depth: found_depth,
         normal: r * n,
         force: r * f,
         torque_b: r * tb,

@@ -300,6 +300,33 @@ impl<const L: bool> Sums<L> {
         (v, p, u, depth)
     }
 
+    /// Adds a pair of node spheres not refined (the time-critical query ran out of budget)
+    /// as if it were one overlap of volume `v` (its bound) along its centres' direction, so
+    /// that the force of an unfinished query still pushes the right way with about the
+    /// right size. Its area is the node lens's scaled by `v` over the node lens's volume.
+    /// Counts in neither `pairs` nor `max_depth`.
+    #[inline]
+    pub(crate) fn add_coarse(&mut self, ca: [f32; 3], ra: f32, cb: [f32; 3], rb: f32, v: f64) {
+        let ca = DVec3::new(ca[0] as f64, ca[1] as f64, ca[2] as f64);
+        let cbd = DVec3::new(cb[0] as f64, cb[1] as f64, cb[2] as f64);
+        let (ra, rb) = (ra as f64, rb as f64);
+        let (u, d) = direction(ca, cbd);
+        let (lv, g) = lens(ra, rb, d);
+        let p = ca + u * g;
+        let s = p.cross(u);
+        self.volume += v;
+        self.vu += u * v;
+        self.vgu += s * v;
+        if L && lv > 0.0 {
+            let a = lens_area(ra, rb, d) * (v / lv).min(1.0);
+            self.area += a;
+            let au = u * a;
+            self.auu += outer(au, u);
+            self.aus += outer(au, s);
+            self.ass += outer(s * a, s);
+        }
+    }
+
     /// The [`ContactStiffness`] (A's frame) of penalty stiffness `k`, rotations about
     /// `com_b` (A's frame).
     pub(crate) fn stiffness(&self, k: f64, com_b: DVec3) -> ContactStiffness {

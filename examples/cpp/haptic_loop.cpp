@@ -26,6 +26,11 @@
 #include <thread>
 #include <vector>
 
+#ifdef __linux__
+#include <pthread.h>
+#include <sched.h>
+#endif
+
 using Clock = std::chrono::steady_clock;
 
 // The tool pose handed from the servo thread to the graphics thread without a lock: the
@@ -133,6 +138,14 @@ int main(int argc, char** argv) {
         }
     });
 
+    // Servo threads ask for real-time scheduling (CHAI3D and the device SDKs do): without it
+    // any other thread can delay a tick. Best effort: it needs root or CAP_SYS_NICE.
+    bool realtime = false;
+#ifdef __linux__
+    sched_param sp{};
+    sp.sched_priority = 20;
+    realtime = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp) == 0;
+#endif
     auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
     auto start = Clock::now();
     auto deadline = start;
@@ -182,9 +195,9 @@ int main(int argc, char** argv) {
     std::printf(
         "{\"ticks\": %zu, \"rate_hz\": %.1f, \"achieved_hz\": %.1f, \"deadline_misses\": %zu, \"over_budget\": %zu, "
         "\"tick_p50_us\": %.2f, \"tick_p99_us\": %.2f, \"tick_max_us\": %.2f, \"max_force_n\": %.4f, "
-        "\"energy_to_user_max_j\": %.3e, \"graphics_frames\": %zu, \"budgeted_ticks\": %zu, \"max_dt_ms\": %.3f}\n",
+        "\"energy_to_user_max_j\": %.3e, \"graphics_frames\": %zu, \"budgeted_ticks\": %zu, \"max_dt_ms\": %.3f, \"realtime\": %s}\n",
         ticks, rate, ticks / seconds, misses, over_budget, pct(0.5), pct(0.99), sorted.back(), max_force,
-        energy_max, frames.load(), budgeted, max_dt * 1e3);
+        energy_max, frames.load(), budgeted, max_dt * 1e3, realtime ? "true" : "false");
 
     innersphere_example::compile_check_chai3d_adapter(pair, params);
     ist_haptic_free(haptic);

@@ -3,8 +3,8 @@
 //! budget sized to the time left.
 
 use super::mat6::Mat6;
-use super::step::{add_block, Wrench};
-use crate::{ContactStiffness, Pair, PenetrationOptions, Pose};
+use super::step::Wrench;
+use crate::{Pair, PenetrationOptions, Pose};
 use std::time::{Duration, Instant};
 
 /// A node-pair test of the time-critical query, assumed before any was measured (s): the
@@ -88,7 +88,7 @@ impl Deadline {
                     force: p.force,
                     torque: p.torque_b,
                 },
-                stiffness: matrix(&p.stiffness),
+                stiffness: p.stiffness.to_matrix6(),
                 volume: p.volume,
                 volume_bound: p.volume,
                 max_depth: p.max_depth,
@@ -124,7 +124,7 @@ impl Deadline {
                 force: w.force,
                 torque: w.torque_b,
             },
-            stiffness: matrix(&w.stiffness),
+            stiffness: w.stiffness.to_matrix6(),
             volume: w.volume,
             volume_bound: w.upper_bound,
             max_depth: w.max_depth,
@@ -132,13 +132,4 @@ impl Deadline {
             budgeted: true,
         }
     }
-}
-
-fn matrix(k: &ContactStiffness) -> Mat6 {
-    let mut m = [[0.0; 6]; 6];
-    add_block(&mut m, 0, 0, &k.linear);
-    add_block(&mut m, 0, 3, &k.coupling);
-    add_block(&mut m, 3, 0, &k.coupling.transpose());
-    add_block(&mut m, 3, 3, &k.angular);
-    m
 }

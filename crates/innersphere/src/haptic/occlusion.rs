@@ -4,7 +4,7 @@
 
 use super::body::{rotation_between, BodyState, RigidBody, TOOTH_DENSITY};
 use super::mat6::Mat6;
-use super::step::{add_block, implicit_step, Wrench};
+use super::step::{add_block, contact_damping, implicit_step, Wrench};
 use crate::{Error, Pair, Patch, PenetrationOptions, Pose, Result};
 use glam::{DMat3, DVec3};
 
@@ -145,11 +145,9 @@ pub fn occlude(
                 break;
             }
         }
-        let mut k: Mat6 = [[0.0; 6]; 6];
-        add_block(&mut k, 0, 0, &p.stiffness.linear);
-        add_block(&mut k, 0, 3, &p.stiffness.coupling);
-        add_block(&mut k, 3, 0, &p.stiffness.coupling.transpose());
-        add_block(&mut k, 3, 3, &p.stiffness.angular);
+        // The contact's stiffness, then the joints' springs added to it.
+        let kc: Mat6 = p.stiffness.to_matrix6();
+        let mut k = kc;
         let (mut jf, mut jt) = (DVec3::ZERO, DVec3::ZERO);
         if let Some(j) = &opts.joints {
             for (pb, anchor) in j.points.iter().zip(&j.anchors) {
@@ -168,35 +166,13 @@ pub fn occlude(
             }
         }
         // The contact's damping only: β·K of the contact, not of the joints.
-        let mut kc: Mat6 = [[0.0; 6]; 6];
-        add_block(&mut kc, 0, 0, &p.stiffness.linear);
-        add_block(&mut kc, 0, 3, &p.stiffness.coupling);
-        add_block(&mut kc, 3, 0, &p.stiffness.coupling.transpose());
-        add_block(&mut kc, 3, 3, &p.stiffness.angular);
-        let beta = opts.contact_damping;
-        let v6 = [
-            state.velocity.x,
-            state.velocity.y,
-            state.velocity.z,
-            state.angular_velocity.x,
-            state.angular_velocity.y,
-            state.angular_velocity.z,
-        ];
-        let kv = super::mat6::mul(&kc, v6);
+        let (cd, mut d) = contact_damping(&kc, opts.contact_damping, &state);
         let w = Wrench {
-            force: axis * opts.force + jf + p.force
-                - state.velocity * b
-                - DVec3::new(kv[0], kv[1], kv[2]) * beta,
-            torque: p.torque_b + jt
-                - state.angular_velocity * br
-                - DVec3::new(kv[3], kv[4], kv[5]) * beta,
+            force: axis * opts.force + jf + p.force - state.velocity * b + cd.force,
+            torque: p.torque_b + jt - state.angular_velocity * br + cd.torque,
         };
-        let mut d: Mat6 = [[0.0; 6]; 6];
-        for i in 0..6 {
-            for j in 0..6 {
-                d[i][j] = beta * kc[i][j];
-            }
-            d[i][i] += if i < 3 { b } else { br };
+        for (i, row) in d.iter_mut().enumerate() {
+            row[i] += if i < 3 { b } else { br };
         }
         if !implicit_step(&body, &mut state, h, w, &k, &d) {
             return Err(Error::InvalidOption(

@@ -5,7 +5,7 @@ use super::body::{rotation_between, BodyState, RigidBody, TOOTH_DENSITY};
 use super::contact::Deadline;
 use super::device::{Coupling, DeviceClass, DeviceLimits};
 use super::mat6::Mat6;
-use super::step::{implicit_step, Wrench};
+use super::step::{contact_damping, implicit_step, Wrench};
 use crate::{Error, Pair, PenetrationOptions, Pose, Result};
 use glam::{DQuat, DVec3};
 use std::time::{Duration, Instant};
@@ -236,26 +236,14 @@ impl HapticLoop {
         let twist =
             err * c.angular_stiffness + (wd - self.state.angular_velocity) * c.angular_damping;
         // Contact damping β·K on the tool's own velocity (A is fixed).
-        let beta = self.opts.contact_damping;
-        let x = [
-            self.state.velocity.x,
-            self.state.velocity.y,
-            self.state.velocity.z,
-            self.state.angular_velocity.x,
-            self.state.angular_velocity.y,
-            self.state.angular_velocity.z,
-        ];
-        let kv = super::mat6::mul(&contact.stiffness, x);
+        let (cd, mut damping) =
+            contact_damping(&contact.stiffness, self.opts.contact_damping, &self.state);
         let w = Wrench {
-            force: spring + contact.wrench.force - DVec3::new(kv[0], kv[1], kv[2]) * beta,
-            torque: twist + contact.wrench.torque - DVec3::new(kv[3], kv[4], kv[5]) * beta,
+            force: spring + contact.wrench.force + cd.force,
+            torque: twist + contact.wrench.torque + cd.torque,
         };
         let mut stiffness: Mat6 = contact.stiffness;
-        let mut damping: Mat6 = [[0.0; 6]; 6];
         for i in 0..6 {
-            for j in 0..6 {
-                damping[i][j] = beta * stiffness[i][j];
-            }
             let (k, b) = if i < 3 {
                 (c.stiffness, c.damping)
             } else {

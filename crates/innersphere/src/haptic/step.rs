@@ -27,6 +27,24 @@ pub(crate) fn add_block(a: &mut Mat6, r: usize, c: usize, m: &DMat3) {
     }
 }
 
+/// Contact damping proportional to the contact stiffness `k`: the wrench `−β·K·[v; ω]` on
+/// the body's own velocity (the other body is fixed) and the damping matrix `β·K`.
+pub(crate) fn contact_damping(k: &Mat6, beta: f64, state: &BodyState) -> (Wrench, Mat6) {
+    let (v, w) = (state.velocity, state.angular_velocity);
+    let kv = super::mat6::mul(k, [v.x, v.y, v.z, w.x, w.y, w.z]);
+    let mut d = [[0.0; 6]; 6];
+    for (drow, krow) in d.iter_mut().zip(k) {
+        for (dij, kij) in drow.iter_mut().zip(krow) {
+            *dij = beta * kij;
+        }
+    }
+    let wrench = Wrench {
+        force: -(DVec3::new(kv[0], kv[1], kv[2]) * beta),
+        torque: -(DVec3::new(kv[3], kv[4], kv[5]) * beta),
+    };
+    (wrench, d)
+}
+
 /// Advances `state` by `h` seconds under `w` (evaluated at the current state), with
 /// `stiffness = −∂w/∂x` and `damping = −∂w/∂v` (6×6, symmetric positive semi-definite,
 /// world frame, about the centre of mass). Returns false (and leaves the state alone) when

@@ -177,6 +177,16 @@ typedef struct ist_haptic_params {
    */
   double density;
   /*
+   How fast a new contact model may take over from the one in use (N/s): bounds the
+   force step a model update causes.
+   */
+  double model_slew;
+  /*
+   Oldest a contact model may get (s) before the single-thread loop runs the exact query
+   whatever it costs.
+   */
+  double max_model_age;
+  /*
    World pose of body A (fixed).
    */
   struct ist_pose pose_a;

@@ -42,6 +42,12 @@ pub struct ist_haptic_params {
     pub contact_damping: f64,
     /// Density of the tool (kg/mm³).
     pub density: f64,
+    /// How fast a new contact model may take over from the one in use (N/s): bounds the
+    /// force step a model update causes.
+    pub model_slew: f64,
+    /// Oldest a contact model may get (s) before the single-thread loop runs the exact query
+    /// whatever it costs.
+    pub max_model_age: f64,
     /// World pose of body A (fixed).
     pub pose_a: ist_pose,
     /// Where the tool (body B) starts, at rest.
@@ -115,6 +121,8 @@ pub unsafe extern "C" fn ist_haptic_params_default(
             contact_stiffness: o.contact_stiffness,
             contact_damping: o.contact_damping,
             density: o.density,
+            model_slew: o.model_slew,
+            max_model_age: o.max_model_age,
             pose_a: id,
             start: id,
         };
@@ -154,6 +162,8 @@ pub unsafe extern "C" fn ist_haptic_new(
             contact_damping: c.contact_damping,
             density: c.density,
             max_patches: 8,
+            model_slew: c.model_slew,
+            max_model_age: c.max_model_age,
         };
         let own = Pair::new(p.pair.tree_a().clone(), p.pair.tree_b().clone());
         let hl = HapticLoop::new(own, c.pose_a.to_pose()?, c.start.to_pose()?, opts)?;

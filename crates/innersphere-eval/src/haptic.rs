@@ -4,7 +4,9 @@
 
 use crate::motion::{AnatomicalFrame, Motion};
 use innersphere::glam::DVec3;
-use innersphere::haptic::{HapticLoop, HapticOptions, Joints, Tick};
+use innersphere::haptic::{
+    CollisionOptions, CollisionStats, HapticLoop, HapticOptions, Joints, MultirateLoop, Tick,
+};
 use innersphere::{Error, Pair, Pose, Result};
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
@@ -56,6 +58,50 @@ pub struct HapticSummary {
     pub max_force_step_n: f64,
     /// Whether the ticks were paced at the device rate (else as fast as possible).
     pub realtime: bool,
+    /// Whether the pacing thread got real-time (FIFO) scheduling.
+    pub realtime_priority: bool,
+    /// 99th percentile of the contact model's age at a tick (µs): since the tool pose its
+    /// query answered for was taken (simulated time in one thread, real time with the
+    /// collision thread).
+    pub model_age_p99_us: f64,
+    /// Oldest contact model a tick used (µs).
+    pub model_age_max_us: f64,
+    /// Whether the penetration query ran in a collision thread of its own.
+    pub collision_thread: bool,
+    /// The collision thread's stress delay before each query (µs).
+    pub collision_delay_us: Option<f64>,
+    /// Contact models the collision thread published per second.
+    pub collision_rate_hz: Option<f64>,
+    /// 99th percentile of the collision thread's query time (µs).
+    pub collision_p99_us: Option<f64>,
+    /// Collision queries answered by the time-critical query (the model kept, bounded).
+    pub collision_budgeted: Option<u64>,
+}
+
+/// How a session runs its loop.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Session {
+    /// Pace the ticks at the rate in real time (spinning), asking for real-time (FIFO)
+    /// scheduling; else back to back.
+    pub realtime: bool,
+    /// Run the penetration query in a collision thread of its own ([`MultirateLoop`]);
+    /// `None`: in the tick ([`HapticLoop`]).
+    pub collision: Option<CollisionOptions>,
+}
+
+/// Either loop.
+enum Looper {
+    Single(HapticLoop),
+    Servo(MultirateLoop),
+}
+
+impl Looper {
+    fn tick(&mut self, pose: &Pose) -> Tick {
+        match self {
+            Looper::Single(h) => h.tick(pose),
+            Looper::Servo(h) => h.tick(pose),
+        }
+    }
 }
 
 /// A session's ticks and figures.
@@ -87,12 +133,23 @@ pub fn sample(m: &Motion, t: f64) -> Pose {
 }
 
 /// Runs the loop over `device` (B's device pose in A's frame, A at the identity) at
-/// `opts.rate`, starting with the tool at the first device pose; `realtime` paces the ticks
-/// at the rate (spinning), else they run back to back.
-pub fn run(pair: Pair, device: &Motion, opts: HapticOptions, realtime: bool) -> Result<HapticRun> {
+/// `opts.rate`, starting with the tool at the first device pose, as `session` says.
+pub fn run(
+    pair: Pair,
+    device: &Motion,
+    opts: HapticOptions,
+    session: &Session,
+) -> Result<HapticRun> {
     if device.frames.is_empty() {
         return Err(Error::InvalidOption(
             "the device trajectory has no frames".into(),
+        ));
+    }
+    if session.collision.is_some() && !session.realtime {
+        return Err(Error::InvalidOption(
+            "the collision thread runs in real time: pace the ticks in real time too (--realtime); \
+             ticks run faster than real time would use ever older contact models"
+                .into(),
         ));
     }
     let t0 = device.frames[0].t;
@@ -106,15 +163,38 @@ pub fn run(pair: Pair, device: &Motion, opts: HapticOptions, realtime: bool) -> 
     let poses: Vec<Pose> = (0..n)
         .map(|i| sample(device, t0 + i as f64 / opts.rate))
         .collect();
-    let mut hl = HapticLoop::new(pair, Pose::IDENTITY, poses[0], opts)?;
+    // Real time: the collision thread is started at a real-time priority just below the
+    // servo's (it inherits the policy), so that neither waits behind ordinary threads and
+    // the collision thread never preempts the servo.
+    use crate::sysinfo::{realtime_priority, SERVO_PRIORITY};
+    let priority = session.realtime && realtime_priority(Some(SERVO_PRIORITY - 1));
+    let made = match session.collision {
+        None => HapticLoop::new(pair, Pose::IDENTITY, poses[0], opts).map(Looper::Single),
+        Some(c) => MultirateLoop::spawn(pair, Pose::IDENTITY, poses[0], opts, c).map(Looper::Servo),
+    };
+    let hl = match made {
+        Ok(h) => h,
+        Err(e) => {
+            if priority {
+                realtime_priority(None);
+            }
+            return Err(e);
+        }
+    };
+    let mut hl = hl;
+    let priority = priority && realtime_priority(Some(SERVO_PRIORITY));
     let mut ticks = Vec::with_capacity(n);
+    if let Looper::Servo(s) = &hl {
+        // The collision thread's first model, before the clock starts.
+        let wait = Instant::now();
+        while s.collision_queries() == 0 && wait.elapsed() < Duration::from_secs(5) {
+            std::thread::yield_now();
+        }
+    }
     let start = Instant::now();
     for (i, pose) in poses.iter().enumerate() {
-        if realtime {
-            let due = start + Duration::from_secs_f64(i as f64 / opts.rate);
-            while Instant::now() < due {
-                std::hint::spin_loop();
-            }
+        if session.realtime {
+            pace(start + Duration::from_secs_f64(i as f64 / opts.rate));
         }
         let tick = hl.tick(pose);
         ticks.push(TickRecord {
@@ -123,9 +203,23 @@ pub fn run(pair: Pair, device: &Motion, opts: HapticOptions, realtime: bool) -> 
             tick,
         });
     }
-    let mut compute: Vec<f64> = ticks.iter().map(|r| r.tick.compute * 1e6).collect();
-    compute.sort_by(f64::total_cmp);
-    let pct = |q: f64| compute[((compute.len() - 1) as f64 * q).round() as usize];
+    if session.realtime {
+        realtime_priority(None);
+    }
+    let (energy_max, energy_end) = match &hl {
+        Looper::Single(h) => (h.energy_to_user_max(), h.energy_to_user()),
+        Looper::Servo(h) => (h.energy_to_user_max(), h.energy_to_user()),
+    };
+    let stats: Option<CollisionStats> = match hl {
+        Looper::Single(_) => None,
+        Looper::Servo(h) => Some(h.finish()),
+    };
+    let quantile = |mut v: Vec<f64>, q: f64| {
+        v.sort_by(f64::total_cmp);
+        v[((v.len() - 1) as f64 * q).round() as usize]
+    };
+    let compute: Vec<f64> = ticks.iter().map(|r| r.tick.compute * 1e6).collect();
+    let ages: Vec<f64> = ticks.iter().map(|r| r.tick.model_age * 1e6).collect();
     let max = |f: &dyn Fn(&TickRecord) -> f64| ticks.iter().map(f).fold(0.0, f64::max);
     let max_force_step_n = ticks
         .windows(2)
@@ -136,27 +230,51 @@ pub fn run(pair: Pair, device: &Motion, opts: HapticOptions, realtime: bool) -> 
         rate_hz: opts.rate,
         budget_us: opts.budget * 1e6,
         deadline_misses: ticks.iter().filter(|r| r.tick.late).count(),
-        compute_p50_us: pct(0.5),
-        compute_p99_us: pct(0.99),
-        compute_max_us: compute[compute.len() - 1],
+        compute_p50_us: quantile(compute.clone(), 0.5),
+        compute_p99_us: quantile(compute.clone(), 0.99),
+        compute_max_us: quantile(compute, 1.0),
         budgeted_ticks: ticks.iter().filter(|r| r.tick.budgeted).count(),
         max_force_n: max(&|r| r.tick.force.length()),
         max_torque_nmm: max(&|r| r.tick.torque.length()),
         max_depth_mm: max(&|r| r.tick.max_depth),
         max_volume_mm3: max(&|r| r.tick.volume),
-        energy_to_user_max_j: hl.energy_to_user_max(),
-        energy_to_user_end_j: hl.energy_to_user(),
+        energy_to_user_max_j: energy_max,
+        energy_to_user_end_j: energy_end,
         max_force_step_n,
-        realtime,
+        realtime: session.realtime,
+        realtime_priority: priority,
+        model_age_p99_us: quantile(ages.clone(), 0.99),
+        model_age_max_us: quantile(ages, 1.0),
+        collision_thread: stats.is_some(),
+        collision_delay_us: session.collision.map(|c| c.delay * 1e6),
+        collision_rate_hz: stats.as_ref().map(|s| s.rate_hz()),
+        collision_p99_us: stats.as_ref().map(|s| s.quantile(0.99) * 1e6),
+        collision_budgeted: stats.as_ref().map(|s| s.budgeted),
     };
     Ok(HapticRun { ticks, summary })
 }
 
+/// Waits until `due`: sleeps until shortly before, then spins. A loop that only spins keeps
+/// its core busy under real-time scheduling, and the kernel's real-time throttling then
+/// stops it (and its collision thread) for 50 ms in every second.
+fn pace(due: Instant) {
+    const SPIN: Duration = Duration::from_micros(40);
+    if let Some(left) = due.checked_duration_since(Instant::now()) {
+        if left > SPIN {
+            std::thread::sleep(left - SPIN);
+        }
+    }
+    while Instant::now() < due {
+        std::hint::spin_loop();
+    }
+}
+
 /// The trace as CSV, one row per tick: `t`, the device pose (7), the tool pose (7), force
-/// xyz (N), torque xyz (N·mm), volume (mm³), depth (mm), compute_us, budgeted (0/1).
+/// xyz (N), torque xyz (N·mm), volume (mm³), depth (mm), compute_us, budgeted (0/1),
+/// model_age_us.
 pub fn trace_csv(run: &HapticRun) -> String {
     let mut s = String::from(
-        "t,dev_tx,dev_ty,dev_tz,dev_qw,dev_qx,dev_qy,dev_qz,tool_tx,tool_ty,tool_tz,tool_qw,tool_qx,tool_qy,tool_qz,fx,fy,fz,tx,ty,tz,volume,depth,compute_us,budgeted\n",
+        "t,dev_tx,dev_ty,dev_tz,dev_qw,dev_qx,dev_qy,dev_qz,tool_tx,tool_ty,tool_tz,tool_qw,tool_qx,tool_qy,tool_qz,fx,fy,fz,tx,ty,tz,volume,depth,compute_us,budgeted,model_age_us\n",
     );
     for r in &run.ticks {
         let d = r.device.to_array();
@@ -168,7 +286,7 @@ pub fn trace_csv(run: &HapticRun) -> String {
         }
         let _ = writeln!(
             s,
-            ",{},{},{},{},{},{},{},{},{:.2},{}",
+            ",{},{},{},{},{},{},{},{},{:.2},{},{:.1}",
             f.x,
             f.y,
             f.z,
@@ -178,7 +296,8 @@ pub fn trace_csv(run: &HapticRun) -> String {
             r.tick.volume,
             r.tick.max_depth,
             r.tick.compute * 1e6,
-            r.tick.budgeted as u8
+            r.tick.budgeted as u8,
+            r.tick.model_age * 1e6
         );
     }
     s

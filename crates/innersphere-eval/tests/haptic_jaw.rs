@@ -10,7 +10,7 @@ mod common;
 use innersphere::glam::DQuat;
 use innersphere::haptic::{occlude, DeviceClass, HapticOptions, OcclusionOptions};
 use innersphere::{BuildOptions, Mesh, Pair, Pose, SharedTree, SphereTree};
-use innersphere_eval::haptic::{crown_centres, run, temporomandibular_joints};
+use innersphere_eval::haptic::{crown_centres, run, temporomandibular_joints, Session};
 use innersphere_eval::motion::{AnatomicalFrame, Motion};
 use std::sync::OnceLock;
 
@@ -63,7 +63,13 @@ fn pressing_the_jaw_into_the_bite_feels_solid_and_passive() {
         let mut o = HapticOptions::for_device(DeviceClass::Omega);
         o.rate = rate;
         o.budget = 1.0 / rate;
-        let r = run(Pair::new(j.a.clone(), j.b.clone()), &press(), o, false).unwrap();
+        let r = run(
+            Pair::new(j.a.clone(), j.b.clone()),
+            &press(),
+            o,
+            &Session::default(),
+        )
+        .unwrap();
         let s = r.summary;
         eprintln!("{rate} Hz: {s:?}");
         assert_eq!(s.ticks, (6.0 * rate) as usize + 1);

@@ -185,7 +185,9 @@ pub(crate) fn run(
     let mut last_mode = Mode::Free;
     let mut seek_id = 0u64;
     let mut rate_from = (start, 0u64);
-    state.realtime = realtime_priority();
+    state.realtime = innersphere_eval::sysinfo::realtime_priority(Some(
+        innersphere_eval::sysinfo::SERVO_PRIORITY,
+    ));
     while !io.stop.load(Ordering::Relaxed) {
         deadline += period;
         let t0 = Instant::now();
@@ -292,22 +294,5 @@ pub(crate) fn run(
             // Behind by more than a tick: do not try to catch up.
             deadline = Instant::now();
         }
-    }
-}
-
-/// Asks for real-time (FIFO) scheduling of the calling thread, as haptic servo loops do;
-/// true when granted (root or CAP_SYS_NICE on Linux), false elsewhere.
-fn realtime_priority() -> bool {
-    #[cfg(target_os = "linux")]
-    {
-        // SAFETY: plain system calls on the current thread with a valid parameter.
-        unsafe {
-            let p = libc::sched_param { sched_priority: 20 };
-            libc::pthread_setschedparam(libc::pthread_self(), libc::SCHED_FIFO, &p) == 0
-        }
-    }
-    #[cfg(not(target_os = "linux"))]
-    {
-        false
     }
 }

@@ -258,7 +258,7 @@ fn a_tick_allocates_nothing() {
 }
 
 #[test]
-fn a_tiny_budget_is_kept_by_the_time_critical_query() {
+fn a_tiny_budget_is_kept_but_for_the_models_refreshes() {
     let _serial = serial();
     let (a, b) = slab_and_block();
     let mut o = options();
@@ -281,19 +281,27 @@ fn a_tiny_budget_is_kept_by_the_time_critical_query() {
         budgeted += t.budgeted as usize;
         assert!(t.volume <= t.volume_bound);
         assert!(t.force.is_finite() && t.tool.translation.is_finite());
+        // The model in use is never older than allowed (simulated time, one tick's slack).
+        assert!(t.model_age <= o.max_model_age + 1.5 / o.rate, "{t:?}");
         late += t.late as usize;
         times.push(t.compute);
     }
     times.sort_by(f64::total_cmp);
-    // Preemption on a shared machine can delay any tick; the loop itself must not.
+    // The exact query runs, late, once the model is `max_model_age` old (one tick in five at
+    // 1 kHz); preemption on a shared machine can delay any other tick.
+    let refreshes = (n as f64 / (o.max_model_age * o.rate)).ceil() as usize;
     assert!(
-        late <= n / 100,
+        late <= refreshes + n / 100,
         "{late} of {n} ticks over {budget} s (median {} s)",
         times[n / 2]
     );
     assert!(times[n / 2] < 0.9 * budget, "median {} s", times[n / 2]);
-    // The contact is far too large for the budget: the time-critical path answers.
-    assert!(budgeted * 10 >= n * 9, "{budgeted} of {n} ticks budgeted");
+    // The contact is far too large for the budget: the time-critical path answers between
+    // the refreshes.
+    assert!(
+        budgeted >= n - refreshes - n / 20,
+        "{budgeted} of {n} ticks budgeted"
+    );
     // The contact pushed the tool up, out of the slab.
     assert!(hl.state().pose.translation.z > on_slab(1.0).translation.z);
 }
@@ -381,7 +389,7 @@ fn occlusion_refuses_bad_options() {
 fn a_budget_too_small_for_the_contact_never_lets_the_tool_sink() {
     let _serial = serial();
     let (a, b) = slab_and_block();
-    // The device held 1 mm inside the slab; where the tool rests with the exact query, and
+    // The device held 1 mm inside the slab: where the tool rests with the exact query, and
     // with budgets that do not reach one leaf pair of this contact.
     let rest = |budget: f64| {
         let mut o = options();
@@ -393,25 +401,31 @@ fn a_budget_too_small_for_the_contact_never_lets_the_tool_sink() {
             o,
         )
         .unwrap();
+        let mut budgeted = 0;
         let mut t = hl.tick(&on_slab(1.0));
         for _ in 0..3000 {
             t = hl.tick(&on_slab(1.0));
+            budgeted += t.budgeted as usize;
         }
-        t
+        (t, budgeted)
     };
-    let exact = rest(1.0);
-    assert!(!exact.budgeted);
-    for budget in [100e-6, 20e-6, 10e-6] {
-        let t = rest(budget);
-        assert!(t.budgeted);
-        // Held out of the slab (the unrefined node pairs push as their bounds), never
-        // deeper than the exact rest.
+    let (exact, none) = rest(1.0);
+    assert_eq!(none, 0);
+    for budget in [100e-6, 20e-6, 10e-6, 1e-6] {
+        let (t, budgeted) = rest(budget);
+        if budget <= 20e-6 {
+            assert!(
+                budgeted > 1000,
+                "budget {budget} s: {budgeted} ticks budgeted"
+            );
+        }
+        // The model of the last complete answer holds the tool where the exact query does.
         assert!(
-            t.tool.translation.z >= exact.tool.translation.z - 1e-3,
-            "budget {budget} s: tool at z = {} below the exact rest {}",
+            (t.tool.translation.z - exact.tool.translation.z).abs() <= 0.01,
+            "budget {budget} s: tool at z = {}, the exact rest {}",
             t.tool.translation.z,
             exact.tool.translation.z
         );
-        assert!(t.force.length() > 0.5 * exact.force.length());
+        assert!((t.force - exact.force).length() <= 0.02 * exact.force.length());
     }
 }

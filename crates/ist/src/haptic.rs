@@ -1,9 +1,9 @@
 //! `ist haptic`: the library's 6-DOF haptic loop over a recorded device trajectory.
 
 use anyhow::Context;
-use innersphere::haptic::{DeviceClass, HapticOptions};
+use innersphere::haptic::{CollisionOptions, DeviceClass, HapticOptions};
 use innersphere::Pair;
-use innersphere_eval::haptic::{run as run_session, trace_csv};
+use innersphere_eval::haptic::{run as run_session, trace_csv, Session};
 use innersphere_eval::motion::Motion;
 use std::path::PathBuf;
 
@@ -39,9 +39,18 @@ pub struct Args {
     /// time-critical one when it would not fit.
     #[arg(long)]
     budget_us: Option<f64>,
-    /// Pace the ticks at the rate in real time (default: as fast as possible).
+    /// Pace the ticks at the rate in real time, asking for real-time (FIFO) scheduling
+    /// (default: as fast as possible).
     #[arg(long)]
     realtime: bool,
+    /// Run the penetration query in a collision thread of its own, the servo tick on the
+    /// contact model it publishes (the multi-rate loop; see docs/HAPTICS.md).
+    #[arg(long)]
+    collision_thread: bool,
+    /// With --collision-thread: sleep this long (µs) before each collision query, standing
+    /// for a slow machine.
+    #[arg(long, requires = "collision_thread")]
+    collision_delay_us: Option<f64>,
     /// Write one row per tick: t, device pose, tool pose, force xyz (N), torque xyz (N·mm),
     /// volume (mm³), depth (mm), compute_us, budgeted.
     #[arg(long)]
@@ -79,10 +88,24 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         opts.contact_stiffness = k;
     }
     opts.check()?;
+    let collision = if args.collision_thread {
+        let c = CollisionOptions {
+            delay: args.collision_delay_us.unwrap_or(0.0) * 1e-6,
+            ..Default::default()
+        };
+        c.check()?;
+        Some(c)
+    } else {
+        None
+    };
     let a = crate::load_tree(&args.a)?;
     let b = crate::load_tree(&args.b)?;
     let device = Motion::load(&args.device)?;
-    let r = run_session(Pair::new(a, b), &device, opts, args.realtime)?;
+    let session = Session {
+        realtime: args.realtime,
+        collision,
+    };
+    let r = run_session(Pair::new(a, b), &device, opts, &session)?;
     if let Some(path) = &args.trace {
         innersphere::output::write_file(path, trace_csv(&r).as_bytes())
             .context("writing the trace")?;
@@ -97,7 +120,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         println!(
             "{} ticks at {} Hz ({}): compute p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs; {} over the {:.0} µs budget, {} budgeted\n\
              force max {:.3} N (largest step {:.4} N), torque max {:.1} N·mm; depth max {:.3} mm, volume max {:.3} mm³\n\
-             energy to the hand: max {:.3e} J, end {:.3e} J (≤ 0: passive)",
+             energy to the hand: max {:.3e} J, end {:.3e} J (≤ 0: passive)\n\
+             contact model age p99 {:.1} µs, max {:.1} µs{}",
             s.ticks,
             s.rate_hz,
             if s.realtime { "real time" } else { "as fast as possible" },
@@ -113,7 +137,15 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             s.max_depth_mm,
             s.max_volume_mm3,
             s.energy_to_user_max_j,
-            s.energy_to_user_end_j
+            s.energy_to_user_end_j,
+            s.model_age_p99_us,
+            s.model_age_max_us,
+            match (s.collision_rate_hz, s.collision_p99_us) {
+                (Some(r), Some(p)) => format!(
+                    "; collision thread {r:.0} models/s, query p99 {p:.1} µs"
+                ),
+                _ => String::new(),
+            }
         );
     }
     Ok(0)

@@ -1,9 +1,11 @@
-//! The contact wrench of one tick, within a deadline: the exact penetration query when its
-//! predicted time fits what is left of the tick, else the time-critical one with a node-pair
-//! budget sized to the time left.
+//! The contact query of one tick (or one collision-thread round), within a deadline: the
+//! exact penetration query when its predicted time fits what is left, else the time-critical
+//! one with a node-pair budget sized to the time left. A complete answer becomes a new
+//! [`ContactModel`]; an unfinished time-critical one only bounds the force of the model in use
+//! (its unrefined node pairs' bounds are far larger than the contact, and pushing with them
+//! kicks the hand).
 
-use super::mat6::Mat6;
-use super::step::Wrench;
+use super::model::ContactModel;
 use crate::{Pair, PenetrationOptions, Pose};
 use std::time::{Duration, Instant};
 
@@ -11,27 +13,26 @@ use std::time::{Duration, Instant};
 /// figure measured on the jaw trees (see [`Pair::penetration_within`]).
 const FIRST_VISIT_COST: f64 = 75e-9;
 
-/// Complete time-critical ticks in a row before the exact query is tried again (the very
+/// Complete time-critical answers in a row before the exact query is tried again (the very
 /// first one, before any exact query, counts at once).
 const RETURN_AFTER: u32 = 50;
 
-/// The contact of one tick.
+/// What a query round learnt.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct ContactSample {
-    /// Penalty force and torque on the tool (world, about its centre of mass).
-    pub wrench: Wrench,
-    /// Their linearisation (`−∂w/∂x`, 6×6).
-    pub stiffness: Mat6,
-    /// Penetration volume (mm³): exact, or what the time-critical query found.
-    pub volume: f64,
-    /// Upper bound on the volume (= `volume` when exact).
-    pub volume_bound: f64,
-    /// Deepest leaf-pair overlap found (mm).
-    pub max_depth: f64,
-    /// Contact patches of the exact query (0 on the time-critical path).
-    pub patches: usize,
-    /// True when the time-critical query answered.
-    pub budgeted: bool,
+pub(crate) enum Answer {
+    /// A complete answer (exact, or a time-critical query that finished): the new model.
+    Model(ContactModel),
+    /// The time-critical query ran out of budget; the model in use stays.
+    Bound {
+        /// The contact's penalty force is at most this (N).
+        cap: f64,
+        /// Volume of the leaf pairs found (mm³).
+        found: f64,
+        /// Upper bound on the volume (mm³).
+        bound: f64,
+        /// Deepest leaf-pair overlap found (mm).
+        depth: f64,
+    },
 }
 
 /// Chooses between the exact and the time-critical query from their measured costs.
@@ -45,7 +46,7 @@ pub(crate) struct Deadline {
     next: usize,
     /// Measured seconds per node-pair test of the time-critical query.
     per_visit: f64,
-    /// Time-critical ticks in a row that found everything.
+    /// Time-critical answers in a row that found everything.
     complete_run: u32,
 }
 
@@ -59,17 +60,21 @@ impl Deadline {
         }
     }
 
-    /// The contact at the tool pose `pose_b`, answering before `deadline` (what is left of
-    /// the tick after `reserve` for the rest of the tick).
-    pub(crate) fn sample(
+    /// The contact at the tool pose `pose_b` (taken at `sampled`), answering before
+    /// `deadline` (what is left after `reserve` for the rest of the tick), or exactly
+    /// whatever it costs when `force_exact` (the model in use is too old to stand in).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn query(
         &mut self,
         pair: &mut Pair,
         pose_a: &Pose,
         pose_b: &Pose,
+        sampled: Instant,
         opts: &PenetrationOptions,
         deadline: Instant,
         reserve: Duration,
-    ) -> ContactSample {
+        force_exact: bool,
+    ) -> Answer {
         let start = Instant::now();
         let left = deadline
             .checked_duration_since(start)
@@ -79,22 +84,14 @@ impl Deadline {
         // The exact query's time follows the motion smoothly from tick to tick: 1.5× the
         // recent ones, plus a little for the clock's and the scheduler's noise.
         let predicted = self.exact.iter().copied().fold(f64::INFINITY, f64::min);
-        if 1.5 * predicted + 5e-6 <= left {
+        if force_exact || 1.5 * predicted + 5e-6 <= left {
             let p = pair.penetration_with(pose_a, pose_b, opts);
-            self.exact[self.next] = start.elapsed().as_secs_f64();
+            let t = start.elapsed().as_secs_f64();
+            self.exact[self.next] = t;
             self.next = (self.next + 1) % self.exact.len();
-            return ContactSample {
-                wrench: Wrench {
-                    force: p.force,
-                    torque: p.torque_b,
-                },
-                stiffness: p.stiffness.to_matrix6(),
-                volume: p.volume,
-                volume_bound: p.volume,
-                max_depth: p.max_depth,
-                patches: p.patch_count,
-                budgeted: false,
-            };
+            let mut m = ContactModel::from_penetration(*pose_b, &p, sampled);
+            m.query_seconds = t;
+            return Answer::Model(m);
         }
         let visits = ((0.7 * left / self.per_visit) as u64).max(1);
         let w = pair.penetration_within_with(pose_a, pose_b, visits, opts);
@@ -102,34 +99,40 @@ impl Deadline {
         if w.visits > 16 {
             self.per_visit = 0.8 * self.per_visit + 0.2 * (t / w.visits as f64);
         }
-        if w.complete {
-            // Everything was found in the budget: after enough such ticks in a row the exact
-            // query (cheaper per frame, on its front) is expected to fit. Not at once: the
-            // two paths feel the surface a little apart, and flipping between them every few
-            // ticks would be felt as a buzz.
-            self.complete_run += 1;
-            if self.complete_run >= RETURN_AFTER || self.exact.iter().all(|e| e.is_infinite()) {
-                self.exact = [predicted.min(t); 4];
-                self.complete_run = 0;
-            }
-        } else {
+        if !w.complete {
             self.complete_run = 0;
             // Decay, so that a contact that shrank is eventually tried exactly again.
             for e in &mut self.exact {
                 *e *= 0.999;
             }
+            return Answer::Bound {
+                cap: opts.stiffness * w.upper_bound,
+                found: w.volume,
+                bound: w.upper_bound,
+                depth: w.max_depth,
+            };
         }
-        ContactSample {
-            wrench: Wrench {
-                force: w.force,
-                torque: w.torque_b,
-            },
+        // Everything was found in the budget: after enough such answers in a row the exact
+        // query (cheaper per frame, on its front) is expected to fit. Not at once: flipping
+        // between the two every few ticks would only cost time.
+        self.complete_run += 1;
+        if self.complete_run >= RETURN_AFTER || self.exact.iter().all(|e| e.is_infinite()) {
+            self.exact = [predicted.min(t); 4];
+            self.complete_run = 0;
+        }
+        Answer::Model(ContactModel {
+            pose: *pose_b,
+            force: w.force,
+            torque: w.torque_b,
             stiffness: w.stiffness.to_matrix6(),
             volume: w.volume,
-            volume_bound: w.upper_bound,
             max_depth: w.max_depth,
+            normal: w.normal,
             patches: 0,
-            budgeted: true,
-        }
+            force_cap: f64::INFINITY,
+            sampled,
+            query_seconds: t,
+            seq: 0,
+        })
     }
 }

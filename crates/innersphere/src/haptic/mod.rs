@@ -12,15 +12,23 @@
 //! Units: millimetres, newtons, seconds, kilograms. `docs/HAPTICS.md` explains the model,
 //! the parameters and why the loop is stable and passive.
 
+mod blend;
 pub mod body;
 mod contact;
 pub mod device;
 mod mat6;
+pub mod model;
+pub mod multirate;
 pub mod occlusion;
 pub mod render;
+pub mod servo;
 mod step;
 
 pub use body::{BodyState, RigidBody, TOOTH_DENSITY};
 pub use device::{Coupling, DeviceClass, DeviceLimits};
+pub use model::ContactModel;
+pub use multirate::{CollisionOptions, CollisionStats, MultirateLoop};
 pub use occlusion::{occlude, Joints, Occlusion, OcclusionOptions};
 pub use render::{HapticLoop, HapticOptions, Tick};
+pub use servo::Servo;
+pub use step::Wrench;

@@ -1,17 +1,14 @@
 //! The haptic loop: one call per device tick turns the device's pose into the force to
 //! send, moving a virtual tool that the contact stops at the other body's surface.
 
-use super::body::{rotation_between, BodyState, RigidBody, TOOTH_DENSITY};
-use super::contact::Deadline;
+use super::body::{BodyState, RigidBody, TOOTH_DENSITY};
+use super::contact::{Answer, Deadline};
 use super::device::{Coupling, DeviceClass, DeviceLimits};
-use super::mat6::Mat6;
-use super::step::{contact_damping, implicit_step, Wrench};
+use super::model::ContactModel;
+use super::servo::Servo;
 use crate::{Error, Pair, PenetrationOptions, Pose, Result};
-use glam::{DQuat, DVec3};
+use glam::DVec3;
 use std::time::{Duration, Instant};
-
-/// Millijoules per joule: N·mm is mJ.
-const MJ: f64 = 1e-3;
 
 /// Settings of a [`HapticLoop`]. Units: mm, N, s, kg.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -33,6 +30,13 @@ pub struct HapticOptions {
     pub density: f64,
     /// Contact patches kept per exact query.
     pub max_patches: usize,
+    /// How fast a new contact model may take over from the one in use (N/s: force plus
+    /// torque / 20 mm): the bound on the force step a model update causes (see
+    /// `docs/HAPTICS.md`). Default 50 × the device's maximum force per second.
+    pub model_slew: f64,
+    /// Oldest a contact model may get (s) before the single-thread loop runs the exact query
+    /// whatever it costs (a late tick) rather than go on extrapolating it; default 5 ms.
+    pub max_model_age: f64,
 }
 
 impl HapticOptions {
@@ -49,6 +53,19 @@ impl HapticOptions {
             contact_damping: 1e-3,
             density: TOOTH_DENSITY,
             max_patches: 8,
+            model_slew: 50.0 * class.limits().max_force,
+            max_model_age: 5e-3,
+        }
+    }
+
+    /// The penetration query's options for the contact model: this stiffness and patch
+    /// count, with the linearised wrench.
+    pub(crate) fn penetration(&self) -> PenetrationOptions {
+        PenetrationOptions {
+            stiffness: self.contact_stiffness,
+            max_patches: self.max_patches,
+            linearize: true,
+            ..Default::default()
         }
     }
 
@@ -86,6 +103,15 @@ impl HapticOptions {
             ("the device's maximum force", self.device.max_force),
             ("the device's maximum torque", self.device.max_torque),
         ];
+        let positive = [
+            ("the model slew rate", self.model_slew),
+            ("the largest model age", self.max_model_age),
+        ];
+        for (what, x) in positive {
+            if !(x.is_finite() && x > 0.0) {
+                return bad(what, x);
+            }
+        }
         for (what, x) in nonneg {
             if !(x.is_finite() && x >= 0.0) {
                 return Err(Error::InvalidOption(format!(
@@ -119,15 +145,16 @@ pub struct Tick {
     pub torque: DVec3,
     /// The tool's pose after the tick: what to draw.
     pub tool: Pose,
-    /// Penalty force on the tool (N).
+    /// Penalty force applied to the tool (N): the contact model in use, at the tool's pose.
     pub contact_force: DVec3,
-    /// Penetration volume (mm³): exact, or what the time-critical query found.
+    /// Penetration volume (mm³): of the model in use, or what the time-critical query found
+    /// when it answered this tick.
     pub volume: f64,
     /// Upper bound on the penetration volume (mm³); equals `volume` unless budgeted.
     pub volume_bound: f64,
-    /// Deepest leaf-pair overlap (mm).
+    /// Deepest leaf-pair overlap (mm) of the same.
     pub max_depth: f64,
-    /// Contact patches (exact path only).
+    /// Contact patches of the model in use (exact queries only).
     pub patches: usize,
     /// True when the time-critical query answered because the exact one would not fit.
     pub budgeted: bool,
@@ -135,27 +162,32 @@ pub struct Tick {
     pub compute: f64,
     /// True when the tick took longer than its budget.
     pub late: bool,
+    /// Age of the contact model in use (s): from when the tool pose it answered for was
+    /// taken to this tick (in simulated time for [`HapticLoop`], in real time for
+    /// [`MultirateLoop`](super::MultirateLoop)).
+    pub model_age: f64,
 }
 
-/// The 6-DOF haptic loop: a virtual tool (body B of the pair) coupled to the device's pose by
-/// a spring-damper and pushed out of body A (fixed at its pose) by the penalty wrench of the
-/// penetration query. Call [`tick`](Self::tick) once per device tick, from one thread; it
-/// allocates nothing and takes no lock.
+/// The 6-DOF haptic loop in one thread: a virtual tool (body B of the pair) coupled to the
+/// device's pose by a spring-damper and pushed out of body A (fixed at its pose) by the
+/// penalty wrench of the penetration query, run within each tick. Call
+/// [`tick`](Self::tick) once per device tick, from one thread; it allocates nothing and takes
+/// no lock. When the exact query does not fit the tick's budget, the tick uses the last
+/// complete answer's linearised contact model (see [`ContactModel`]), bounded by the
+/// time-critical query; for contacts whose exact query exceeds the tick period, use
+/// [`MultirateLoop`](super::MultirateLoop), which runs the query in a thread of its own.
 #[derive(Debug)]
 pub struct HapticLoop {
     pair: Pair,
     pose_a: Pose,
-    body: RigidBody,
-    state: BodyState,
-    opts: HapticOptions,
+    tool: Servo,
     penetration: PenetrationOptions,
     deadline: Deadline,
-    /// The device's centre-of-mass point and rotation at the last tick.
-    last_device: Option<(DVec3, DQuat)>,
-    /// The force and torque sent at the last tick (held until this one: zero-order hold).
-    sent: (DVec3, DVec3),
-    energy: f64,
-    energy_max: f64,
+    queries: u64,
+    /// Simulated time (s): the sum of the steps so far.
+    time: f64,
+    /// Simulated time when the model in use was made.
+    model_time: f64,
 }
 
 impl HapticLoop {
@@ -167,27 +199,19 @@ impl HapticLoop {
         Ok(HapticLoop {
             pair,
             pose_a,
-            body,
-            state: BodyState::at_rest(start),
-            penetration: PenetrationOptions {
-                stiffness: opts.contact_stiffness,
-                max_patches: opts.max_patches,
-                linearize: true,
-                ..Default::default()
-            },
-            opts,
+            tool: Servo::start(body, start, opts),
+            penetration: opts.penetration(),
             deadline: Deadline::new(),
-            last_device: None,
-            sent: (DVec3::ZERO, DVec3::ZERO),
-            energy: 0.0,
-            energy_max: 0.0,
+            queries: 0,
+            time: 0.0,
+            model_time: 0.0,
         })
     }
 
     /// One device tick: the device's pose in (B's pose in the world, as read from the device
     /// this tick), the force and torque to send out, with the tool's new pose.
     pub fn tick(&mut self, device: &Pose) -> Tick {
-        self.tick_step(device, 1.0 / self.opts.rate)
+        self.tick_step(device, 1.0 / self.tool.opts.rate)
     }
 
     /// [`tick`](Self::tick) with the time since the last tick measured by the caller
@@ -196,91 +220,72 @@ impl HapticLoop {
     /// than ten periods, is replaced by one period.
     pub fn tick_step(&mut self, device: &Pose, dt: f64) -> Tick {
         let start = Instant::now();
-        let period = 1.0 / self.opts.rate;
-        let h = if dt.is_finite() && dt > 0.0 && dt <= 10.0 * period {
-            dt
-        } else {
-            period
-        };
-        let com = self.body.center_of_mass;
-        let xd = device.transform_point(com);
-        let qd = device.rotation;
-        // Device velocity by backward difference; the energy the held force and torque did
-        // on the hand since the last tick (zero-order hold: constant over the tick).
-        let (vd, wd) = match self.last_device {
-            Some((x0, q0)) => {
-                let dx = xd - x0;
-                let dth = rotation_between(q0, qd);
-                self.energy += (self.sent.0.dot(dx) + self.sent.1.dot(dth)) * MJ;
-                self.energy_max = self.energy_max.max(self.energy);
-                (dx / h, dth / h)
-            }
-            None => (DVec3::ZERO, DVec3::ZERO),
-        };
-        self.last_device = Some((xd, qd));
-
-        let budget = Duration::from_secs_f64(self.opts.budget);
-        let contact = self.deadline.sample(
+        let sensed = self.tool.sense(device, dt);
+        let opts = self.tool.opts;
+        let budget = Duration::from_secs_f64(opts.budget);
+        let pose = self.tool.state.pose;
+        // Ages in simulated time: a loop run faster than real time ages its model alike.
+        self.time += sensed.h;
+        let stale = self.time - self.model_time > opts.max_model_age;
+        let mut answer = self.deadline.query(
             &mut self.pair,
             &self.pose_a,
-            &self.state.pose,
+            &pose,
+            start,
             &self.penetration,
             start + budget,
             Duration::from_micros(3),
+            stale,
         );
-
-        let c = self.opts.coupling;
-        let xt = self.state.pose.transform_point(com);
-        let err = rotation_between(self.state.pose.rotation, qd);
-        let spring = (xd - xt) * c.stiffness + (vd - self.state.velocity) * c.damping;
-        let twist =
-            err * c.angular_stiffness + (wd - self.state.angular_velocity) * c.angular_damping;
-        // Contact damping β·K on the tool's own velocity (A is fixed).
-        let (cd, mut damping) =
-            contact_damping(&contact.stiffness, self.opts.contact_damping, &self.state);
-        let w = Wrench {
-            force: spring + contact.wrench.force + cd.force,
-            torque: twist + contact.wrench.torque + cd.torque,
+        // Leaf pairs found where the model in use has no contact: the model cannot stand in.
+        if let Answer::Bound { found, .. } = answer {
+            if found > 0.0 && !self.tool.blend.target().touching() {
+                answer = self.deadline.query(
+                    &mut self.pair,
+                    &self.pose_a,
+                    &pose,
+                    start,
+                    &self.penetration,
+                    start,
+                    Duration::ZERO,
+                    true,
+                );
+            }
+        }
+        let (volume, volume_bound, max_depth, budgeted) = match answer {
+            Answer::Model(mut m) => {
+                self.queries += 1;
+                m.seq = self.queries;
+                self.model_time = self.time;
+                self.tool.new_model(m);
+                (m.volume, m.volume, m.max_depth, false)
+            }
+            Answer::Bound {
+                cap,
+                found,
+                bound,
+                depth,
+            } => {
+                self.tool.blend.set_cap(cap);
+                (found, bound, depth, true)
+            }
         };
-        let mut stiffness: Mat6 = contact.stiffness;
-        for i in 0..6 {
-            let (k, b) = if i < 3 {
-                (c.stiffness, c.damping)
-            } else {
-                (c.angular_stiffness, c.angular_damping)
-            };
-            stiffness[i][i] += k;
-            damping[i][i] += b;
-        }
-        if !implicit_step(&self.body, &mut self.state, h, w, &stiffness, &damping) {
-            // Non-finite input (a NaN device pose): the tool stays where it was, at rest.
-            self.state.velocity = DVec3::ZERO;
-            self.state.angular_velocity = DVec3::ZERO;
-        }
-
-        // What the hand feels: the coupling after the step, pulling the device towards the
-        // tool, clamped to the device's limits.
-        let xt = self.state.pose.transform_point(com);
-        let err = rotation_between(self.state.pose.rotation, qd);
-        let f = -((xd - xt) * c.stiffness + (vd - self.state.velocity) * c.damping);
-        let t =
-            -(err * c.angular_stiffness + (wd - self.state.angular_velocity) * c.angular_damping);
-        let force = clamp(f, self.opts.device.max_force);
-        let torque = clamp(t, self.opts.device.max_torque);
-        self.sent = (force, torque);
+        let sent = self.tool.step(&sensed);
         let compute = start.elapsed().as_secs_f64();
+        let model = self.tool.blend.target();
         Tick {
-            force,
-            torque,
-            tool: self.state.pose,
-            contact_force: contact.wrench.force,
-            volume: contact.volume,
-            volume_bound: contact.volume_bound,
-            max_depth: contact.max_depth,
-            patches: contact.patches,
-            budgeted: contact.budgeted,
+            force: sent.force,
+            torque: sent.torque,
+            tool: self.tool.state.pose,
+            contact_force: sent.contact.force,
+            volume,
+            volume_bound,
+            max_depth,
+            patches: model.patches,
+            budgeted,
             compute,
-            late: compute > self.opts.budget,
+            late: compute > opts.budget,
+            model_age: self.time - self.model_time,
         }
     }
 
@@ -288,43 +293,36 @@ impl HapticLoop {
     /// held force times the device's displacement (and torque times rotation). Negative when
     /// the hand has put more in than it got back; a passive loop keeps it at most zero.
     pub fn energy_to_user(&self) -> f64 {
-        self.energy
+        self.tool.energy_to_user()
     }
 
     /// The largest value [`energy_to_user`](Self::energy_to_user) has had.
     pub fn energy_to_user_max(&self) -> f64 {
-        self.energy_max
+        self.tool.energy_to_user_max()
     }
 
     /// The tool's state.
     pub fn state(&self) -> &BodyState {
-        &self.state
+        &self.tool.state
     }
 
     /// The tool's mass properties.
     pub fn body(&self) -> &RigidBody {
-        &self.body
+        &self.tool.body
     }
 
     /// The options.
     pub fn options(&self) -> &HapticOptions {
-        &self.opts
+        &self.tool.opts
+    }
+
+    /// The contact model in use (the newest complete answer).
+    pub fn model(&self) -> &ContactModel {
+        self.tool.blend.target()
     }
 
     /// The pair (its patches after an exact tick: [`Pair::patches`]).
     pub fn pair(&self) -> &Pair {
         &self.pair
-    }
-}
-
-/// `v` shortened to at most `max` (its direction kept).
-fn clamp(v: DVec3, max: f64) -> DVec3 {
-    let l = v.length();
-    if l > max && l > 0.0 {
-        v * (max / l)
-    } else if l.is_finite() {
-        v
-    } else {
-        DVec3::ZERO
     }
 }

@@ -12,8 +12,10 @@ const KG_MM: f64 = 1e-3;
 
 /// A force and a torque about the body's centre of mass (N, N·mm; world frame).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub(crate) struct Wrench {
+pub struct Wrench {
+    /// Force (N).
     pub force: DVec3,
+    /// Torque about the body's centre of mass (N·mm).
     pub torque: DVec3,
 }
 

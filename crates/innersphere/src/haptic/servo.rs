@@ -1,0 +1,245 @@
+//! The servo side of a haptic loop, shared by the single-thread loop and the multi-rate one,
+//! and public for applications that run their collision queries themselves: the device's
+//! motion and the energy it exchanges with the hand, the tool moved by one implicit step
+//! under the coupling and the contact model in use, and the force sent back.
+
+use super::blend::Blend;
+use super::body::{rotation_between, BodyState, RigidBody};
+use super::mat6::Mat6;
+use super::model::ContactModel;
+use super::step::{contact_damping, implicit_step, Wrench};
+use super::{HapticOptions, Tick};
+use crate::{Pose, Result};
+use glam::{DQuat, DVec3};
+use std::time::Instant;
+
+/// Millijoules per joule: N·mm is mJ.
+const MJ: f64 = 1e-3;
+
+/// The device as sensed this tick.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Sensed {
+    /// The device's centre-of-mass point and rotation (B's centre of mass carried by it).
+    x: DVec3,
+    q: DQuat,
+    /// Its velocities, by backward difference.
+    v: DVec3,
+    w: DVec3,
+    /// The step (s).
+    pub h: f64,
+}
+
+/// What the servo step sends and applied.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Sent {
+    /// Force and torque to the device, clamped.
+    pub force: DVec3,
+    pub torque: DVec3,
+    /// The contact wrench applied to the tool this tick.
+    pub contact: Wrench,
+}
+
+/// The servo side of a haptic loop: the tool (body B) coupled to the device, the contact
+/// model in use and the energy exchanged with the hand. [`HapticLoop`](super::HapticLoop)
+/// and [`MultirateLoop`](super::MultirateLoop) drive one; an application with collision
+/// queries of its own feeds it [`ContactModel`]s through [`tick`](Self::tick). A new model
+/// is blended in at the options' [`model_slew`](HapticOptions::model_slew), never switched.
+#[derive(Debug, Clone)]
+pub struct Servo {
+    pub(crate) body: RigidBody,
+    pub(crate) state: BodyState,
+    pub(crate) opts: HapticOptions,
+    pub(crate) blend: Blend,
+    last_device: Option<(DVec3, DQuat)>,
+    /// The force and torque sent at the last tick (held until this one: zero-order hold).
+    sent: (DVec3, DVec3),
+    energy: f64,
+    energy_max: f64,
+}
+
+impl Servo {
+    /// The tool with mass properties `body` at rest at `start`, no contact known yet.
+    /// Fails on bad options or body.
+    pub fn new(body: RigidBody, start: Pose, opts: HapticOptions) -> Result<Servo> {
+        opts.check()?;
+        body.check()?;
+        Ok(Servo::start(body, start, opts))
+    }
+
+    /// One device tick: the device's pose in (`dt` as in
+    /// [`HapticLoop::tick_step`](super::HapticLoop::tick_step)), with `model` the newest
+    /// contact model when one arrived since the last tick; the force to send out and the
+    /// tool's new pose. Allocates nothing, takes no lock.
+    pub fn tick(&mut self, device: &Pose, dt: f64, model: Option<&ContactModel>) -> Tick {
+        let start = Instant::now();
+        let sensed = self.sense(device, dt);
+        if let Some(m) = model {
+            self.new_model(*m);
+        }
+        let sent = self.step(&sensed);
+        let compute = start.elapsed().as_secs_f64();
+        self.tick_of(&sent, compute, start)
+    }
+
+    /// The [`Tick`] of a servo step whose model came from the collision thread's side.
+    pub(crate) fn tick_of(&self, sent: &Sent, compute: f64, now: Instant) -> Tick {
+        let model = self.blend.target();
+        let volume_bound = if model.force_cap.is_finite() {
+            model.force_cap / self.opts.contact_stiffness
+        } else {
+            model.volume
+        };
+        Tick {
+            force: sent.force,
+            torque: sent.torque,
+            tool: self.state.pose,
+            contact_force: sent.contact.force,
+            volume: model.volume,
+            volume_bound,
+            max_depth: model.max_depth,
+            patches: model.patches,
+            budgeted: model.force_cap.is_finite(),
+            compute,
+            late: compute > self.opts.budget,
+            model_age: model.age(now),
+        }
+    }
+
+    /// Energy the device has delivered to the hand so far (J; see
+    /// [`HapticLoop::energy_to_user`](super::HapticLoop::energy_to_user)).
+    pub fn energy_to_user(&self) -> f64 {
+        self.energy
+    }
+
+    /// The largest value [`energy_to_user`](Self::energy_to_user) has had.
+    pub fn energy_to_user_max(&self) -> f64 {
+        self.energy_max
+    }
+
+    /// The tool's state.
+    pub fn state(&self) -> &BodyState {
+        &self.state
+    }
+
+    /// The tool's mass properties.
+    pub fn body(&self) -> &RigidBody {
+        &self.body
+    }
+
+    /// The options.
+    pub fn options(&self) -> &HapticOptions {
+        &self.opts
+    }
+
+    /// The newest contact model.
+    pub fn model(&self) -> &ContactModel {
+        self.blend.target()
+    }
+
+    pub(crate) fn start(body: RigidBody, start: Pose, opts: HapticOptions) -> Servo {
+        Servo {
+            body,
+            state: BodyState::at_rest(start),
+            opts,
+            blend: Blend::new(ContactModel::none(start)),
+            last_device: None,
+            sent: (DVec3::ZERO, DVec3::ZERO),
+            energy: 0.0,
+            energy_max: 0.0,
+        }
+    }
+
+    /// Reads the device's pose: the step (`dt` when positive, finite and at most ten
+    /// periods, else one period), the device's velocity, and the energy the held force did
+    /// on the hand since the last tick (zero-order hold: constant over the tick).
+    pub(crate) fn sense(&mut self, device: &Pose, dt: f64) -> Sensed {
+        let period = 1.0 / self.opts.rate;
+        let h = if dt.is_finite() && dt > 0.0 && dt <= 10.0 * period {
+            dt
+        } else {
+            period
+        };
+        let x = device.transform_point(self.body.center_of_mass);
+        let q = device.rotation;
+        let (v, w) = match self.last_device {
+            Some((x0, q0)) => {
+                let dx = x - x0;
+                let dth = rotation_between(q0, q);
+                self.energy += (self.sent.0.dot(dx) + self.sent.1.dot(dth)) * MJ;
+                self.energy_max = self.energy_max.max(self.energy);
+                (dx / h, dth / h)
+            }
+            None => (DVec3::ZERO, DVec3::ZERO),
+        };
+        self.last_device = Some((x, q));
+        Sensed { x, q, v, w, h }
+    }
+
+    /// Starts blending towards a new contact model.
+    pub(crate) fn new_model(&mut self, m: ContactModel) {
+        self.blend
+            .switch_to(m, &self.state.pose, self.body.center_of_mass);
+    }
+
+    /// One implicit step of the tool under the coupling to the sensed device and the contact
+    /// model in use; the force to send.
+    pub(crate) fn step(&mut self, d: &Sensed) -> Sent {
+        let com = self.body.center_of_mass;
+        let c = self.opts.coupling;
+        let max_step = self.opts.model_slew * d.h;
+        let (contact, kc) = self.blend.wrench_at(&self.state.pose, com, max_step);
+        let xt = self.state.pose.transform_point(com);
+        let err = rotation_between(self.state.pose.rotation, d.q);
+        let spring = (d.x - xt) * c.stiffness + (d.v - self.state.velocity) * c.damping;
+        let twist =
+            err * c.angular_stiffness + (d.w - self.state.angular_velocity) * c.angular_damping;
+        // Contact damping β·K on the tool's own velocity (A is fixed).
+        let (cd, mut damping) = contact_damping(&kc, self.opts.contact_damping, &self.state);
+        let w = Wrench {
+            force: spring + contact.force + cd.force,
+            torque: twist + contact.torque + cd.torque,
+        };
+        let mut stiffness: Mat6 = kc;
+        for i in 0..6 {
+            let (k, b) = if i < 3 {
+                (c.stiffness, c.damping)
+            } else {
+                (c.angular_stiffness, c.angular_damping)
+            };
+            stiffness[i][i] += k;
+            damping[i][i] += b;
+        }
+        if !implicit_step(&self.body, &mut self.state, d.h, w, &stiffness, &damping) {
+            // Non-finite input (a NaN device pose): the tool stays where it was, at rest.
+            self.state.velocity = DVec3::ZERO;
+            self.state.angular_velocity = DVec3::ZERO;
+        }
+        // What the hand feels: the coupling after the step, pulling the device towards the
+        // tool, clamped to the device's limits.
+        let xt = self.state.pose.transform_point(com);
+        let err = rotation_between(self.state.pose.rotation, d.q);
+        let f = -((d.x - xt) * c.stiffness + (d.v - self.state.velocity) * c.damping);
+        let t =
+            -(err * c.angular_stiffness + (d.w - self.state.angular_velocity) * c.angular_damping);
+        let force = clamp(f, self.opts.device.max_force);
+        let torque = clamp(t, self.opts.device.max_torque);
+        self.sent = (force, torque);
+        Sent {
+            force,
+            torque,
+            contact,
+        }
+    }
+}
+
+/// `v` shortened to at most `max` (its direction kept).
+fn clamp(v: DVec3, max: f64) -> DVec3 {
+    let l = v.length();
+    if l > max && l > 0.0 {
+        v * (max / l)
+    } else if l.is_finite() {
+        v
+    } else {
+        DVec3::ZERO
+    }
+}

@@ -90,6 +90,7 @@ pub struct Session {
 }
 
 /// Either loop.
+#[allow(clippy::large_enum_variant)] // one per session, on the stack
 enum Looper {
     Single(HapticLoop),
     Servo(MultirateLoop),

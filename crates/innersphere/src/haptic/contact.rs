@@ -19,6 +19,8 @@ const RETURN_AFTER: u32 = 50;
 
 /// What a query round learnt.
 #[derive(Debug, Clone, Copy)]
+// Not boxed: a box would allocate once per query on the real-time path.
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum Answer {
     /// A complete answer (exact, or a time-critical query that finished): the new model.
     Model(ContactModel),

@@ -4,8 +4,10 @@
 //! `(1 − s)·old(x) + s·new(x)` of both models evaluated at the tool's current pose `x`, and
 //! `s` rises from 0 to 1 no faster than keeps the change it causes per tick under a bound
 //! (a slew limit on the switch only: the force still follows the tool's motion at once, through
-//! each model's linearisation). Both are pushes (each model is unilateral), so the blend never
-//! pulls either.
+//! each model's linearisation). Models that agree at the tool's pose (consecutive
+//! linearisations of one contact) switch at once; the bound acts where they do not: a contact
+//! the last model did not know of, a time-critical bound. Both are pushes (each model is
+//! unilateral), so the blend never pulls either.
 
 use super::device::LEVER;
 use super::mat6::Mat6;
@@ -50,26 +52,16 @@ impl Blend {
         self.to.force_cap = cap;
     }
 
-    /// Blends towards `next` from what is applied now at the tool pose `pose` (the blend in
-    /// progress is frozen into one model there, so that the wrench stays continuous).
-    pub(crate) fn switch_to(&mut self, next: ContactModel, pose: &Pose, com: DVec3) {
-        if self.s < 1.0 {
-            let (w, k) = self.mix(pose, com, self.s);
-            self.from = ContactModel {
-                pose: *pose,
-                force: w.force,
-                torque: w.torque,
-                stiffness: k,
-                volume: (1.0 - self.s) * self.from.volume + self.s * self.to.volume,
-                max_depth: self.from.max_depth.max(self.to.max_depth),
-                force_cap: f64::INFINITY,
-                ..self.to
-            };
-        } else {
+    /// Blends towards `next`: from the model in use when no blend is in progress; else the
+    /// blend goes on from where it started, towards `next` instead of the model it was
+    /// heading for (each model is a linearisation about its own pose: the newest is the
+    /// best target, and the start is what the tool last felt in full).
+    pub(crate) fn switch_to(&mut self, next: ContactModel) {
+        if self.s >= 1.0 {
             self.from = self.to;
+            self.s = 0.0;
         }
         self.to = next;
-        self.s = 0.0;
     }
 
     /// The wrench (and stiffness) at `pose` for this tick, advancing the blend so that it
@@ -110,5 +102,81 @@ impl Blend {
             },
             k,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Instant;
+
+    /// A contact pushing up with `f` N at the identity pose, stiffness 100 N/mm along z.
+    fn pushing(f: f64) -> ContactModel {
+        let mut k = [[0.0; 6]; 6];
+        k[2][2] = 100.0;
+        ContactModel {
+            force: DVec3::new(0.0, 0.0, f),
+            volume: f / 10.0,
+            stiffness: k,
+            ..ContactModel::none(Pose::IDENTITY)
+        }
+    }
+
+    #[test]
+    fn a_model_that_disagrees_comes_in_at_the_slew_and_one_that_agrees_at_once() {
+        let at = Pose::IDENTITY;
+        let mut b = Blend::new(ContactModel::none(at));
+        b.switch_to(pushing(2.0));
+        // 2 N apart at the tool's pose: 0.25 N per tick, in eight ticks.
+        let mut last = 0.0;
+        for i in 1..=8 {
+            let (w, _) = b.wrench_at(&at, DVec3::ZERO, 0.25);
+            let step = w.force.z - last;
+            assert!(
+                step > 0.0 && step <= 0.25 + 1e-12,
+                "tick {i}: step {step} N"
+            );
+            last = w.force.z;
+        }
+        assert!((last - 2.0).abs() < 1e-12, "{last}");
+        // The same contact linearised about a pose 0.01 mm lower: it agrees where the tool
+        // is, and is used at once.
+        let lower = ContactModel {
+            pose: Pose::from_translation(DVec3::new(0.0, 0.0, -0.01)),
+            force: DVec3::new(0.0, 0.0, 3.0),
+            sampled: Instant::now(),
+            ..pushing(3.0)
+        };
+        b.switch_to(lower);
+        let (w, _) = b.wrench_at(&at, DVec3::ZERO, 0.25);
+        assert_eq!(w.force, lower.wrench_at(&at, DVec3::ZERO).0.force);
+        assert!((w.force.z - 2.0).abs() < 1e-12);
+        // A blend in progress goes on towards the newest model.
+        b.switch_to(pushing(0.5));
+        b.switch_to(pushing(1.0));
+        let (w, _) = b.wrench_at(&at, DVec3::ZERO, 0.25);
+        assert!((w.force.z - 1.75).abs() < 1e-12, "{}", w.force.z);
+    }
+
+    #[test]
+    fn a_model_never_pulls() {
+        let m = pushing(1.0);
+        // 0.02 mm up: the linearised push would be 1 − 100 × 0.02 = −1 N.
+        let up = Pose::from_translation(DVec3::new(0.0, 0.0, 0.02));
+        let (w, k) = m.wrench_at(&up, DVec3::ZERO);
+        assert_eq!(w.force, DVec3::ZERO);
+        assert_eq!(k[2][2], 0.0);
+        // 0.008 mm up: 0.2 N left of 1, in the fade (below a quarter): 0.2 × 0.8.
+        let near = Pose::from_translation(DVec3::new(0.0, 0.0, 0.008));
+        let (w, _) = m.wrench_at(&near, DVec3::ZERO);
+        assert!((w.force.z - 0.2 * 0.8).abs() < 1e-9, "{}", w.force.z);
+        // Deeper pushes harder, uncapped unless a bound says otherwise.
+        let down = Pose::from_translation(DVec3::new(0.0, 0.0, -0.01));
+        assert!((m.wrench_at(&down, DVec3::ZERO).0.force.z - 2.0).abs() < 1e-12);
+        let capped = ContactModel {
+            force_cap: 1.5,
+            ..m
+        };
+        assert!((capped.wrench_at(&down, DVec3::ZERO).0.force.z - 1.5).abs() < 1e-12);
     }
 }

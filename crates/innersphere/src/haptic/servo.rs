@@ -177,8 +177,7 @@ impl Servo {
 
     /// Starts blending towards a new contact model.
     pub(crate) fn new_model(&mut self, m: ContactModel) {
-        self.blend
-            .switch_to(m, &self.state.pose, self.body.center_of_mass);
+        self.blend.switch_to(m);
     }
 
     /// One implicit step of the tool under the coupling to the sensed device and the contact

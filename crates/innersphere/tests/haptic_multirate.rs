@@ -68,18 +68,21 @@ fn penetration(o: &HapticOptions) -> PenetrationOptions {
     }
 }
 
-/// A device path: from above the slab, moves (smooth or in one jerk) to points between
-/// 0.5 mm above and 1.5 mm inside it, turned a little, with rests.
-fn device_path(moves: &[((f64, f64, f64), (f64, f64), usize, bool)], rest: usize) -> Vec<Pose> {
+/// One move of the device: to `(x, y, into)` (mm; `into` below the slab's top), turned
+/// `(rx, ry)` (rad), in this many ticks.
+type Move = ((f64, f64, f64), (f64, f64), usize);
+
+/// A device path: from above the slab, smooth moves to points between 0.5 mm above and
+/// 1.5 mm inside it, turned a little, with rests.
+fn device_path(moves: &[Move], rest: usize) -> Vec<Pose> {
     let mut out = vec![on_slab(-0.5)];
-    for &((x, y, into), (rx, ry), n, jerk) in moves {
+    for &((x, y, into), (rx, ry), n) in moves {
         let from = *out.last().unwrap();
         let to = Pose::new(
             DVec3::new(x, y, on_slab(into).translation.z),
             DQuat::from_rotation_x(rx) * DQuat::from_rotation_y(ry),
         )
         .unwrap();
-        let n = if jerk { 1 } else { n };
         for i in 1..=n {
             let s = i as f64 / n as f64;
             out.push(Pose {
@@ -159,7 +162,7 @@ proptest! {
         o.density = grams * 1e-3 / 32.0;
         let moves: Vec<_> = moves
             .into_iter()
-            .map(|(to, turn, seconds)| (to, turn, (seconds * rate) as usize, false))
+            .map(|(to, turn, seconds)| (to, turn, (seconds * rate) as usize))
             .collect();
         let rest = (0.05 * rate) as usize;
         let path = device_path(&moves, rest);
@@ -182,9 +185,9 @@ fn stale_models_hold_the_tool_where_fresh_ones_do_without_a_kick() {
     o.rate = 4000.0;
     o.budget = 1.0;
     let moves = [
-        ((0.0, 0.0, 1.0), (0.0, 0.0), 2000, false),
-        ((2.0, 0.0, 1.0), (0.0, 0.02), 2000, false),
-        ((2.0, 0.0, -0.5), (0.0, 0.0), 1000, false),
+        ((0.0, 0.0, 1.0), (0.0, 0.0), 2000),
+        ((2.0, 0.0, 1.0), (0.0, 0.02), 2000),
+        ((2.0, 0.0, -0.5), (0.0, 0.0), 1000),
     ];
     let path = device_path(&moves, 1000);
     let (fresh, fresh_step, fresh_max) = stale_run(o, &path, 1);
@@ -268,9 +271,9 @@ fn a_slow_collision_thread_keeps_the_loop_passive_smooth_and_out_of_the_slab() {
     o.rate = 2000.0;
     o.budget = 1.0 / o.rate;
     let moves = [
-        ((0.0, 0.0, 1.0), (0.0, 0.0), 1000, false),
-        ((1.5, 0.5, 1.0), (0.02, 0.0), 1000, false),
-        ((1.5, 0.5, -0.5), (0.0, 0.0), 600, false),
+        ((0.0, 0.0, 1.0), (0.0, 0.0), 1000),
+        ((1.5, 0.5, 1.0), (0.02, 0.0), 1000),
+        ((1.5, 0.5, -0.5), (0.0, 0.0), 600),
     ];
     let path = device_path(&moves, 400);
     // The reference: the exact query in the tick.

@@ -95,7 +95,9 @@
 #define IST_DEVICE_OMEGA 1
 
 /*
- A haptic loop (opaque; one thread at a time: the device's servo thread).
+ A haptic loop (opaque). ist_haptic_tick and ist_haptic_energy are called from one thread
+ at a time: the device's servo thread. With a collision thread, that thread is the
+ library's own; the caller never calls into it.
  */
 typedef struct ist_haptic ist_haptic;
 
@@ -187,6 +189,23 @@ typedef struct ist_haptic_params {
    */
   double max_model_age;
   /*
+   1: the penetration query runs in a collision thread of its own, started by
+   ist_haptic_new and joined by ist_haptic_free, and each tick uses the newest contact
+   model it published (the multi-rate loop, for 4–10 kHz servo rates or contacts whose
+   query exceeds a tick); 0: the query runs inside ist_haptic_tick.
+   */
+  int collision_thread;
+  /*
+   With collision_thread: seconds the collision thread sleeps before each query (0; a
+   stress knob standing for a slow machine).
+   */
+  double collision_delay;
+  /*
+   With collision_thread: most time one collision query may take (s) before the
+   time-critical query bounds the model in use instead.
+   */
+  double collision_budget;
+  /*
    World pose of body A (fixed).
    */
   struct ist_pose pose_a;
@@ -240,6 +259,11 @@ typedef struct ist_haptic_output {
    1 when the tick took longer than its budget.
    */
   int late;
+  /*
+   Age of the contact model the tick used (s): since the tool pose its query answered
+   for was taken (simulated time without a collision thread, real time with one).
+   */
+  double model_age_seconds;
 } ist_haptic_output;
 
 /*
@@ -437,7 +461,17 @@ int ist_haptic_tick(struct ist_haptic *haptic, const struct ist_pose *device, do
 int ist_haptic_energy(const struct ist_haptic *haptic, double *now, double *max);
 
 /*
- Frees a haptic loop (NULL is accepted).
+ The contact models the collision thread has published so far, through `out` (0 without
+ a collision thread). Never waits; from the servo thread or any other.
+
+ # Safety
+ Every pointer is NULL or valid.
+ */
+int ist_haptic_collision_queries(const struct ist_haptic *haptic, uint64_t *out);
+
+/*
+ Frees a haptic loop (NULL is accepted); with a collision thread, stops and joins it
+ first (waiting for its query in progress to end).
 
  # Safety
  `haptic` is NULL or from ist_haptic_new, not freed before.

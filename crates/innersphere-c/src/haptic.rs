@@ -4,7 +4,10 @@ use crate::error::{pointer, status, Fail};
 use crate::query::ist_pair;
 use crate::types::ist_pose;
 use crate::{mutable, reference};
-use innersphere::haptic::{Coupling, DeviceClass, DeviceLimits, HapticLoop, HapticOptions};
+use innersphere::haptic::{
+    CollisionOptions, Coupling, DeviceClass, DeviceLimits, HapticLoop, HapticOptions,
+    MultirateLoop, Tick,
+};
 use innersphere::Pair;
 use std::ffi::c_int;
 
@@ -48,15 +51,34 @@ pub struct ist_haptic_params {
     /// Oldest a contact model may get (s) before the single-thread loop runs the exact query
     /// whatever it costs.
     pub max_model_age: f64,
+    /// 1: the penetration query runs in a collision thread of its own, started by
+    /// ist_haptic_new and joined by ist_haptic_free, and each tick uses the newest contact
+    /// model it published (the multi-rate loop, for 4–10 kHz servo rates or contacts whose
+    /// query exceeds a tick); 0: the query runs inside ist_haptic_tick.
+    pub collision_thread: c_int,
+    /// With collision_thread: seconds the collision thread sleeps before each query (0; a
+    /// stress knob standing for a slow machine).
+    pub collision_delay: f64,
+    /// With collision_thread: most time one collision query may take (s) before the
+    /// time-critical query bounds the model in use instead.
+    pub collision_budget: f64,
     /// World pose of body A (fixed).
     pub pose_a: ist_pose,
     /// Where the tool (body B) starts, at rest.
     pub start: ist_pose,
 }
 
-/// A haptic loop (opaque; one thread at a time: the device's servo thread).
+/// A haptic loop (opaque). ist_haptic_tick and ist_haptic_energy are called from one thread
+/// at a time: the device's servo thread. With a collision thread, that thread is the
+/// library's own; the caller never calls into it.
 pub struct ist_haptic {
-    hl: HapticLoop,
+    hl: Loop,
+}
+
+/// Either loop.
+enum Loop {
+    Single(Box<HapticLoop>),
+    Multirate(Box<MultirateLoop>),
 }
 
 /// What one tick did (world frame).
@@ -83,6 +105,9 @@ pub struct ist_haptic_output {
     pub budgeted: c_int,
     /// 1 when the tick took longer than its budget.
     pub late: c_int,
+    /// Age of the contact model the tick used (s): since the tool pose its query answered
+    /// for was taken (simulated time without a collision thread, real time with one).
+    pub model_age_seconds: f64,
 }
 
 /// The defaults of a device class (IST_DEVICE_TOUCH or IST_DEVICE_OMEGA) at 1 kHz, with A
@@ -123,6 +148,9 @@ pub unsafe extern "C" fn ist_haptic_params_default(
             density: o.density,
             model_slew: o.model_slew,
             max_model_age: o.max_model_age,
+            collision_thread: 0,
+            collision_delay: 0.0,
+            collision_budget: CollisionOptions::default().budget,
             pose_a: id,
             start: id,
         };
@@ -166,7 +194,25 @@ pub unsafe extern "C" fn ist_haptic_new(
             max_model_age: c.max_model_age,
         };
         let own = Pair::new(p.pair.tree_a().clone(), p.pair.tree_b().clone());
-        let hl = HapticLoop::new(own, c.pose_a.to_pose()?, c.start.to_pose()?, opts)?;
+        let (pose_a, start) = (c.pose_a.to_pose()?, c.start.to_pose()?);
+        let hl = match c.collision_thread {
+            0 => Loop::Single(Box::new(HapticLoop::new(own, pose_a, start, opts)?)),
+            1 => {
+                let collision = CollisionOptions {
+                    delay: c.collision_delay,
+                    budget: c.collision_budget,
+                    ..Default::default()
+                };
+                Loop::Multirate(Box::new(MultirateLoop::spawn(
+                    own, pose_a, start, opts, collision,
+                )?))
+            }
+            n => {
+                return Err(Fail::arg(format!(
+                    "collision_thread must be 0 or 1, not {n}"
+                )))
+            }
+        };
         Ok(Box::new(ist_haptic { hl }))
     })
 }
@@ -191,7 +237,10 @@ pub unsafe extern "C" fn ist_haptic_tick(
         let h = unsafe { mutable(haptic, "haptic") }?;
         let d = unsafe { reference(device, "device") }?.to_pose()?;
         let out = unsafe { mutable(out, "out") }?;
-        let t = h.hl.tick_step(&d, dt);
+        let t: Tick = match &mut h.hl {
+            Loop::Single(l) => l.tick_step(&d, dt),
+            Loop::Multirate(l) => l.tick_step(&d, dt),
+        };
         *out = ist_haptic_output {
             force: t.force.to_array(),
             torque: t.torque.to_array(),
@@ -203,6 +252,7 @@ pub unsafe extern "C" fn ist_haptic_tick(
             compute_seconds: t.compute,
             budgeted: t.budgeted as c_int,
             late: t.late as c_int,
+            model_age_seconds: t.model_age,
         };
         Ok(())
     })
@@ -221,23 +271,50 @@ pub unsafe extern "C" fn ist_haptic_energy(
 ) -> c_int {
     status(|| {
         let h = unsafe { reference(haptic, "haptic") }?;
+        let (e, e_max) = match &h.hl {
+            Loop::Single(l) => (l.energy_to_user(), l.energy_to_user_max()),
+            Loop::Multirate(l) => (l.energy_to_user(), l.energy_to_user_max()),
+        };
         if let Some(n) = unsafe { now.as_mut() } {
-            *n = h.hl.energy_to_user();
+            *n = e;
         }
         if let Some(m) = unsafe { max.as_mut() } {
-            *m = h.hl.energy_to_user_max();
+            *m = e_max;
         }
         Ok(())
     })
 }
 
-/// Frees a haptic loop (NULL is accepted).
+/// The contact models the collision thread has published so far, through `out` (0 without
+/// a collision thread). Never waits; from the servo thread or any other.
+///
+/// # Safety
+/// Every pointer is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn ist_haptic_collision_queries(
+    haptic: *const ist_haptic,
+    out: *mut u64,
+) -> c_int {
+    status(|| {
+        let h = unsafe { reference(haptic, "haptic") }?;
+        let out = unsafe { mutable(out, "out") }?;
+        *out = match &h.hl {
+            Loop::Single(_) => 0,
+            Loop::Multirate(l) => l.collision_queries(),
+        };
+        Ok(())
+    })
+}
+
+/// Frees a haptic loop (NULL is accepted); with a collision thread, stops and joins it
+/// first (waiting for its query in progress to end).
 ///
 /// # Safety
 /// `haptic` is NULL or from ist_haptic_new, not freed before.
 #[no_mangle]
 pub unsafe extern "C" fn ist_haptic_free(haptic: *mut ist_haptic) {
     if !haptic.is_null() {
-        let _ = std::panic::catch_unwind(|| drop(unsafe { Box::from_raw(haptic) }));
+        let free = || drop(unsafe { Box::from_raw(haptic) });
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(free));
     }
 }

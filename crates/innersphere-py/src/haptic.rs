@@ -2,7 +2,9 @@
 
 use crate::convert::{error, pose, pose44, pose7, pose_or_identity, vec3};
 use crate::pair::Pair;
-use innersphere::haptic::{DeviceClass, HapticLoop, HapticOptions};
+use innersphere::haptic::{
+    CollisionOptions, DeviceClass, HapticLoop, HapticOptions, MultirateLoop,
+};
 use numpy::PyArray1;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -77,6 +79,12 @@ impl Tick {
     fn late(&self) -> bool {
         self.t.late
     }
+    /// Age of the contact model the tick used (s): since the tool pose its query answered
+    /// for was taken (simulated time without a collision thread, real time with one).
+    #[getter]
+    fn model_age(&self) -> f64 {
+        self.t.model_age
+    }
     /// The fields as a dict.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -91,6 +99,7 @@ impl Tick {
         d.set_item("budgeted", self.t.budgeted)?;
         d.set_item("compute", self.t.compute)?;
         d.set_item("late", self.t.late)?;
+        d.set_item("model_age", self.t.model_age)?;
         Ok(d)
     }
     fn __repr__(&self) -> String {
@@ -116,18 +125,41 @@ impl Tick {
 /// pose_a: A's fixed pose (default the identity).
 /// budget: most time a tick may take (s; default one period): beyond it the exact query
 ///     gives way to the time-critical one.
+/// collision_thread: run the penetration query in a thread of its own (the multi-rate
+///     loop: each tick uses the newest contact model it published; for 4–10 kHz rates, or
+///     contacts whose query exceeds a tick). Pace the ticks in real time. The thread stops
+///     when the Haptic is deleted.
+/// collision_delay: with collision_thread, seconds the collision thread sleeps before each
+///     query (a stress knob standing for a slow machine).
 ///
 /// Call tick(device_pose) once per device tick, from one thread. Raises ValueError for a bad
 /// option or a tree of B without mass properties.
 #[pyclass(module = "innersphere", name = "Haptic")]
 pub struct Haptic {
-    inner: HapticLoop,
+    inner: Loop,
+}
+
+/// Either loop.
+enum Loop {
+    Single(Box<HapticLoop>),
+    Multirate(Box<MultirateLoop>),
+}
+
+/// The same call on either loop.
+macro_rules! either {
+    ($l:expr, $h:ident => $e:expr) => {
+        match $l {
+            Loop::Single($h) => $e,
+            Loop::Multirate($h) => $e,
+        }
+    };
 }
 
 #[pymethods]
 impl Haptic {
     #[new]
-    #[pyo3(signature = (pair, device="omega", rate=1000.0, start=None, *, pose_a=None, budget=None))]
+    #[pyo3(signature = (pair, device="omega", rate=1000.0, start=None, *, pose_a=None, budget=None, collision_thread=false, collision_delay=0.0))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         pair: PyRef<'_, Pair>,
         device: &str,
@@ -135,6 +167,8 @@ impl Haptic {
         start: Option<&Bound<'_, PyAny>>,
         pose_a: Option<&Bound<'_, PyAny>>,
         budget: Option<f64>,
+        collision_thread: bool,
+        collision_delay: f64,
     ) -> PyResult<Haptic> {
         let class = DeviceClass::ALL
             .into_iter()
@@ -149,7 +183,24 @@ impl Haptic {
         let mut opts = HapticOptions::for_device(class);
         opts.rate = rate;
         opts.budget = budget.unwrap_or(1.0 / rate);
-        let inner = HapticLoop::new(pair.fresh(), pose_a, start, opts).map_err(error)?;
+        let inner = if collision_thread {
+            let c = CollisionOptions {
+                delay: collision_delay,
+                ..Default::default()
+            };
+            Loop::Multirate(Box::new(
+                MultirateLoop::spawn(pair.fresh(), pose_a, start, opts, c).map_err(error)?,
+            ))
+        } else {
+            if collision_delay != 0.0 {
+                return Err(PyValueError::new_err(
+                    "invalid option: collision_delay needs collision_thread=True",
+                ));
+            }
+            Loop::Single(Box::new(
+                HapticLoop::new(pair.fresh(), pose_a, start, opts).map_err(error)?,
+            ))
+        };
         Ok(Haptic { inner })
     }
 
@@ -161,7 +212,7 @@ impl Haptic {
     fn tick(&mut self, device_pose: &Bound<'_, PyAny>, dt: f64) -> PyResult<Tick> {
         let p = pose(device_pose, "device_pose")?;
         Ok(Tick {
-            t: self.inner.tick_step(&p, dt),
+            t: either!(&mut self.inner, h => h.tick_step(&p, dt)),
         })
     }
 
@@ -169,45 +220,54 @@ impl Haptic {
     /// most zero.
     #[getter]
     fn energy_to_user(&self) -> f64 {
-        self.inner.energy_to_user()
+        either!(&self.inner, h => h.energy_to_user())
     }
 
     /// The largest value energy_to_user has had (J).
     #[getter]
     fn energy_to_user_max(&self) -> f64 {
-        self.inner.energy_to_user_max()
+        either!(&self.inner, h => h.energy_to_user_max())
     }
 
     /// The tool's current pose (tx, ty, tz, qw, qx, qy, qz).
     #[getter]
     fn tool<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        pose7(py, &self.inner.state().pose)
+        pose7(py, &either!(&self.inner, h => h.state().pose))
     }
 
     /// Device ticks per second (Hz).
     #[getter]
     fn rate(&self) -> f64 {
-        self.inner.options().rate
+        either!(&self.inner, h => h.options().rate)
     }
 
     /// Most time one tick may take (s).
     #[getter]
     fn budget(&self) -> f64 {
-        self.inner.options().budget
+        either!(&self.inner, h => h.options().budget)
+    }
+
+    /// Contact models the collision thread has published so far (0 without one).
+    #[getter]
+    fn collision_queries(&self) -> u64 {
+        match &self.inner {
+            Loop::Single(_) => 0,
+            Loop::Multirate(h) => h.collision_queries(),
+        }
     }
 
     /// The tool's mass (kg) from tree B's mass properties and the tooth density.
     #[getter]
     fn mass(&self) -> f64 {
-        self.inner.body().mass
+        either!(&self.inner, h => h.body().mass)
     }
 
     fn __repr__(&self) -> String {
         format!(
             "Haptic(rate={}, budget={}, energy_to_user={})",
-            self.inner.options().rate,
-            self.inner.options().budget,
-            self.inner.energy_to_user()
+            either!(&self.inner, h => h.options().rate),
+            either!(&self.inner, h => h.options().budget),
+            either!(&self.inner, h => h.energy_to_user())
         )
     }
 }

@@ -75,3 +75,31 @@ def test_haptic_leaves_the_pair_alone(trees):
     pair = innersphere.Pair(*trees)
     innersphere.Haptic(pair).tick([1.3, 0, 0, 1, 0, 0, 0])
     assert pair.distance([5, 0, 0, 1, 0, 0, 0]).distance == pytest.approx(3.4, abs=0.05)
+
+
+def test_haptic_with_a_collision_thread_pushes_back_passively(trees):
+    """The multi-rate loop, paced in real time at 2 kHz: the models arrive, the tool is held
+    at the face as in one thread, the hand gets no energy; bad options are refused."""
+    import time
+
+    pair = innersphere.Pair(*trees)
+    _, poses = press(600)
+    h = innersphere.Haptic(pair, "touch", 2000.0, start=poses[0], collision_thread=True)
+    start = time.perf_counter()
+    ticks = []
+    for i, p in enumerate(poses):
+        while time.perf_counter() < start + i / 2000.0:
+            pass
+        ticks.append(h.tick(p))
+    last = ticks[-1]
+    assert h.collision_queries > 100
+    assert last.tool[0] > poses[-1][0] + 0.1 and last.force[0] > 0.02
+    assert all(0.0 <= k.model_age < 0.05 for k in ticks)
+    assert h.energy_to_user_max <= 1e-9
+    assert "model_age" in last.to_dict()
+    with pytest.raises(ValueError, match="collision delay"):
+        innersphere.Haptic(pair, collision_thread=True, collision_delay=-1.0)
+    with pytest.raises(ValueError, match="collision_delay needs collision_thread"):
+        innersphere.Haptic(pair, collision_delay=0.001)
+    single = innersphere.Haptic(pair)
+    assert single.collision_queries == 0 and single.tick(poses[0]).model_age == 0.0

@@ -2,7 +2,9 @@
  * DIR/poses.txt and the haptic loop's along DIR/device.txt in the format of
  * `cargo run --example reference answer DIR` (run.sh diffs the two: bit for bit), then
  * checks the error paths (bad paths, a corrupt file, NULL pointers, NaN poses, bad
- * arguments). Written against include/innersphere.h only. */
+ * arguments), and runs the haptic loop with its collision thread in real time (passive,
+ * models published, freed cleanly). Written against include/innersphere.h only. */
+#define _POSIX_C_SOURCE 200809L
 #include "innersphere.h"
 
 #include <math.h>
@@ -10,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 static int failures = 0;
 
@@ -140,6 +143,58 @@ static void answers(const char* dir, ist_tree* a, ist_tree* b) {
     ist_pair_free(pair);
 }
 
+/* The haptic loop with its collision thread, paced at 1 kHz along DIR/device.txt: every
+ * tick answers, the models arrive, the loop stays passive; bad collision options are
+ * refused. Prints nothing (its answers depend on timing). */
+static void multirate(const char* dir, ist_tree* a, ist_tree* b) {
+    ist_pair* pair = ist_pair_new(a, b);
+    ist_haptic_params hp;
+    CHECK(ist_haptic_params_default(IST_DEVICE_OMEGA, &hp) == IST_OK, "params");
+    hp.contact_stiffness = 2.0;
+    hp.collision_thread = 1;
+    char* path = join(dir, "device.txt");
+    FILE* f = fopen(path, "r");
+    free(path);
+    ist_pose dev;
+    CHECK(f && read_pose(f, &dev), "device file");
+    hp.start = dev;
+    ist_haptic* h = ist_haptic_new(pair, &hp);
+    CHECK(h != NULL, "ist_haptic_new with a collision thread");
+    struct timespec due;
+    clock_gettime(CLOCK_MONOTONIC, &due);
+    int ticks = 0, touching = 0;
+    while (h) {
+        due.tv_nsec += 1000000;
+        if (due.tv_nsec >= 1000000000) {
+            due.tv_nsec -= 1000000000;
+            due.tv_sec += 1;
+        }
+        clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &due, NULL);
+        ist_haptic_output o;
+        CHECK(ist_haptic_tick(h, &dev, 0.001, &o) == IST_OK, "multi-rate tick %d", ticks);
+        CHECK(isfinite(o.model_age_seconds) && o.model_age_seconds >= 0.0, "model age %g",
+              o.model_age_seconds);
+        touching += o.volume > 0.0;
+        ticks++;
+        if (!read_pose(f, &dev)) break;
+    }
+    if (f) fclose(f);
+    uint64_t queries = 0;
+    CHECK(ist_haptic_collision_queries(h, &queries) == IST_OK && queries > 100,
+          "%llu collision queries in %d ticks", (unsigned long long)queries, ticks);
+    CHECK(touching > 0, "the tool never touched");
+    double max = 1.0;
+    CHECK(ist_haptic_energy(h, NULL, &max) == IST_OK && max <= 1e-9,
+          "energy to the hand rose to %g J", max);
+    ist_haptic_free(h);
+    hp.collision_thread = 2;
+    CHECK(ist_haptic_new(pair, &hp) == NULL, "collision_thread 2");
+    hp.collision_thread = 1;
+    hp.collision_delay = -1.0;
+    CHECK(ist_haptic_new(pair, &hp) == NULL, "negative collision delay");
+    ist_pair_free(pair);
+}
+
 static void errors(const char* dir, ist_tree* a, ist_tree* b) {
     /* Bad paths and a corrupt file: NULL and a message. */
     CHECK(ist_tree_load("/nonexistent/x.ist") == NULL, "missing file");
@@ -235,6 +290,7 @@ int main(int argc, char** argv) {
     }
     answers(argv[1], a, b);
     errors(argv[1], a, b);
+    multirate(argv[1], a, b);
     /* A tree saved and loaded back answers the same. */
     char* again = join(argv[1], "again.ist");
     CHECK(ist_tree_save(a, again) == IST_OK, "save");

@@ -299,6 +299,9 @@ class Tick:
     @property
     def late(self) -> bool:
         """True when the tick took longer than its budget."""
+    @property
+    def model_age(self) -> float:
+        """Age of the contact model the tick used (s)."""
     def to_dict(self) -> Dict[str, Any]:
         """The fields as a dict."""
 
@@ -316,9 +319,13 @@ class Haptic:
         *,
         pose_a: Optional[_PoseLike] = None,
         budget: Optional[float] = None,
+        collision_thread: bool = False,
+        collision_delay: float = 0.0,
     ) -> "Haptic":
         """device: "omega" (12 N) or "touch" (3.3 N); rate in Hz; start: the tool's pose
-        at rest (default identity); budget: most seconds per tick (default one period)."""
+        at rest (default identity); budget: most seconds per tick (default one period);
+        collision_thread: the penetration query in a thread of its own (pace the ticks in
+        real time); collision_delay: seconds it sleeps before each query (stress knob)."""
     def tick(self, device_pose: _PoseLike, dt: float = 0.0) -> Tick:
         """One device tick: the device's pose in, the force to send out (dt: seconds since
         the last tick; 0 = one period). A NaN pose raises ValueError."""
@@ -335,6 +342,9 @@ class Haptic:
     def rate(self) -> float: ...
     @property
     def budget(self) -> float: ...
+    @property
+    def collision_queries(self) -> int:
+        """Contact models the collision thread has published (0 without one)."""
     @property
     def mass(self) -> float:
         """The tool's mass (kg)."""

@@ -619,6 +619,10 @@ function showLoop(s) {
     $('tick').textContent = `${num(l.tick_us, 3)} µs`;
     $('tick').title = `p99 ${num(l.tick_us_p99, 3)} µs, max ${num(l.tick_us_max, 3)} µs, ${l.ticks} ticks`;
     $('over').textContent = `${l.over_1ms} of ${l.ticks}`;
+    // Haptic mode: the servo runs at the loop's rate, the collision thread at its own.
+    $('collision-row').hidden = s.mode !== 'haptic';
+    $('collision').textContent = `${num(l.collision_rate_hz, 5)} Hz`;
+    $('collision').title = `contact models per second; the one in use is ${num(l.model_age_us, 3)} µs old`;
     drawTickChart(l);
   }
   const modeSel = $('mode');

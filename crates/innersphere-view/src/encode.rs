@@ -54,6 +54,8 @@ pub(crate) fn state(s: &LoopState, motion_seconds: Option<f64>) -> Value {
             "over_1ms": s.over_1ms,
             "history_us": history,
             "realtime": s.realtime,
+            "collision_rate_hz": s.collision_rate_hz,
+            "model_age_us": s.model_age_us,
         },
         "motion": motion_seconds.map(|len| json!({"playing": s.playing, "t": s.motion_t, "seconds": len})),
     })

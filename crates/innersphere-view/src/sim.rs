@@ -4,7 +4,7 @@
 //! waits for the HTTP side, and no tick allocates.
 
 use innersphere::glam::DVec3;
-use innersphere::haptic::{DeviceClass, HapticLoop, HapticOptions};
+use innersphere::haptic::{CollisionOptions, DeviceClass, HapticOptions, MultirateLoop};
 use innersphere::{DistanceOptions, Pair, Patch, PenetrationOptions, Pose, SharedTree};
 use innersphere_eval::haptic::sample;
 use innersphere_eval::motion::Motion;
@@ -108,6 +108,10 @@ pub struct LoopState {
     /// Whether the loop thread got real-time scheduling (SCHED_FIFO), as haptic loops ask
     /// for: without it other threads (the HTTP side, the browser) can preempt a tick.
     pub realtime: bool,
+    /// Haptic mode: contact models the collision thread publishes per second.
+    pub collision_rate_hz: f64,
+    /// Haptic mode: age of the contact model this tick used (µs).
+    pub model_age_us: f64,
 }
 
 const NO_PATCH: Patch = Patch {
@@ -147,6 +151,8 @@ impl LoopState {
             motion_t: 0.0,
             playing: false,
             realtime: false,
+            collision_rate_hz: 0.0,
+            model_age_us: 0.0,
         }
     }
 }
@@ -169,7 +175,7 @@ pub(crate) fn run(
 ) {
     let mut pair = Pair::new(a.clone(), b.clone());
     let haptic_opts = HapticOptions::for_device(DeviceClass::Omega);
-    let mut haptic: Option<HapticLoop> = None;
+    let mut haptic: Option<MultirateLoop> = None;
     let dist = DistanceOptions::default();
     let pen = PenetrationOptions {
         stiffness,
@@ -184,7 +190,7 @@ pub(crate) fn run(
     let mut scratch = [0f32; WINDOW];
     let mut last_mode = Mode::Free;
     let mut seek_id = 0u64;
-    let mut rate_from = (start, 0u64);
+    let mut rate_from = (start, 0u64, 0u64);
     state.realtime = innersphere_eval::sysinfo::realtime_priority(Some(
         innersphere_eval::sysinfo::SERVO_PRIORITY,
     ));
@@ -210,24 +216,32 @@ pub(crate) fn run(
             (Some(m), Mode::Motion) => sample(m, m.frames[0].t + state.motion_t),
             _ => c.target,
         };
-        // Entering haptic mode puts the tool at rest at the device's pose (an allocation
-        // when the mode changes, never per tick).
+        // Entering haptic mode puts the tool at rest at the device's pose, its penetration
+        // query in a collision thread of its own (a thread and an allocation when the mode
+        // changes, never per tick); leaving it stops that thread.
         if c.mode == Mode::Haptic && last_mode != Mode::Haptic {
-            haptic = HapticLoop::new(
+            haptic = MultirateLoop::spawn(
                 Pair::new(a.clone(), b.clone()),
                 Pose::IDENTITY,
                 target,
                 haptic_opts,
+                CollisionOptions::default(),
             )
             .ok();
+        } else if c.mode != Mode::Haptic {
+            haptic = None;
         }
         last_mode = c.mode;
         let (pose_b, device_force) = match (c.mode, haptic.as_mut()) {
             (Mode::Haptic, Some(h)) => {
                 let t = h.tick(&target);
+                state.model_age_us = t.model_age * 1e6;
                 (t.tool, t.force)
             }
-            _ => (target, DVec3::ZERO),
+            _ => {
+                state.model_age_us = 0.0;
+                (target, DVec3::ZERO)
+            }
         };
         // Penetration first; the distance only while apart (in contact it is 0, and the
         // patches say where): one query per tick where the work is largest.
@@ -274,11 +288,13 @@ pub(crate) fn run(
             let (_, v, _) = scratch[..k].select_nth_unstable_by(i, f32::total_cmp);
             state.tick_us_p99 = *v as f64;
         }
-        // The rate: ticks over the last half second or more.
+        // The rates: ticks and collision models over the last half second or more.
         let since = t0.duration_since(rate_from.0).as_secs_f64();
         if since >= 0.5 {
+            let models = haptic.as_ref().map_or(0, |h| h.collision_queries());
             state.rate_hz = (state.ticks - rate_from.1) as f64 / since;
-            rate_from = (t0, state.ticks);
+            state.collision_rate_hz = models.saturating_sub(rate_from.2) as f64 / since;
+            rate_from = (t0, state.ticks, models);
         }
         state.t = t0.duration_since(start).as_secs_f64();
         io.state.write(state);

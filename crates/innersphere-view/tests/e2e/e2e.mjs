@@ -21,7 +21,8 @@
 //      screenshot spheres.png;
 //   8. motion (if the demo has one): #play advances the motion time, #timeline scrubs;
 //   9. haptic mode (if offered): the tool stops short of the device pose, a device force,
-//      the ghost and the device-force arrow drawn; screenshot haptic.png.
+//      the ghost and the device-force arrow drawn, the collision thread's rate shown;
+//      screenshot haptic.png.
 
 import { chromium } from 'playwright-core';
 import fs from 'node:fs';
@@ -360,6 +361,15 @@ try {
     await sleep(300);
     const ov = await page.evaluate(() => window.__ist.overlays());
     check('haptic: ghost of the device pose and device-force arrow drawn', ov.ghost && ov.device, JSON.stringify(ov));
+    // The servo and the collision thread each at its own rate, both on the page.
+    const rates = await until(async () => {
+      const l = (await getJson('/api/state')).body.loop;
+      const shown = await page.evaluate(() => !document.getElementById('collision-row').hidden
+        && document.getElementById('collision').textContent);
+      return l.collision_rate_hz > 100 && shown ? { servo: l.rate_hz, collision: l.collision_rate_hz, shown } : null;
+    }, 3000);
+    check('haptic: the collision thread\'s rate shown beside the loop\'s', rates,
+      rates ? `servo ${rates.servo.toFixed(0)} Hz, collision ${rates.collision.toFixed(0)} Hz, page "${rates.shown}"` : 'no');
     await page.screenshot({ path: path.join(outDir, 'haptic.png') });
     await page.selectOption('#mode', 'free');
   }

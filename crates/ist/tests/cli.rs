@@ -747,6 +747,29 @@ fn haptic_and_occlude_run_on_generated_bodies_and_refuse_bad_input() {
     assert_eq!(rows.lines().count(), 302);
     assert!(rows.starts_with("t,dev_tx"));
     assert!(std::fs::metadata(&plot).unwrap().len() > 1000);
+    // The collision thread, in real time: its figures beside the servo's.
+    let v = ist_json(
+        &[
+            "haptic",
+            s(&ta),
+            s(&tb),
+            "--device",
+            s(&dev),
+            "--realtime",
+            "--collision-thread",
+            "--collision-delay-us",
+            "500",
+            "--json",
+        ],
+        0,
+    );
+    assert_eq!(v["collision_thread"], true, "{v}");
+    assert_eq!(v["collision_delay_us"], 500.0, "{v}");
+    for key in ["collision_rate_hz", "collision_p99_us", "model_age_p99_us"] {
+        assert!(v[key].as_f64().unwrap() > 0.0, "{key}: {v}");
+    }
+    assert!(v["max_force_n"].as_f64().unwrap() > 0.0, "{v}");
+    assert!(v["energy_to_user_max_j"].as_f64().unwrap() <= 1e-9, "{v}");
     // Bad input: a clear error (exit 2), never a panic; the device file is not overwritten.
     for args in [
         vec!["haptic", s(&ta), s(&tb), "--device", s(&dev), "--rate", "0"],
@@ -769,6 +792,35 @@ fn haptic_and_occlude_run_on_generated_bodies_and_refuse_bad_input() {
             s(&dev),
         ],
         vec!["haptic", s(&ta), s(&tb), "--device", s(&box_stl)],
+        // The collision thread runs in real time only; its delay needs it.
+        vec![
+            "haptic",
+            s(&ta),
+            s(&tb),
+            "--device",
+            s(&dev),
+            "--collision-thread",
+        ],
+        vec![
+            "haptic",
+            s(&ta),
+            s(&tb),
+            "--device",
+            s(&dev),
+            "--collision-delay-us",
+            "100",
+        ],
+        vec![
+            "haptic",
+            s(&ta),
+            s(&tb),
+            "--device",
+            s(&dev),
+            "--realtime",
+            "--collision-thread",
+            "--collision-delay-us",
+            "-5",
+        ],
         vec![
             "occlude",
             s(&ta),

@@ -3,56 +3,13 @@
 //! a tiny budget, and occlusion from several open starts ends in the same bite.
 
 mod alloc_util;
+mod haptic_util;
 
 use glam::{DQuat, DVec3};
-use innersphere::haptic::{
-    occlude, DeviceClass, HapticLoop, HapticOptions, OcclusionOptions, RigidBody,
-};
-use innersphere::{shapes, BuildOptions, Pair, Pose, Resolution, SharedTree, SphereTree};
+use haptic_util::{build, on_slab, options, serial, slab_and_block};
+use innersphere::haptic::{occlude, HapticLoop, OcclusionOptions, RigidBody};
+use innersphere::{shapes, Pair, Pose, SphereTree};
 use proptest::prelude::*;
-use std::sync::OnceLock;
-
-/// The tests of this file run one at a time: one of them times its ticks.
-fn serial() -> std::sync::MutexGuard<'static, ()> {
-    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    LOCK.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-fn build(mesh: &innersphere::Mesh, cells: u32) -> SharedTree {
-    SharedTree::new(
-        SphereTree::build(
-            mesh,
-            &BuildOptions {
-                resolution: Resolution::Cells(cells),
-                ..Default::default()
-            },
-        )
-        .unwrap(),
-    )
-}
-
-/// A 20 × 20 × 2 mm slab (A, top face at z = 1) and a 4 × 4 × 2 mm block (B, centred on
-/// its model origin).
-fn slab_and_block() -> &'static (SharedTree, SharedTree) {
-    static T: OnceLock<(SharedTree, SharedTree)> = OnceLock::new();
-    T.get_or_init(|| {
-        (
-            build(&shapes::cuboid(DVec3::new(10.0, 10.0, 1.0)), 96),
-            build(&shapes::cuboid(DVec3::new(2.0, 2.0, 1.0)), 32),
-        )
-    })
-}
-
-/// The block resting on the slab with its bottom `into` below the slab's top.
-fn on_slab(into: f64) -> Pose {
-    Pose::from_translation(DVec3::new(0.0, 0.0, 2.0 - into))
-}
-
-fn options() -> HapticOptions {
-    let mut o = HapticOptions::for_device(DeviceClass::Omega);
-    o.contact_stiffness = 50.0;
-    o
-}
 
 #[test]
 fn a_tree_without_mass_properties_is_refused_clearly() {

@@ -4,59 +4,17 @@
 //! waits for a collision thread that is stuck; a slow collision thread leaves the loop
 //! passive, smooth and the tool out of the slab.
 
+mod haptic_util;
+
 use glam::{DQuat, DVec3};
+use haptic_util::{on_slab, options, serial, slab_and_block};
 use innersphere::haptic::{
-    CollisionOptions, ContactModel, DeviceClass, HapticLoop, HapticOptions, MultirateLoop,
-    RigidBody, Servo,
+    CollisionOptions, ContactModel, HapticLoop, HapticOptions, MultirateLoop, RigidBody, Servo,
 };
-use innersphere::{
-    shapes, BuildOptions, Pair, PenetrationOptions, Pose, Resolution, SharedTree, SphereTree,
-};
+use innersphere::{Pair, PenetrationOptions, Pose};
 use proptest::prelude::*;
 use std::collections::VecDeque;
-use std::sync::OnceLock;
 use std::time::{Duration, Instant};
-
-/// One test at a time: the multi-rate ones run in real time.
-fn serial() -> std::sync::MutexGuard<'static, ()> {
-    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    LOCK.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-fn build(mesh: &innersphere::Mesh, cells: u32) -> SharedTree {
-    SharedTree::new(
-        SphereTree::build(
-            mesh,
-            &BuildOptions {
-                resolution: Resolution::Cells(cells),
-                ..Default::default()
-            },
-        )
-        .unwrap(),
-    )
-}
-
-/// A 20 × 20 × 2 mm slab (A, top face at z = 1) and a 4 × 4 × 2 mm block (B).
-fn slab_and_block() -> &'static (SharedTree, SharedTree) {
-    static T: OnceLock<(SharedTree, SharedTree)> = OnceLock::new();
-    T.get_or_init(|| {
-        (
-            build(&shapes::cuboid(DVec3::new(10.0, 10.0, 1.0)), 96),
-            build(&shapes::cuboid(DVec3::new(2.0, 2.0, 1.0)), 32),
-        )
-    })
-}
-
-/// The block with its bottom `into` below the slab's top.
-fn on_slab(into: f64) -> Pose {
-    Pose::from_translation(DVec3::new(0.0, 0.0, 2.0 - into))
-}
-
-fn options() -> HapticOptions {
-    let mut o = HapticOptions::for_device(DeviceClass::Omega);
-    o.contact_stiffness = 50.0;
-    o
-}
 
 /// The penetration query's options of a loop with `o`.
 fn penetration(o: &HapticOptions) -> PenetrationOptions {

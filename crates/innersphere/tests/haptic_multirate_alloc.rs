@@ -2,9 +2,12 @@
 //! collision thread's queries and publishing, counted over the whole process (its own test
 //! binary, one test: nothing else runs while it counts).
 
+mod haptic_util;
+
 use glam::{DQuat, DVec3};
-use innersphere::haptic::{CollisionOptions, DeviceClass, HapticOptions, MultirateLoop};
-use innersphere::{shapes, BuildOptions, Pair, Pose, Resolution, SharedTree, SphereTree};
+use haptic_util::{options, slab_and_block};
+use innersphere::haptic::{CollisionOptions, MultirateLoop};
+use innersphere::{Pair, Pose};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -40,25 +43,10 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-fn build(mesh: &innersphere::Mesh, cells: u32) -> SharedTree {
-    SharedTree::new(
-        SphereTree::build(
-            mesh,
-            &BuildOptions {
-                resolution: Resolution::Cells(cells),
-                ..Default::default()
-            },
-        )
-        .unwrap(),
-    )
-}
-
 #[test]
 fn neither_thread_of_the_multirate_loop_allocates_once_running() {
-    let a = build(&shapes::cuboid(DVec3::new(10.0, 10.0, 1.0)), 96);
-    let b = build(&shapes::cuboid(DVec3::new(2.0, 2.0, 1.0)), 32);
-    let mut o = HapticOptions::for_device(DeviceClass::Omega);
-    o.contact_stiffness = 50.0;
+    let (a, b) = slab_and_block();
+    let mut o = options();
     o.rate = 4000.0;
     o.budget = 1.0 / o.rate;
     // Pressing into the slab and sliding over it, turning a little.
@@ -75,7 +63,7 @@ fn neither_thread_of_the_multirate_loop_allocates_once_running() {
         .unwrap()
     };
     let mut hl = MultirateLoop::spawn(
-        Pair::new(a, b),
+        Pair::new(a.clone(), b.clone()),
         Pose::IDENTITY,
         dev(0),
         o,

@@ -1,0 +1,53 @@
+//! The generated bodies and settings of the haptic tests: a slab and a block, the block's
+//! pose on the slab, omega-class options with a stiff contact, and a lock that runs the
+//! tests of one file one at a time (some time their ticks or run in real time).
+#![allow(dead_code)]
+
+use glam::DVec3;
+use innersphere::haptic::{DeviceClass, HapticOptions};
+use innersphere::{shapes, BuildOptions, Mesh, Pose, Resolution, SharedTree, SphereTree};
+use std::sync::OnceLock;
+
+/// One test at a time.
+pub fn serial() -> std::sync::MutexGuard<'static, ()> {
+    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    LOCK.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// The tree of `mesh` at `cells` voxels along its longest side.
+pub fn build(mesh: &Mesh, cells: u32) -> SharedTree {
+    SharedTree::new(
+        SphereTree::build(
+            mesh,
+            &BuildOptions {
+                resolution: Resolution::Cells(cells),
+                ..Default::default()
+            },
+        )
+        .unwrap(),
+    )
+}
+
+/// A 20 × 20 × 2 mm slab (A, top face at z = 1) and a 4 × 4 × 2 mm block (B, centred on
+/// its model origin).
+pub fn slab_and_block() -> &'static (SharedTree, SharedTree) {
+    static T: OnceLock<(SharedTree, SharedTree)> = OnceLock::new();
+    T.get_or_init(|| {
+        (
+            build(&shapes::cuboid(DVec3::new(10.0, 10.0, 1.0)), 96),
+            build(&shapes::cuboid(DVec3::new(2.0, 2.0, 1.0)), 32),
+        )
+    })
+}
+
+/// The block resting on the slab with its bottom `into` below the slab's top.
+pub fn on_slab(into: f64) -> Pose {
+    Pose::from_translation(DVec3::new(0.0, 0.0, 2.0 - into))
+}
+
+/// Omega-class defaults with a 50 N/mm³ contact.
+pub fn options() -> HapticOptions {
+    let mut o = HapticOptions::for_device(DeviceClass::Omega);
+    o.contact_stiffness = 50.0;
+    o
+}

@@ -386,3 +386,59 @@ fn a_budget_too_small_for_the_contact_never_lets_the_tool_sink() {
         assert!((t.force - exact.force).length() <= 0.02 * exact.force.length());
     }
 }
+
+#[test]
+fn a_late_query_never_kicks_the_hand() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    // Pressing 1 mm into the slab over 0.5 s, sliding 1.5 mm sideways while pressing, letting
+    // go; at budgets from far below the exact query's cost to above it.
+    let dev = |i: usize| {
+        let s = i as f64 * 1e-3;
+        let into = if s < 0.5 {
+            2.4 * s - 0.2
+        } else if s < 1.5 {
+            1.0
+        } else {
+            1.0 - 1.2 * (s - 1.5)
+        };
+        let x = 1.5 * ((s - 0.5) / 0.8).clamp(0.0, 1.0);
+        Pose::from_translation(DVec3::new(x, 0.3 * x, on_slab(into).translation.z))
+    };
+    let run = |budget: f64| {
+        let mut o = options();
+        o.budget = budget;
+        let mut hl =
+            HapticLoop::new(Pair::new(a.clone(), b.clone()), Pose::IDENTITY, dev(0), o).unwrap();
+        let ticks: Vec<_> = (0..2400).map(|i| hl.tick(&dev(i))).collect();
+        let max = ticks.iter().map(|t| t.force.length()).fold(0.0, f64::max);
+        let step = ticks
+            .windows(2)
+            .map(|w| (w[1].force - w[0].force).length())
+            .fold(0.0, f64::max);
+        // On a budgeted tick the contact pushes no harder than the time-critical query's
+        // bound on the volume allows.
+        for t in ticks.iter().filter(|t| t.budgeted) {
+            assert!(
+                t.contact_force.length() <= o.contact_stiffness * t.volume_bound * (1.0 + 1e-9),
+                "budget {budget} s: {t:?}"
+            );
+        }
+        let budgeted = ticks.iter().filter(|t| t.budgeted).count();
+        (max, step, hl.energy_to_user_max(), budgeted)
+    };
+    let (exact_max, exact_step, exact_energy, _) = run(1.0);
+    assert!(exact_max > 1.0 && exact_step <= 0.05 * exact_max && exact_energy <= 1e-9);
+    for budget in [1e-6, 10e-6, 20e-6, 50e-6, 100e-6] {
+        let (max, step, energy, budgeted) = run(budget);
+        let what = format!(
+            "budget {budget} s ({budgeted} ticks budgeted): max force {max} N (exact {exact_max}), step {step} N, energy {energy} J"
+        );
+        assert!(max <= 1.05 * exact_max && max >= 0.95 * exact_max, "{what}");
+        assert!(step <= 0.05 * max, "{what}");
+        assert!(energy <= 1e-9, "{what}");
+        if budget <= 10e-6 {
+            assert!(budgeted > 1000, "{what}");
+        }
+    }
+}

@@ -189,6 +189,15 @@ typedef struct ist_haptic_params {
    */
   double max_model_age;
   /*
+   Fastest the loop lets the device move (mm/s; rotations alike at a 20 mm lever): a
+   jump, a glitch or a far pose is approached no faster.
+   */
+  double max_device_speed;
+  /*
+   Largest acceleration the loop lets the device have (mm/s²).
+   */
+  double max_device_acceleration;
+  /*
    1: the penetration query runs in a collision thread of its own, started by
    ist_haptic_new and joined by ist_haptic_free, and each tick uses the newest contact
    model it published (the multi-rate loop, for 4–10 kHz servo rates or contacts whose
@@ -430,6 +439,17 @@ const char *ist_last_error(void);
 int ist_haptic_params_default(int device_class, struct ist_haptic_params *out);
 
 /*
+ The defaults of a device class for a loop at `rate` Hz (budget one period): below 1 kHz
+ the coupling's damping grows with the period and, past the device's damping limit, its
+ stiffness drops, so that the loop stays passive (ist_haptic_new refuses a damping below
+ k·T/2).
+
+ # Safety
+ `out` is NULL or valid.
+ */
+int ist_haptic_params_for_rate(int device_class, double rate, struct ist_haptic_params *out);
+
+/*
  A haptic loop on the trees of `pair` (it keeps its own pair: `pair` stays yours), with
  B as the tool. B's tree must hold mass properties (built by this version). NULL on error.
 
@@ -441,10 +461,10 @@ struct ist_haptic *ist_haptic_new(const struct ist_pair *pair, const struct ist_
 /*
  One device tick: the device's pose in (B's pose in the world), `dt` the seconds between
  this pose's sample and the previous one (0: one period; it must be the interval the pose
- moved over, or the device's velocity comes out wrong); the force and torque to send and
- the tool's pose out.
- Never allocates, never blocks. A NaN device pose is refused (IST_ERR_POSE) and the tool
- stays where it was.
+ moved over, or the device's velocity comes out wrong; over ten periods counts as one);
+ the force and torque to send and the tool's pose out.
+ Never allocates, never blocks. A NaN device pose (IST_ERR_POSE) and a negative, NaN or
+ infinite dt (IST_ERR_INVALID_ARGUMENT) are refused and the tool stays where it was.
 
  # Safety
  Every pointer is NULL or valid.
@@ -528,8 +548,8 @@ int ist_contact(struct ist_pair *pair, const struct ist_pose *pose_a, const stru
 int ist_penetration(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, struct ist_penetration_result *out);
 
 /*
- ist_penetration with a penalty stiffness: force per unit volume (e.g. N/mm³), finite
- and not negative (else IST_ERR_INVALID_ARGUMENT).
+ ist_penetration with a penalty stiffness: force per unit volume (e.g. N/mm³), from 0 to
+ 1e30 (else IST_ERR_INVALID_ARGUMENT).
 
  # Safety
  Every pointer is NULL or valid.

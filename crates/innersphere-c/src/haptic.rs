@@ -51,6 +51,11 @@ pub struct ist_haptic_params {
     /// Oldest a contact model may get (s) before the single-thread loop runs the exact query
     /// whatever it costs.
     pub max_model_age: f64,
+    /// Fastest the loop lets the device move (mm/s; rotations alike at a 20 mm lever): a
+    /// jump, a glitch or a far pose is approached no faster.
+    pub max_device_speed: f64,
+    /// Largest acceleration the loop lets the device have (mm/s²).
+    pub max_device_acceleration: f64,
     /// 1: the penetration query runs in a collision thread of its own, started by
     /// ist_haptic_new and joined by ist_haptic_free, and each tick uses the newest contact
     /// model it published (the multi-rate loop, for 4–10 kHz servo rates or contacts whose
@@ -120,8 +125,30 @@ pub unsafe extern "C" fn ist_haptic_params_default(
     device_class: c_int,
     out: *mut ist_haptic_params,
 ) -> c_int {
+    unsafe { ist_haptic_params_for_rate(device_class, 1000.0, out) }
+}
+
+/// The defaults of a device class for a loop at `rate` Hz (budget one period): below 1 kHz
+/// the coupling's damping grows with the period and, past the device's damping limit, its
+/// stiffness drops, so that the loop stays passive (ist_haptic_new refuses a damping below
+/// k·T/2).
+///
+/// # Safety
+/// `out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn ist_haptic_params_for_rate(
+    device_class: c_int,
+    rate: f64,
+    out: *mut ist_haptic_params,
+) -> c_int {
     status(|| {
         let out = unsafe { mutable(out, "out") }?;
+        if !(rate.is_finite() && rate > 0.0) {
+            return Err(Fail::arg(format!(
+                "the rate must be positive and finite, not {} Hz",
+                innersphere::error::num(rate)
+            )));
+        }
         let class = match device_class {
             IST_DEVICE_TOUCH => DeviceClass::Touch,
             IST_DEVICE_OMEGA => DeviceClass::Omega,
@@ -131,7 +158,7 @@ pub unsafe extern "C" fn ist_haptic_params_default(
                 )))
             }
         };
-        let o = HapticOptions::for_device(class);
+        let o = HapticOptions::for_device_at(class, rate);
         let id = crate::query::ist_pose_identity();
         *out = ist_haptic_params {
             rate: o.rate,
@@ -148,6 +175,8 @@ pub unsafe extern "C" fn ist_haptic_params_default(
             density: o.density,
             model_slew: o.model_slew,
             max_model_age: o.max_model_age,
+            max_device_speed: o.max_device_speed,
+            max_device_acceleration: o.max_device_acceleration,
             collision_thread: 0,
             collision_delay: 0.0,
             collision_budget: CollisionOptions::default().budget,
@@ -192,6 +221,8 @@ pub unsafe extern "C" fn ist_haptic_new(
             max_patches: 8,
             model_slew: c.model_slew,
             max_model_age: c.max_model_age,
+            max_device_speed: c.max_device_speed,
+            max_device_acceleration: c.max_device_acceleration,
         };
         let own = Pair::new(p.pair.tree_a().clone(), p.pair.tree_b().clone());
         let (pose_a, start) = (c.pose_a.to_pose()?, c.start.to_pose()?);
@@ -219,10 +250,10 @@ pub unsafe extern "C" fn ist_haptic_new(
 
 /// One device tick: the device's pose in (B's pose in the world), `dt` the seconds between
 /// this pose's sample and the previous one (0: one period; it must be the interval the pose
-/// moved over, or the device's velocity comes out wrong); the force and torque to send and
-/// the tool's pose out.
-/// Never allocates, never blocks. A NaN device pose is refused (IST_ERR_POSE) and the tool
-/// stays where it was.
+/// moved over, or the device's velocity comes out wrong; over ten periods counts as one);
+/// the force and torque to send and the tool's pose out.
+/// Never allocates, never blocks. A NaN device pose (IST_ERR_POSE) and a negative, NaN or
+/// infinite dt (IST_ERR_INVALID_ARGUMENT) are refused and the tool stays where it was.
 ///
 /// # Safety
 /// Every pointer is NULL or valid.
@@ -237,6 +268,7 @@ pub unsafe extern "C" fn ist_haptic_tick(
         let h = unsafe { mutable(haptic, "haptic") }?;
         let d = unsafe { reference(device, "device") }?.to_pose()?;
         let out = unsafe { mutable(out, "out") }?;
+        innersphere::haptic::check_step(dt)?;
         let t: Tick = match &mut h.hl {
             Loop::Single(l) => l.tick_step(&d, dt),
             Loop::Multirate(l) => l.tick_step(&d, dt),

@@ -123,8 +123,8 @@ pub unsafe extern "C" fn ist_penetration(
     unsafe { ist_penetration_with_stiffness(pair, pose_a, pose_b, 1.0, out) }
 }
 
-/// ist_penetration with a penalty stiffness: force per unit volume (e.g. N/mm³), finite
-/// and not negative (else IST_ERR_INVALID_ARGUMENT).
+/// ist_penetration with a penalty stiffness: force per unit volume (e.g. N/mm³), from 0 to
+/// 1e30 (else IST_ERR_INVALID_ARGUMENT).
 ///
 /// # Safety
 /// Every pointer is NULL or valid.
@@ -139,16 +139,11 @@ pub unsafe extern "C" fn ist_penetration_with_stiffness(
     status(|| {
         let (pair, a, b) = unsafe { args(pair, pose_a, pose_b) }?;
         let out = unsafe { mutable(out, "out") }?;
-        // Refused: NaN, infinite or negative.
-        if !(stiffness.is_finite() && stiffness >= 0.0) {
-            return Err(Fail::arg(format!(
-                "the stiffness must be finite and not negative, not {stiffness}"
-            )));
-        }
         let opts = PenetrationOptions {
             stiffness,
             ..Default::default()
         };
+        opts.check()?;
         let p = pair.penetration_with(&a, &b, &opts);
         *out = ist_penetration_result {
             volume: p.volume,

@@ -180,8 +180,7 @@ impl Haptic {
             })?;
         let start = pose_or_identity(start, "start")?;
         let pose_a = pose_or_identity(pose_a, "pose_a")?;
-        let mut opts = HapticOptions::for_device(class);
-        opts.rate = rate;
+        let mut opts = HapticOptions::for_device_at(class, rate);
         opts.budget = budget.unwrap_or(1.0 / rate);
         let inner = if collision_thread {
             let c = CollisionOptions {
@@ -206,11 +205,13 @@ impl Haptic {
 
     /// One device tick: the device's pose in (B's pose in the world as read this tick), a
     /// Tick out (the force and torque to send, the tool's new pose). dt: seconds since the
-    /// last tick as measured by the caller; 0 (or anything not positive and finite, or more
-    /// than ten periods) means one period. A NaN pose raises ValueError and changes nothing.
+    /// last tick as measured by the caller; 0 means one period (more than ten periods counts
+    /// as one). A NaN pose, or a negative, NaN or infinite dt, raises ValueError and changes
+    /// nothing.
     #[pyo3(signature = (device_pose, dt=0.0))]
     fn tick(&mut self, device_pose: &Bound<'_, PyAny>, dt: f64) -> PyResult<Tick> {
         let p = pose(device_pose, "device_pose")?;
+        innersphere::haptic::check_step(dt).map_err(error)?;
         Ok(Tick {
             t: either!(&mut self.inner, h => h.tick_step(&p, dt)),
         })

@@ -1,15 +1,16 @@
 //! `innersphere.Pair` and its results: every query kind, single and batched.
 
-use crate::convert::{non_negative, pose, pose_or_identity, poses, vec3, PosesA};
+use crate::convert::{error, non_negative, pose, pose_or_identity, poses, vec3, PosesA};
 use crate::tree::Tree;
 use innersphere::glam::DVec3;
 use innersphere::{
     Distance, DistanceOptions, MultipointOptions, Patch, Penetration, PenetrationOptions, Pose,
 };
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use std::sync::{Mutex, MutexGuard, TryLockError};
 
 /// The answer of Pair.distance: the exact minimum distance between the two inner-sphere
 /// packings, with the closest points (world frame).
@@ -214,24 +215,43 @@ impl PenetrationResult {
 /// loop wants: consecutive poses of a motion are fast). The answers do not depend on it,
 /// except that a far pair may be answered within the library's far-field tolerance; call
 /// reset() (or use a new Pair) for a query from scratch, which is what `ist query` runs.
-/// One thread at a time per pair; trees are shared freely.
-#[pyclass(module = "innersphere", name = "Pair")]
+/// One thread at a time per pair (another thread's query raises RuntimeError); trees are
+/// shared freely.
+#[pyclass(module = "innersphere", name = "Pair", frozen)]
 pub struct Pair {
-    inner: innersphere::Pair,
+    inner: Mutex<innersphere::Pair>,
     a: Py<Tree>,
     b: Py<Tree>,
 }
 
 impl Pair {
-    /// The Rust pair's trees, for a new pair of the same trees.
+    /// A new Rust pair of the same trees.
     pub(crate) fn fresh(&self) -> innersphere::Pair {
-        innersphere::Pair::new(self.inner.tree_a().clone(), self.inner.tree_b().clone())
+        innersphere::Pair::new(self.a.get().shared.clone(), self.b.get().shared.clone())
+    }
+
+    /// The Rust pair, or a clear error while another thread's query holds it.
+    fn lock(&self) -> PyResult<MutexGuard<'_, innersphere::Pair>> {
+        match self.inner.try_lock() {
+            Ok(g) => Ok(g),
+            Err(TryLockError::Poisoned(p)) => Ok(p.into_inner()),
+            Err(TryLockError::WouldBlock) => Err(PyRuntimeError::new_err(
+                "this Pair is answering a query in another thread: a Pair keeps one query's \
+                 state at a time; make one Pair per thread (Pairs of the same Trees share them)",
+            )),
+        }
     }
 }
 
-/// The stiffness argument, checked as `ist query --stiffness`.
+/// The stiffness argument, checked by the library as `ist query --stiffness` is.
 fn stiffness_arg(stiffness: f64) -> PyResult<f64> {
-    non_negative(stiffness, "the stiffness")
+    PenetrationOptions {
+        stiffness,
+        ..Default::default()
+    }
+    .check()
+    .map_err(error)?;
+    Ok(stiffness)
 }
 
 /// B's and A's poses of a batch.
@@ -258,7 +278,7 @@ impl Pair {
         let inner =
             innersphere::Pair::new(tree_a.get().shared.clone(), tree_b.get().shared.clone());
         Pair {
-            inner,
+            inner: Mutex::new(inner),
             a: tree_a,
             b: tree_b,
         }
@@ -283,7 +303,7 @@ impl Pair {
     /// relative error.
     #[pyo3(signature = (pose_b, *, pose_a=None, signed=false, abs_tol=0.0, rel_tol=0.0))]
     fn distance(
-        &mut self,
+        &self,
         py: Python<'_>,
         pose_b: &Bound<'_, PyAny>,
         pose_a: Option<&Bound<'_, PyAny>>,
@@ -299,7 +319,8 @@ impl Pair {
             signed,
             ..Default::default()
         };
-        let inner = &mut self.inner;
+        let mut guard = self.lock()?;
+        let inner: &mut innersphere::Pair = &mut guard;
         let d = py.detach(|| inner.distance_with(&pa, &pb, &opts));
         Ok(DistanceResult { d })
     }
@@ -307,14 +328,15 @@ impl Pair {
     /// Whether the two packings overlap (first contact, from the kinetic front).
     #[pyo3(signature = (pose_b, *, pose_a=None))]
     fn contact(
-        &mut self,
+        &self,
         py: Python<'_>,
         pose_b: &Bound<'_, PyAny>,
         pose_a: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<bool> {
         let pb = pose(pose_b, "pose_b")?;
         let pa = pose_or_identity(pose_a, "pose_a")?;
-        let inner = &mut self.inner;
+        let mut guard = self.lock()?;
+        let inner: &mut innersphere::Pair = &mut guard;
         Ok(py.detach(|| inner.contact(&pa, &pb).in_contact()))
     }
 
@@ -323,7 +345,7 @@ impl Pair {
     /// normals and leaves are in pair.contacts until the next multipoint query.
     #[pyo3(signature = (pose_b, k=16, *, pose_a=None, split_depth=4))]
     fn multipoint<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         pose_b: &Bound<'py, PyAny>,
         k: i64,
@@ -345,10 +367,10 @@ impl Pair {
             split_depth,
             ..Default::default()
         };
-        let inner = &mut self.inner;
+        let mut guard = self.lock()?;
+        let inner: &mut innersphere::Pair = &mut guard;
         py.detach(|| inner.multipoint(&pa, &pb, &opts));
-        let points = self
-            .inner
+        let points = inner
             .contacts()
             .iter()
             .map(|c| c.point.to_array())
@@ -360,7 +382,8 @@ impl Pair {
     /// normal (n, 3) (from A's sphere centre to B's), depth (n,), leaf_a (n,), leaf_b (n,).
     #[getter]
     fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let c = self.inner.contacts();
+        let guard = self.lock()?;
+        let c = guard.contacts();
         let d = PyDict::new(py);
         d.set_item(
             "point",
@@ -388,7 +411,7 @@ impl Pair {
     /// .patches, ...).
     #[pyo3(signature = (pose_b, stiffness=1.0, *, pose_a=None, max_patches=8))]
     fn penetration(
-        &mut self,
+        &self,
         py: Python<'_>,
         pose_b: &Bound<'_, PyAny>,
         stiffness: f64,
@@ -405,18 +428,20 @@ impl Pair {
             max_patches,
             ..Default::default()
         };
-        let inner = &mut self.inner;
+        let mut guard = self.lock()?;
+        let inner: &mut innersphere::Pair = &mut guard;
         let p = py.detach(|| inner.penetration_with(&pa, &pb, &opts));
         Ok(PenetrationResult {
             p,
-            patches: self.inner.patches().to_vec(),
+            patches: inner.patches().to_vec(),
         })
     }
 
     /// Forgets all temporal coherence (last contacts, closest pair, proved separation,
     /// fronts): the next query starts from scratch, as `ist query` does. Keeps the memory.
-    fn reset(&mut self) {
-        self.inner.reset();
+    fn reset(&self) -> PyResult<()> {
+        self.lock()?.reset();
+        Ok(())
     }
 
     /// Pair.distance for each pose of B in poses, an (N, 7) or (N, 4, 4) array, in order and
@@ -426,13 +451,14 @@ impl Pair {
     /// Rust with the interpreter released.
     #[pyo3(signature = (poses, *, pose_a=None))]
     fn distance_many<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         poses: &Bound<'py, PyAny>,
         pose_a: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let (pb, pa) = batch(poses, pose_a)?;
-        let inner = &mut self.inner;
+        let mut guard = self.lock()?;
+        let inner: &mut innersphere::Pair = &mut guard;
         let out: Vec<f64> = py.detach(|| {
             pb.iter()
                 .enumerate()
@@ -446,13 +472,14 @@ impl Pair {
     /// the pair's state: an (N,) bool array. Interpreter released.
     #[pyo3(signature = (poses, *, pose_a=None))]
     fn contact_many<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         poses: &Bound<'py, PyAny>,
         pose_a: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (pb, pa) = batch(poses, pose_a)?;
-        let inner = &mut self.inner;
+        let mut guard = self.lock()?;
+        let inner: &mut innersphere::Pair = &mut guard;
         let out: Vec<bool> = py.detach(|| {
             pb.iter()
                 .enumerate()
@@ -469,7 +496,7 @@ impl Pair {
     /// normal (N, 3), pairs (N,) int64, contact (N,) bool. Interpreter released.
     #[pyo3(signature = (poses, stiffness=1.0, *, pose_a=None))]
     fn penetration_many<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         poses: &Bound<'py, PyAny>,
         stiffness: f64,
@@ -480,7 +507,8 @@ impl Pair {
             stiffness: stiffness_arg(stiffness)?,
             ..Default::default()
         };
-        let inner = &mut self.inner;
+        let mut guard = self.lock()?;
+        let inner: &mut innersphere::Pair = &mut guard;
         let out: Vec<Penetration> = py.detach(|| {
             pb.iter()
                 .enumerate()

@@ -227,3 +227,73 @@ def test_bad_haptic_options(trees):
         innersphere.Haptic(pair, budget=-1.0)
     with pytest.raises(ValueError, match="start"):
         innersphere.Haptic(pair, start=[NAN, 0, 0, 1, 0, 0, 0])
+
+
+# --- issue 34: what a hostile caller feeds the new doors ------------------------------------
+
+
+def test_a_stiffness_whose_force_would_overflow_is_refused(pair):
+    p = [1.3, 0, 0, 1, 0, 0, 0]
+    with pytest.raises(ValueError, match="stiffness must be from 0 to 1e30"):
+        pair.penetration(p, stiffness=1e308)
+    with pytest.raises(ValueError, match="stiffness must be from 0 to 1e30"):
+        pair.penetration_many([p], stiffness=1e31)
+    assert np.all(np.isfinite(pair.penetration(p, stiffness=1e30).force))
+
+
+@pytest.mark.parametrize("dt", [NAN, -1.0, math.inf])
+def test_a_bad_tick_step_is_refused(trees, dt):
+    h = innersphere.Haptic(innersphere.Pair(*trees), start=[3, 0, 0, 1, 0, 0, 0])
+    h.tick([3, 0, 0, 1, 0, 0, 0])
+    before = h.tool.copy()
+    with pytest.raises(ValueError, match="dt must be 0"):
+        h.tick([3, 0, 0, 1, 0, 0, 0], dt=dt)
+    assert np.array_equal(h.tool, before)
+
+
+def test_a_huge_device_pose_does_not_fling_the_tool(trees):
+    h = innersphere.Haptic(innersphere.Pair(*trees), start=[3, 0, 0, 1, 0, 0, 0])
+    h.tick([3, 0, 0, 1, 0, 0, 0])
+    h.tick([1e200, 0, 0, 1, 0, 0, 0])
+    for _ in range(20):
+        t = h.tick([3, 0, 0, 1, 0, 0, 0])
+    assert abs(t.tool[0] - 3.0) < 0.01 and np.all(np.isfinite(t.force))
+    assert h.energy_to_user_max <= 1e-9
+
+
+def test_a_low_rate_is_refused_clearly(trees):
+    with pytest.raises(ValueError, match="the rate must be from 100 Hz"):
+        innersphere.Haptic(innersphere.Pair(*trees), rate=10.0)
+    # Below 1 kHz the default coupling is made passive for the rate.
+    h = innersphere.Haptic(innersphere.Pair(*trees), rate=100.0)
+    assert h.rate == 100.0
+
+
+def test_a_resolution_too_fine_is_said_in_cells(meshes):
+    with pytest.raises(ValueError, match="a resolution of 4096 cells along the longest side"):
+        innersphere.Tree.build(meshes["box"], resolution=4096)
+
+
+def test_a_pair_used_from_two_threads_says_so(trees):
+    import threading
+
+    pair = innersphere.Pair(*trees)
+    poses = np.tile([1.3, 0, 0, 1, 0, 0, 0], (200_000, 1)).astype(float)
+    errors = []
+
+    def other():
+        while worker.is_alive():
+            try:
+                pair.distance([5, 0, 0, 1, 0, 0, 0])
+            except RuntimeError as e:
+                errors.append(str(e))
+                return
+
+    worker = threading.Thread(target=lambda: pair.penetration_many(poses))
+    worker.start()
+    other()
+    worker.join()
+    assert errors, "the second thread never met the busy pair"
+    assert "another thread" in errors[0] and "one Pair per thread" in errors[0]
+    # Free again afterwards.
+    assert pair.distance([5, 0, 0, 1, 0, 0, 0]).distance > 0

@@ -65,3 +65,45 @@ impl Error {
         }
     }
 }
+
+/// A number as a message writes it: plain decimals from 1e-4 to 1e9, else exponent notation
+/// (`1e300`, `2.5e-7`); never hundreds of digits, never a debug dump.
+#[derive(Debug, Clone, Copy)]
+pub struct Num(pub f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        if !x.is_finite() || x == 0.0 || (1e-4..1e9).contains(&x.abs()) {
+            write!(f, "{x}")
+        } else {
+            write!(f, "{x:e}")
+        }
+    }
+}
+
+/// [`Num`] of `x`.
+pub fn num(x: f64) -> Num {
+    Num(x)
+}
+
+/// A vector as a message writes it: `(x, y, z)` in [`Num`]s.
+pub fn vec3(v: glam::DVec3) -> String {
+    format!("({}, {}, {})", num(v.x), num(v.y), num(v.z))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_in_messages_are_plain() {
+        assert_eq!(num(1e300).to_string(), "1e300");
+        assert_eq!(num(-2.5e-7).to_string(), "-2.5e-7");
+        assert_eq!(num(0.006).to_string(), "0.006");
+        assert_eq!(num(12.0).to_string(), "12");
+        assert_eq!(num(0.0).to_string(), "0");
+        assert_eq!(num(f64::NAN).to_string(), "NaN");
+        assert_eq!(num(1e9).to_string(), "1e9");
+    }
+}

@@ -3,7 +3,7 @@
 //! column-major order (OpenGL and OpenHaptics send column-major), or the text
 //! `"tx ty tz qw qx qy qz"`. Input that is no rigid pose is a [`PoseError`], never a panic.
 
-use glam::{DMat3, DMat4, DQuat, DVec3};
+use glam::{DMat3, DMat4, DQuat, DVec3, DVec4};
 use std::fmt;
 use std::str::FromStr;
 
@@ -134,6 +134,14 @@ impl Pose {
         }
         let length = rotation.length();
         if !(length.is_finite() && length > MIN_QUATERNION_LENGTH) {
+            // Its true length for the message: the square underflows below about 1e-154
+            // and overflows above 1e154.
+            let scale = DVec4::from(rotation).abs().max_element();
+            let length = if scale > 0.0 {
+                (rotation / scale).length() * scale
+            } else {
+                0.0
+            };
             return Err(PoseError::BadQuaternion { length });
         }
         Ok(Pose {

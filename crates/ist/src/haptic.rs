@@ -23,10 +23,12 @@ pub struct Args {
     /// (3.3 N) or omega (12 N).
     #[arg(long, default_value = "omega", value_parser = parse_class)]
     device_class: DeviceClass,
-    /// Coupling stiffness (N/mm; default 60 % of the device's; rotations get × 20² mm²).
+    /// Coupling stiffness (N/mm; default 60 % of the device's, less below 1 kHz where the
+    /// device's damping limit caps it; rotations get × 20² mm²).
     #[arg(long)]
     stiffness: Option<f64>,
-    /// Coupling damping (N·s/mm; rotations get × 20² mm²).
+    /// Coupling damping (N·s/mm; default 4 × k·T/2 at the rate or 1 kHz, whichever is
+    /// slower; at least k·T/2; rotations get × 20² mm²).
     #[arg(long)]
     damping: Option<f64>,
     /// Contact stiffness: penalty force per penetration volume (N/mm³).
@@ -73,8 +75,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     outputs.extend(args.trace.as_deref());
     outputs.extend(args.plot.as_deref());
     crate::check_outputs(&outputs, &[&args.a, &args.b, &args.device])?;
-    let mut opts = HapticOptions::for_device(args.device_class);
-    opts.rate = args.rate;
+    let mut opts = HapticOptions::for_device_at(args.device_class, args.rate);
     opts.budget = args.budget_us.map_or(1.0 / args.rate, |us| us * 1e-6);
     if let Some(k) = args.stiffness {
         opts.coupling.stiffness = k;

@@ -117,7 +117,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             "volume": o.volume,
             "max_depth": o.max_depth,
             "patches": patches,
-            "axis": axis.to_array(),
+            "axis": o.axis.to_array(),
             "force": args.force,
             "joints": opts.joints.map(|j| json!({"points": j.points.map(|p| p.to_array()), "anchors": j.anchors.map(|p| p.to_array()), "stiffness": j.stiffness})),
             "landmark_error_max": worst,

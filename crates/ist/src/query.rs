@@ -72,9 +72,12 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         .pose_b
         .parse()
         .with_context(|| format!("--pose-b \"{}\"", args.pose_b))?;
-    if !(args.stiffness.is_finite() && args.stiffness >= 0.0) {
-        anyhow::bail!("--stiffness must be a finite number ≥ 0");
+    innersphere::PenetrationOptions {
+        stiffness: args.stiffness,
+        ..Default::default()
     }
+    .check()
+    .context("--stiffness")?;
     if !(args.abs_tol >= 0.0 && args.rel_tol >= 0.0) {
         anyhow::bail!("--abs-tol and --rel-tol must be ≥ 0");
     }

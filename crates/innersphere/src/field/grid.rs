@@ -1,5 +1,6 @@
 //! The cubic voxel grid laid over a mesh.
 
+use crate::error::num;
 use glam::DVec3;
 
 /// The most cells a grid may have (per-cell arrays must fit in memory).
@@ -60,13 +61,30 @@ impl VoxelGrid {
         if !(longest.is_finite() && longest > 0.0) {
             return Err(crate::Error::InvalidMesh("the mesh has no extent".into()));
         }
-        Self::covering(lo, hi, longest / n as f64)
+        // Said in the caller's terms: cells, not the voxel size they come to.
+        Self::covering(lo, hi, longest / n as f64).map_err(|_| {
+            let ext = hi - lo;
+            let most = (MAX_CELLS as f64 * longest.powi(3) / (ext.x * ext.y * ext.z)).cbrt();
+            crate::Error::InvalidOption(format!(
+                "a resolution of {n} cells along the longest side gives a grid of more than \
+                 {MAX_CELLS} cells over this mesh's {} × {} × {} box; at most about {} cells \
+                 along its longest side fit",
+                num(ext.x),
+                num(ext.y),
+                num(ext.z),
+                most.floor()
+            ))
+        })
     }
 
     fn too_large(h: f64, ext: DVec3) -> crate::Error {
         crate::Error::InvalidOption(format!(
-            "voxel size {h} gives a grid of more than {MAX_CELLS} cells over a box of {:.4} x {:.4} x {:.4}; use a larger voxel size",
-            ext.x, ext.y, ext.z
+            "a voxel size of {} gives a grid of more than {MAX_CELLS} cells over this mesh's \
+             {} × {} × {} box; use a larger voxel size",
+            num(h),
+            num(ext.x),
+            num(ext.y),
+            num(ext.z)
         ))
     }
 

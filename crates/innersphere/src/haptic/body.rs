@@ -1,5 +1,6 @@
 //! The haptic tool as a rigid body: mass and inertia from its tree's meta, and its state.
 
+use crate::error::{num, vec3};
 use crate::{Error, Pose, Result, SphereTree};
 use glam::{DMat3, DQuat, DVec3};
 
@@ -24,7 +25,8 @@ impl RigidBody {
     pub fn from_tree(tree: &SphereTree, density: f64) -> Result<RigidBody> {
         if !(density.is_finite() && density > 0.0) {
             return Err(Error::InvalidOption(format!(
-                "the density must be positive and finite, not {density}"
+                "the density must be positive and finite, not {}",
+                num(density)
             )));
         }
         let Some(entries) = tree.meta.inertia else {
@@ -58,9 +60,11 @@ impl RigidBody {
             i.to_cols_array().iter().all(|x| x.is_finite()) && self.center_of_mass.is_finite();
         if !(self.mass.is_finite() && self.mass > 0.0 && finite && a > 0.0 && b > 0.0 && c > 0.0) {
             return Err(Error::InvalidOption(format!(
-                "the tool's mass ({} kg) must be positive and its inertia tensor positive \
-                 definite ({:?})",
-                self.mass, self.inertia
+                "the tool's mass ({} kg) must be positive and finite and its inertia tensor \
+                 positive definite and finite (its diagonal: {} kg·mm²); check the density \
+                 and the mesh",
+                num(self.mass),
+                vec3(glam::DVec3::new(i.x_axis.x, i.y_axis.y, i.z_axis.z))
             )));
         }
         Ok(())

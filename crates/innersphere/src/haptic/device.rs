@@ -78,14 +78,27 @@ impl DeviceClass {
         }
     }
 
-    /// The default coupling: 60 % of the device's stiffness (room for the sampled spring's
-    /// extra energy, see `docs/HAPTICS.md`) and a damping that keeps the coupling passive at
-    /// rates down to 1 kHz (`b ≥ k·T/2`, Colgate & Schenkel) with a factor of 4 to spare,
-    /// within the device's damping limit.
+    /// The default coupling at 1 kHz and above: 60 % of the device's stiffness (room for the
+    /// sampled spring's extra energy, see `docs/HAPTICS.md`) and a damping that keeps the
+    /// coupling passive at rates down to 1 kHz (`b ≥ k·T/2`, Colgate & Schenkel) with a
+    /// factor of 4 to spare, within the device's damping limit.
     pub fn coupling(self) -> Coupling {
+        self.coupling_at(1000.0)
+    }
+
+    /// The default coupling for a loop at `rate` Hz: as [`coupling`](Self::coupling) at
+    /// 1 kHz and above; below, the damping grows with the period to stay 4 × `k·T/2`, and
+    /// where that would pass the device's damping limit the stiffness drops instead (a
+    /// slower loop renders a softer coupling).
+    pub fn coupling_at(self, rate: f64) -> Coupling {
         let l = self.limits();
-        let k = 0.6 * l.max_stiffness;
-        let b = (4.0 * k * 0.001 / 2.0).min(l.max_damping);
+        let period = 1.0 / rate.min(1000.0);
+        let mut k = 0.6 * l.max_stiffness;
+        let mut b = 4.0 * k * period / 2.0;
+        if b > l.max_damping {
+            b = l.max_damping;
+            k = 2.0 * b / (4.0 * period);
+        }
         Coupling {
             stiffness: k,
             damping: b,

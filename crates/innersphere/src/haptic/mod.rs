@@ -29,6 +29,6 @@ pub use device::{Coupling, DeviceClass, DeviceLimits};
 pub use model::ContactModel;
 pub use multirate::{CollisionOptions, CollisionStats, MultirateLoop};
 pub use occlusion::{occlude, Joints, Occlusion, OcclusionOptions};
-pub use render::{HapticLoop, HapticOptions, Tick};
+pub use render::{check_step, HapticLoop, HapticOptions, Tick, MIN_RATE};
 pub use servo::Servo;
 pub use step::Wrench;

@@ -11,6 +11,7 @@ use super::contact::{Answer, Deadline};
 use super::model::ContactModel;
 use super::servo::Servo;
 use super::{HapticOptions, Tick};
+use crate::error::num;
 use crate::{Error, Pair, PenetrationOptions, Pose, Result};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
@@ -50,13 +51,13 @@ impl CollisionOptions {
         if !(self.delay.is_finite() && (0.0..=1.0).contains(&self.delay)) {
             return Err(Error::InvalidOption(format!(
                 "the collision delay must be between 0 and 1 s, not {} s",
-                self.delay
+                num(self.delay)
             )));
         }
         if !(self.budget.is_finite() && self.budget > 0.0 && self.budget <= 1.0) {
             return Err(Error::InvalidOption(format!(
                 "the collision budget must be above 0 and at most 1 s, not {} s",
-                self.budget
+                num(self.budget)
             )));
         }
         if !(1..=1 << 26).contains(&self.history) {

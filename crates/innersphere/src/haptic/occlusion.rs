@@ -5,6 +5,7 @@
 use super::body::{rotation_between, BodyState, RigidBody, TOOTH_DENSITY};
 use super::mat6::Mat6;
 use super::step::{add_block, contact_damping, implicit_step, Wrench};
+use crate::error::{num, vec3};
 use crate::{Error, Pair, Patch, PenetrationOptions, Pose, Result};
 use glam::{DMat3, DVec3};
 
@@ -100,6 +101,8 @@ pub struct Occlusion {
     pub max_depth: f64,
     /// Contact regions at rest (world).
     pub patches: Vec<Patch>,
+    /// The unit direction B was pushed (the options' axis, normalised).
+    pub axis: DVec3,
 }
 
 /// Closes B (at `from`) onto A (fixed at `pose_a`) under `opts.force` along `opts.axis` until
@@ -112,7 +115,7 @@ pub fn occlude(
 ) -> Result<Occlusion> {
     check(opts)?;
     let body = RigidBody::from_tree(pair.tree_b(), opts.density)?;
-    let axis = opts.axis.normalize();
+    let axis = unit(opts.axis).expect("checked");
     let mut state = BodyState::at_rest(*from);
     let popts = PenetrationOptions {
         stiffness: opts.contact_stiffness,
@@ -190,7 +193,19 @@ pub fn occlude(
         volume: p.volume,
         max_depth: p.max_depth,
         patches: pair.patches().to_vec(),
+        axis,
     })
+}
+
+/// `v` scaled to length 1, robustly (a huge or tiny vector too); `None` when it has no
+/// direction (zero or non-finite).
+fn unit(v: DVec3) -> Option<DVec3> {
+    let scale = v.abs().max_element();
+    if !(scale.is_finite() && scale > 0.0) {
+        return None;
+    }
+    let u = v / scale;
+    Some(u / u.length())
 }
 
 fn check(o: &OcclusionOptions) -> Result<()> {
@@ -206,34 +221,41 @@ fn check(o: &OcclusionOptions) -> Result<()> {
     for (what, x) in positive {
         if !(x.is_finite() && x > 0.0) {
             return Err(Error::InvalidOption(format!(
-                "{what} must be positive and finite, not {x}"
+                "{what} must be positive and finite, not {}",
+                num(x)
             )));
         }
     }
     if !(o.contact_damping.is_finite() && o.contact_damping >= 0.0) {
         return Err(Error::InvalidOption(format!(
             "the contact damping must be finite and not negative, not {}",
-            o.contact_damping
+            num(o.contact_damping)
         )));
     }
-    if !(o.axis.is_finite() && o.axis.length() > 1e-12) {
+    if unit(o.axis).is_none() {
         return Err(Error::InvalidOption(format!(
             "the closing axis must be a finite non-zero vector, not {}",
-            o.axis
+            vec3(o.axis)
         )));
     }
     if let Some(j) = &o.joints {
-        let finite = j.points.iter().chain(&j.anchors).all(|p| p.is_finite());
-        if !(finite && j.stiffness.is_finite() && j.stiffness >= 0.0) {
+        if !j.points.iter().chain(&j.anchors).all(|p| p.is_finite()) {
+            return Err(Error::InvalidOption(
+                "the joints' points and anchors must be finite".into(),
+            ));
+        }
+        if !(j.stiffness.is_finite() && j.stiffness >= 0.0) {
             return Err(Error::InvalidOption(format!(
-                "the joints must have finite points and anchors and a finite stiffness ≥ 0 ({j:?})"
+                "the joint stiffness must be finite and at least 0, not {} N/mm",
+                num(j.stiffness)
             )));
         }
     }
     if o.max_seconds / o.step > 1e8 {
         return Err(Error::InvalidOption(format!(
             "{} s in steps of {} s is more than 10⁸ steps",
-            o.max_seconds, o.step
+            num(o.max_seconds),
+            num(o.step)
         )));
     }
     Ok(())

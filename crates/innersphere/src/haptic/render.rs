@@ -6,9 +6,13 @@ use super::contact::{Answer, Deadline};
 use super::device::{Coupling, DeviceClass, DeviceLimits};
 use super::model::ContactModel;
 use super::servo::Servo;
+use crate::error::num;
 use crate::{Error, Pair, PenetrationOptions, Pose, Result};
 use glam::DVec3;
 use std::time::{Duration, Instant};
+
+/// The slowest loop rate accepted (Hz).
+pub const MIN_RATE: f64 = 100.0;
 
 /// Settings of a [`HapticLoop`]. Units: mm, N, s, kg.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -37,6 +41,15 @@ pub struct HapticOptions {
     /// Oldest a contact model may get (s) before the single-thread loop runs the exact query
     /// whatever it costs (a late tick) rather than go on extrapolating it; default 5 ms.
     pub max_model_age: f64,
+    /// Fastest the loop lets the device move (mm/s; rotations at this speed at the
+    /// coupling's 20 mm lever): a pose read further from the last than this and
+    /// [`max_device_acceleration`](Self::max_device_acceleration) allow is approached as
+    /// fast as they allow, so that a glitch, a jump or a far pose cannot fling the tool or
+    /// kick the hand through the sampled coupling. Default 500 mm/s.
+    pub max_device_speed: f64,
+    /// Largest acceleration the loop lets the device have (mm/s²; rotations alike at the
+    /// lever). Default 20,000 mm/s² (2 g).
+    pub max_device_acceleration: f64,
 }
 
 impl HapticOptions {
@@ -55,6 +68,8 @@ impl HapticOptions {
             max_patches: 8,
             model_slew: 50.0 * class.limits().max_force,
             max_model_age: 5e-3,
+            max_device_speed: 500.0,
+            max_device_acceleration: 20_000.0,
         }
     }
 
@@ -69,19 +84,34 @@ impl HapticOptions {
         }
     }
 
+    /// The defaults of a device class for a loop at `rate` Hz (budget one period): as
+    /// [`for_device`](Self::for_device), with the coupling of
+    /// [`DeviceClass::coupling_at`] (passive at that rate).
+    pub fn for_device_at(class: DeviceClass, rate: f64) -> HapticOptions {
+        HapticOptions {
+            rate,
+            budget: 1.0 / rate,
+            coupling: class.coupling_at(rate),
+            ..HapticOptions::for_device(class)
+        }
+    }
+
     /// Refuses settings no loop can run with: a rate or budget that is not positive and
     /// finite, negative or non-finite stiffness, damping or limits, a coupling stiffer
     /// than the device renders.
     pub fn check(&self) -> Result<()> {
         let bad = |what: &str, x: f64| {
             Err(Error::InvalidOption(format!(
-                "{what} must be positive and finite, not {x}"
+                "{what} must be positive and finite, not {}",
+                num(x)
             )))
         };
-        if !(self.rate.is_finite() && self.rate > 0.0 && self.rate <= 1e6) {
+        if !(self.rate.is_finite() && (MIN_RATE..=1e6).contains(&self.rate)) {
             return Err(Error::InvalidOption(format!(
-                "the rate must be in (0, 1e6] Hz, not {}",
-                self.rate
+                "the rate must be from {MIN_RATE} Hz to 1e6 Hz, not {} Hz: a device updated less \
+                 often than every 10 ms renders no contact a hand feels as one (for the bite at \
+                 rest, use the occlusion)",
+                num(self.rate)
             )));
         }
         if !(self.budget.is_finite() && self.budget > 0.0) {
@@ -106,6 +136,11 @@ impl HapticOptions {
         let positive = [
             ("the model slew rate", self.model_slew),
             ("the largest model age", self.max_model_age),
+            ("the largest device speed", self.max_device_speed),
+            (
+                "the largest device acceleration",
+                self.max_device_acceleration,
+            ),
         ];
         for (what, x) in positive {
             if !(x.is_finite() && x > 0.0) {
@@ -115,7 +150,8 @@ impl HapticOptions {
         for (what, x) in nonneg {
             if !(x.is_finite() && x >= 0.0) {
                 return Err(Error::InvalidOption(format!(
-                    "{what} must be finite and not negative, not {x}"
+                    "{what} must be finite and not negative, not {}",
+                    num(x)
                 )));
             }
         }
@@ -125,13 +161,51 @@ impl HapticOptions {
         if self.coupling.stiffness > self.device.max_stiffness * (1.0 + 1e-12) {
             return Err(Error::InvalidOption(format!(
                 "a coupling of {} N/mm is stiffer than the device renders ({} N/mm)",
-                self.coupling.stiffness, self.device.max_stiffness
+                num(self.coupling.stiffness),
+                num(self.device.max_stiffness)
             )));
         }
         if !(self.density.is_finite() && self.density > 0.0) {
             return bad("the density", self.density);
         }
+        // A sampled spring gives energy back unless its damping is at least k·T/2.
+        let c = &self.coupling;
+        for (what, k, b, unit) in [
+            ("", c.stiffness, c.damping, "N·s/mm"),
+            (
+                "angular ",
+                c.angular_stiffness,
+                c.angular_damping,
+                "N·mm·s/rad",
+            ),
+        ] {
+            let least = k / (2.0 * self.rate);
+            if b < least * (1.0 - 1e-12) {
+                return Err(Error::InvalidOption(format!(
+                    "the {what}coupling damping {} {unit} is below k·T/2 = {} {unit} at {} Hz: \
+                     the sampled spring would give the hand energy; raise the damping or lower \
+                     the stiffness (HapticOptions::for_device_at picks both for a rate)",
+                    num(b),
+                    num(least),
+                    num(self.rate)
+                )));
+            }
+        }
         Ok(())
+    }
+}
+
+/// Refuses a caller's tick step `dt` (s) that is negative, NaN or infinite; 0 stands for one
+/// period. What the bindings check before [`HapticLoop::tick_step`], which itself replaces
+/// such a `dt` by one period (it never fails).
+pub fn check_step(dt: f64) -> Result<()> {
+    if dt.is_finite() && dt >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidOption(format!(
+            "dt must be 0 (one period) or the positive seconds since the last tick, not {}",
+            num(dt)
+        )))
     }
 }
 

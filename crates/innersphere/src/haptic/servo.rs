@@ -4,7 +4,8 @@
 //! under the coupling and the contact model in use, and the force sent back.
 
 use super::blend::Blend;
-use super::body::{rotation_between, BodyState, RigidBody};
+use super::body::{exp, rotation_between, BodyState, RigidBody};
+use super::device::LEVER;
 use super::mat6::Mat6;
 use super::model::ContactModel;
 use super::step::{contact_damping, implicit_step, Wrench};
@@ -50,7 +51,10 @@ pub struct Servo {
     pub(crate) state: BodyState,
     pub(crate) opts: HapticOptions,
     pub(crate) blend: Blend,
-    last_device: Option<(DVec3, DQuat)>,
+    /// The device's centre-of-mass point and rotation as the loop took them last tick.
+    last_device: (DVec3, DQuat),
+    /// Their velocities (mm/s, rad/s).
+    device_velocity: (DVec3, DVec3),
     /// The force and torque sent at the last tick (held until this one: zero-order hold).
     sent: (DVec3, DVec3),
     energy: f64,
@@ -142,7 +146,8 @@ impl Servo {
             state: BodyState::at_rest(start),
             opts,
             blend: Blend::new(ContactModel::none(start)),
-            last_device: None,
+            last_device: (start.transform_point(body.center_of_mass), start.rotation),
+            device_velocity: (DVec3::ZERO, DVec3::ZERO),
             sent: (DVec3::ZERO, DVec3::ZERO),
             energy: 0.0,
             energy_max: 0.0,
@@ -159,19 +164,35 @@ impl Servo {
         } else {
             period
         };
-        let x = device.transform_point(self.body.center_of_mass);
-        let q = device.rotation;
-        let (v, w) = match self.last_device {
-            Some((x0, q0)) => {
-                let dx = x - x0;
-                let dth = rotation_between(q0, q);
-                self.energy += (self.sent.0.dot(dx) + self.sent.1.dot(dth)) * MJ;
-                self.energy_max = self.energy_max.max(self.energy);
-                (dx / h, dth / h)
-            }
-            None => (DVec3::ZERO, DVec3::ZERO),
+        // The device as the loop takes it: it follows the pose read exactly while that moves
+        // within `max_device_speed` and `max_device_acceleration` (rotations at the same at
+        // the coupling's lever), else it goes there as fast as those allow without
+        // overshooting; so a glitch, a jump or a far or non-finite pose moves the tool, and
+        // steps the coupling's force, no more than a hand could.
+        let (x0, q0) = self.last_device;
+        let (vmax, amax) = (
+            self.opts.max_device_speed,
+            self.opts.max_device_acceleration,
+        );
+        let xr = device.transform_point(self.body.center_of_mass);
+        let (x, v) = follow(xr - x0, self.device_velocity.0, vmax, amax, h);
+        let x = x.map_or(xr, |dx| x0 + dx);
+        let (turn, w) = follow(
+            rotation_between(q0, device.rotation),
+            self.device_velocity.1,
+            vmax / LEVER,
+            amax / LEVER,
+            h,
+        );
+        let (q, dth) = match turn {
+            None => (device.rotation, rotation_between(q0, device.rotation)),
+            Some(t) => ((exp(t) * q0).normalize(), t),
         };
-        self.last_device = Some((x, q));
+        self.device_velocity = (v, w);
+        let dx = x - x0;
+        self.energy += (self.sent.0.dot(dx) + self.sent.1.dot(dth)) * MJ;
+        self.energy_max = self.energy_max.max(self.energy);
+        self.last_device = (x, q);
         Sensed { x, q, v, w, h }
     }
 
@@ -228,6 +249,56 @@ impl Servo {
             torque,
             contact,
         }
+    }
+}
+
+/// One step of a follower at velocity `v0` towards a target `d` away, in `h`: `None` (and
+/// the velocity `d / h`) when it can be there now within the speed `vmax` and the
+/// acceleration `amax`; else the displacement it makes at the best speed that still stops
+/// on the target (`√(2·amax·|d|)`, at most `vmax`), reached within `amax`, and its new
+/// velocity. A non-finite `d` is a target in its direction, infinitely far; a NaN one, none.
+fn follow(d: DVec3, v0: DVec3, vmax: f64, amax: f64, h: f64) -> (Option<DVec3>, DVec3) {
+    let need = d / h;
+    if need.is_finite() && need.length() <= vmax && (need - v0).length() <= amax * h {
+        return (None, need);
+    }
+    let dist = d.length();
+    let dir = towards(d, 1.0);
+    let speed = if dist.is_finite() {
+        (2.0 * amax * dist).sqrt().min(vmax)
+    } else {
+        vmax
+    };
+    let v = v0 + towards(dir * speed - v0, amax * h);
+    let mut step = v * h;
+    if dist.is_finite() && step.length() > dist {
+        step = d;
+    }
+    (Some(step), step / h)
+}
+
+/// `d` shortened to at most `max` (its direction kept), robust to huge and non-finite
+/// vectors: zero when `d` has no direction (zero, NaN).
+fn towards(d: DVec3, max: f64) -> DVec3 {
+    let scale = d.abs().max_element();
+    if !(scale > 0.0) || scale.is_nan() {
+        return DVec3::ZERO;
+    }
+    if scale.is_infinite() {
+        // An infinite component: its direction alone.
+        let u = DVec3::new(
+            if d.x.is_infinite() { d.x.signum() } else { 0.0 },
+            if d.y.is_infinite() { d.y.signum() } else { 0.0 },
+            if d.z.is_infinite() { d.z.signum() } else { 0.0 },
+        );
+        return u.normalize() * max;
+    }
+    let u = d / scale;
+    let len = u.length() * scale;
+    if len <= max {
+        d
+    } else {
+        u / u.length() * max
     }
 }
 

@@ -281,7 +281,7 @@ fn follow(d: DVec3, v0: DVec3, vmax: f64, amax: f64, h: f64) -> (Option<DVec3>, 
 /// vectors: zero when `d` has no direction (zero, NaN).
 fn towards(d: DVec3, max: f64) -> DVec3 {
     let scale = d.abs().max_element();
-    if !(scale > 0.0) || scale.is_nan() {
+    if scale.is_nan() || scale <= 0.0 {
         return DVec3::ZERO;
     }
     if scale.is_infinite() {

@@ -2,7 +2,9 @@
 //! [`HapticLoop`] at a given rate, each tick recorded, and the figures that say whether the
 //! loop kept its deadline, stayed passive and rendered a smooth force.
 
+use crate::histogram::Histogram;
 use crate::motion::{AnatomicalFrame, Motion};
+use innersphere::error::num;
 use innersphere::glam::DVec3;
 use innersphere::haptic::{
     CollisionOptions, CollisionStats, HapticLoop, HapticOptions, Joints, MultirateLoop, Tick,
@@ -33,9 +35,9 @@ pub struct HapticSummary {
     pub budget_us: f64,
     /// Ticks that took longer than the budget.
     pub deadline_misses: usize,
-    /// Median tick time (µs).
+    /// Median tick time (µs; from a histogram, within 0.25 %).
     pub compute_p50_us: f64,
-    /// 99th percentile of the tick time (µs).
+    /// 99th percentile of the tick time (µs; within 0.25 %).
     pub compute_p99_us: f64,
     /// Slowest tick (µs).
     pub compute_max_us: f64,
@@ -87,6 +89,9 @@ pub struct Session {
     /// Run the penetration query in a collision thread of its own ([`MultirateLoop`]);
     /// `None`: in the tick ([`HapticLoop`]).
     pub collision: Option<CollisionOptions>,
+    /// Keep every tick in [`HapticRun::ticks`] (for a trace or a plot); else only the
+    /// figures are gathered, in constant memory.
+    pub keep_ticks: bool,
 }
 
 /// Either loop.
@@ -108,7 +113,7 @@ impl Looper {
 /// A session's ticks and figures.
 #[derive(Debug, Clone)]
 pub struct HapticRun {
-    /// Every tick.
+    /// Every tick when the session kept them ([`Session::keep_ticks`]), else none.
     pub ticks: Vec<TickRecord>,
     /// The figures.
     pub summary: HapticSummary,
@@ -133,8 +138,16 @@ pub fn sample(m: &Motion, t: f64) -> Pose {
     }
 }
 
+/// The most ticks a session runs (the trajectory's length times the rate).
+pub const MAX_TICKS: usize = 50_000_000;
+
+/// The most ticks a session keeps for its trace or plot (about 270 bytes each).
+pub const MAX_KEPT_TICKS: usize = 2_000_000;
+
 /// Runs the loop over `device` (B's device pose in A's frame, A at the identity) at
-/// `opts.rate`, starting with the tool at the first device pose, as `session` says.
+/// `opts.rate`, starting with the tool at the first device pose, as `session` says. The
+/// figures are gathered as the ticks go (constant memory); the ticks themselves are kept
+/// only with `session.keep_ticks`, at most [`MAX_KEPT_TICKS`] of them.
 pub fn run(
     pair: Pair,
     device: &Motion,
@@ -154,26 +167,38 @@ pub fn run(
         ));
     }
     let t0 = device.frames[0].t;
-    let n = (device.duration() * opts.rate).floor() as usize + 1;
-    if n > 50_000_000 {
+    let ticks_f = (device.duration() * opts.rate).floor() + 1.0;
+    if !(ticks_f <= MAX_TICKS as f64) {
         return Err(Error::InvalidOption(format!(
-            "{n} ticks are too many (at most 5e7)"
+            "{} s of device trajectory at {} Hz is {} ticks, more than the {} a session runs",
+            num(device.duration()),
+            num(opts.rate),
+            num(ticks_f),
+            num(MAX_TICKS as f64)
         )));
     }
-    // Every device pose before the loop starts: the loop itself allocates nothing.
-    let poses: Vec<Pose> = (0..n)
-        .map(|i| sample(device, t0 + i as f64 / opts.rate))
-        .collect();
+    let n = ticks_f as usize;
+    if session.keep_ticks && n > MAX_KEPT_TICKS {
+        return Err(Error::InvalidOption(format!(
+            "a trace or a plot keeps every tick: at most {} ticks ({} s at {} Hz), not {n}; \
+             shorten the trajectory or leave out --trace and --plot",
+            num(MAX_KEPT_TICKS as f64),
+            num(MAX_KEPT_TICKS as f64 / opts.rate),
+            num(opts.rate)
+        )));
+    }
+    let at = |i: usize| t0 + i as f64 / opts.rate;
+    let first = sample(device, t0);
     // Real time: the collision thread is started at a real-time priority just below the
     // servo's (it inherits the policy), so that neither waits behind ordinary threads and
     // the collision thread never preempts the servo.
     use crate::sysinfo::{realtime_priority, SERVO_PRIORITY};
     let priority = session.realtime && realtime_priority(Some(SERVO_PRIORITY - 1));
     let made = match session.collision {
-        None => HapticLoop::new(pair, Pose::IDENTITY, poses[0], opts).map(Looper::Single),
-        Some(c) => MultirateLoop::spawn(pair, Pose::IDENTITY, poses[0], opts, c).map(Looper::Servo),
+        None => HapticLoop::new(pair, Pose::IDENTITY, first, opts).map(Looper::Single),
+        Some(c) => MultirateLoop::spawn(pair, Pose::IDENTITY, first, opts, c).map(Looper::Servo),
     };
-    let hl = match made {
+    let mut hl = match made {
         Ok(h) => h,
         Err(e) => {
             if priority {
@@ -182,9 +207,9 @@ pub fn run(
             return Err(e);
         }
     };
-    let mut hl = hl;
     let priority = priority && realtime_priority(Some(SERVO_PRIORITY));
-    let mut ticks = Vec::with_capacity(n);
+    let mut ticks = Vec::with_capacity(if session.keep_ticks { n } else { 0 });
+    let mut figures = Figures::default();
     if let Looper::Servo(s) = &hl {
         // The collision thread's first model, before the clock starts.
         let wait = Instant::now();
@@ -193,16 +218,22 @@ pub fn run(
         }
     }
     let start = Instant::now();
-    for (i, pose) in poses.iter().enumerate() {
+    for i in 0..n {
+        // The device's pose: read from the trajectory at the tick's time, as a device driver
+        // would be read (a binary search; nothing allocated).
+        let pose = sample(device, at(i));
         if session.realtime {
             pace(start + Duration::from_secs_f64(i as f64 / opts.rate));
         }
-        let tick = hl.tick(pose);
-        ticks.push(TickRecord {
-            t: t0 + i as f64 / opts.rate,
-            device: *pose,
-            tick,
-        });
+        let tick = hl.tick(&pose);
+        figures.add(&tick);
+        if session.keep_ticks {
+            ticks.push(TickRecord {
+                t: at(i),
+                device: pose,
+                tick,
+            });
+        }
     }
     if session.realtime {
         realtime_priority(None);
@@ -215,37 +246,27 @@ pub fn run(
         Looper::Single(_) => None,
         Looper::Servo(h) => Some(h.finish()),
     };
-    let quantile = |mut v: Vec<f64>, q: f64| {
-        v.sort_by(f64::total_cmp);
-        v[((v.len() - 1) as f64 * q).round() as usize]
-    };
-    let compute: Vec<f64> = ticks.iter().map(|r| r.tick.compute * 1e6).collect();
-    let ages: Vec<f64> = ticks.iter().map(|r| r.tick.model_age * 1e6).collect();
-    let max = |f: &dyn Fn(&TickRecord) -> f64| ticks.iter().map(f).fold(0.0, f64::max);
-    let max_force_step_n = ticks
-        .windows(2)
-        .map(|w| (w[1].tick.force - w[0].tick.force).length())
-        .fold(0.0, f64::max);
+    let f = &figures;
     let summary = HapticSummary {
-        ticks: ticks.len(),
+        ticks: n,
         rate_hz: opts.rate,
         budget_us: opts.budget * 1e6,
-        deadline_misses: ticks.iter().filter(|r| r.tick.late).count(),
-        compute_p50_us: quantile(compute.clone(), 0.5),
-        compute_p99_us: quantile(compute.clone(), 0.99),
-        compute_max_us: quantile(compute, 1.0),
-        budgeted_ticks: ticks.iter().filter(|r| r.tick.budgeted).count(),
-        max_force_n: max(&|r| r.tick.force.length()),
-        max_torque_nmm: max(&|r| r.tick.torque.length()),
-        max_depth_mm: max(&|r| r.tick.max_depth),
-        max_volume_mm3: max(&|r| r.tick.volume),
+        deadline_misses: f.late,
+        compute_p50_us: f.compute_us.quantile(0.5),
+        compute_p99_us: f.compute_us.quantile(0.99),
+        compute_max_us: f.compute_us.max(),
+        budgeted_ticks: f.budgeted,
+        max_force_n: f.max_force,
+        max_torque_nmm: f.max_torque,
+        max_depth_mm: f.max_depth,
+        max_volume_mm3: f.max_volume,
         energy_to_user_max_j: energy_max,
         energy_to_user_end_j: energy_end,
-        max_force_step_n,
+        max_force_step_n: f.max_step,
         realtime: session.realtime,
         realtime_priority: priority,
-        model_age_p99_us: quantile(ages.clone(), 0.99),
-        model_age_max_us: quantile(ages, 1.0),
+        model_age_p99_us: f.age_us.quantile(0.99),
+        model_age_max_us: f.age_us.max(),
         collision_thread: stats.is_some(),
         collision_delay_us: session.collision.map(|c| c.delay * 1e6),
         collision_rate_hz: stats.as_ref().map(|s| s.rate_hz()),
@@ -253,6 +274,38 @@ pub fn run(
         collision_budgeted: stats.as_ref().map(|s| s.budgeted),
     };
     Ok(HapticRun { ticks, summary })
+}
+
+/// The session's figures, gathered tick by tick.
+#[derive(Default)]
+struct Figures {
+    compute_us: Histogram,
+    age_us: Histogram,
+    late: usize,
+    budgeted: usize,
+    max_force: f64,
+    max_torque: f64,
+    max_depth: f64,
+    max_volume: f64,
+    max_step: f64,
+    last_force: Option<DVec3>,
+}
+
+impl Figures {
+    fn add(&mut self, t: &Tick) {
+        self.compute_us.add(t.compute * 1e6);
+        self.age_us.add(t.model_age * 1e6);
+        self.late += t.late as usize;
+        self.budgeted += t.budgeted as usize;
+        self.max_force = self.max_force.max(t.force.length());
+        self.max_torque = self.max_torque.max(t.torque.length());
+        self.max_depth = self.max_depth.max(t.max_depth);
+        self.max_volume = self.max_volume.max(t.volume);
+        if let Some(f) = self.last_force {
+            self.max_step = self.max_step.max((t.force - f).length());
+        }
+        self.last_force = Some(t.force);
+    }
 }
 
 /// Waits until `due`: sleeps until shortly before, then spins. A loop that only spins keeps

@@ -17,6 +17,7 @@
 pub mod bench;
 pub mod demo;
 pub mod haptic;
+pub mod histogram;
 pub mod motion;
 pub mod paper;
 pub mod plot;

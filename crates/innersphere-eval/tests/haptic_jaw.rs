@@ -65,13 +65,11 @@ fn pressing_the_jaw_into_the_bite_feels_solid_and_passive() {
         let mut o = HapticOptions::for_device(DeviceClass::Omega);
         o.rate = rate;
         o.budget = 1.0 / rate;
-        let r = run(
-            Pair::new(j.a.clone(), j.b.clone()),
-            &press(),
-            o,
-            &Session::default(),
-        )
-        .unwrap();
+        let keep = Session {
+            keep_ticks: true,
+            ..Default::default()
+        };
+        let r = run(Pair::new(j.a.clone(), j.b.clone()), &press(), o, &keep).unwrap();
         let s = r.summary;
         eprintln!("{rate} Hz: {s:?}");
         assert_eq!(s.ticks, (6.0 * rate) as usize + 1);
@@ -144,6 +142,7 @@ fn pressing_the_jaw_at_10_khz_with_a_collision_thread_feels_the_same_and_stays_p
                 delay,
                 ..Default::default()
             }),
+            keep_ticks: false,
         };
         let s = run(
             Pair::new(j.a.clone(), j.b.clone()),

@@ -442,3 +442,29 @@ fn a_late_query_never_kicks_the_hand() {
         }
     }
 }
+
+#[test]
+fn a_tool_held_apart_feels_nothing_whatever_the_budget() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    for budget in [1.0, 100e-6, 20e-6, 5e-6, 1e-6] {
+        for gap in [0.05, 0.3, 1.0] {
+            let mut o = options();
+            o.budget = budget;
+            let mut hl = HapticLoop::new(
+                Pair::new(a.clone(), b.clone()),
+                Pose::IDENTITY,
+                on_slab(-gap),
+                o,
+            )
+            .unwrap();
+            for _ in 0..500 {
+                let t = hl.tick(&on_slab(-gap));
+                assert!(
+                    t.force.length() < 1e-9 && t.contact_force == DVec3::ZERO,
+                    "budget {budget} s, {gap} mm apart: {t:?}"
+                );
+            }
+        }
+    }
+}

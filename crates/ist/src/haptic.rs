@@ -105,6 +105,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let session = Session {
         realtime: args.realtime,
         collision,
+        keep_ticks: args.trace.is_some() || args.plot.is_some(),
     };
     let r = run_session(Pair::new(a, b), &device, opts, &session)?;
     if let Some(path) = &args.trace {

@@ -168,7 +168,7 @@ pub fn run(
     }
     let t0 = device.frames[0].t;
     let ticks_f = (device.duration() * opts.rate).floor() + 1.0;
-    if !(ticks_f <= MAX_TICKS as f64) {
+    if ticks_f.is_nan() || ticks_f > MAX_TICKS as f64 {
         return Err(Error::InvalidOption(format!(
             "{} s of device trajectory at {} Hz is {} ticks, more than the {} a session runs",
             num(device.duration()),

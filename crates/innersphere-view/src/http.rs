@@ -1,24 +1,48 @@
 //! The HTTP side: the page, its files, and the JSON/binary API (`docs/VIEWER.md`), on
-//! 127.0.0.1 only. Requests are matched against a fixed table: nothing names a file, bodies
-//! are capped, and every bad request gets a 4xx with a message.
+//! 127.0.0.1 only, served by hyper on a small tokio runtime. Requests are matched against a
+//! fixed table: nothing names a file, and every bad request gets a 4xx with a message. What a
+//! hostile or broken client can do is bounded: a request's headers must arrive within
+//! [`HEADER_TIMEOUT`] and fit [`MAX_HEADER`] (else 431), a body within [`BODY_TIMEOUT`] and
+//! [`MAX_BODY`] (else 408 or 413), a response must be taken within [`WRITE_TIMEOUT`], and at
+//! most [`ServeOptions::max_connections`] connections are open (the next is told 503 and
+//! closed). Each connection is a task of its own: a slow one holds up nobody else.
+
+// A handler's error is the response it answers with, made once per request.
+#![allow(clippy::result_large_err)]
 
 use crate::sim::{self, Control, LoopIo, LoopState, Mode};
 use crate::{assets, encode, Scene};
+use bytes::Bytes;
+use http_body_util::{combinators::BoxBody, BodyExt, Full, Limited, StreamBody};
+use hyper::body::{Frame, Incoming};
+use hyper::header::{HeaderValue, CACHE_CONTROL, CONTENT_LENGTH, CONTENT_TYPE};
+use hyper::{Method, Request, Response, StatusCode};
+use hyper_util::rt::{TokioIo, TokioTimer};
 use innersphere::{DistanceOptions, Pair, PenetrationOptions, Pose};
 use serde_json::{json, Value};
-use std::io::{Cursor, Read};
+use std::convert::Infallible;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
-use tiny_http::{Header, Method, Request, Response, Server, StatusCode};
+use tokio::io::AsyncWriteExt;
+use tokio::sync::Semaphore;
 
 /// Largest request body read (bytes).
-const MAX_BODY: u64 = 64 * 1024;
+pub const MAX_BODY: u64 = 64 * 1024;
+/// Largest request head (request line and headers) read (bytes).
+pub const MAX_HEADER: usize = 16 * 1024;
+/// Time a client has to send a request's head once it starts, or between requests on a
+/// kept-alive connection.
+pub const HEADER_TIMEOUT: Duration = Duration::from_secs(5);
+/// Time a client has to send a request's body.
+pub const BODY_TIMEOUT: Duration = Duration::from_secs(5);
+/// Time a write to a client may stall (a client that sends and never reads).
+pub const WRITE_TIMEOUT: Duration = Duration::from_secs(10);
+/// Connections open at once by default ([`ServeOptions::max_connections`]).
+pub const MAX_CONNECTIONS: usize = 512;
 /// Server-sent-event streams open at once.
 const MAX_STREAMS: usize = 16;
-/// Worker threads answering requests.
-const WORKERS: usize = 4;
 
 /// Settings of [`serve`].
 #[derive(Debug, Clone, Copy)]
@@ -29,6 +53,8 @@ pub struct ServeOptions {
     pub stiffness: f64,
     /// Loop ticks per second.
     pub rate: f64,
+    /// Connections open at once; the next is told 503 and closed.
+    pub max_connections: usize,
 }
 
 impl Default for ServeOptions {
@@ -37,6 +63,7 @@ impl Default for ServeOptions {
             port: 8000,
             stiffness: 1.0,
             rate: 1000.0,
+            max_connections: MAX_CONNECTIONS,
         }
     }
 }
@@ -53,17 +80,29 @@ struct App {
     stop: Arc<AtomicBool>,
 }
 
-type Resp = Response<Cursor<Vec<u8>>>;
+type Body = BoxBody<Bytes, Infallible>;
+type Resp = Response<Body>;
 
-fn header(name: &str, value: &str) -> Header {
-    Header::from_bytes(name.as_bytes(), value.as_bytes()).expect("ASCII header")
+fn respond(code: u16, content_type: &'static str, bytes: Vec<u8>) -> Resp {
+    let mut r = Response::new(Full::new(Bytes::from(bytes)).boxed());
+    *r.status_mut() = StatusCode::from_u16(code).unwrap_or(StatusCode::INTERNAL_SERVER_ERROR);
+    r.headers_mut()
+        .insert(CONTENT_TYPE, HeaderValue::from_static(content_type));
+    r
+}
+
+fn no_store(mut r: Resp) -> Resp {
+    r.headers_mut()
+        .insert(CACHE_CONTROL, HeaderValue::from_static("no-store"));
+    r
 }
 
 fn json_response(code: u16, v: &Value) -> Resp {
-    Response::from_data(serde_json::to_vec(v).unwrap_or_default())
-        .with_status_code(StatusCode(code))
-        .with_header(header("Content-Type", "application/json"))
-        .with_header(header("Cache-Control", "no-store"))
+    no_store(respond(
+        code,
+        "application/json",
+        serde_json::to_vec(v).unwrap_or_default(),
+    ))
 }
 
 fn error(code: u16, message: impl Into<String>) -> Resp {
@@ -71,12 +110,10 @@ fn error(code: u16, message: impl Into<String>) -> Resp {
 }
 
 fn binary(bytes: Vec<u8>) -> Resp {
-    Response::from_data(bytes)
-        .with_header(header("Content-Type", "application/octet-stream"))
-        .with_header(header("Cache-Control", "no-store"))
+    no_store(respond(200, "application/octet-stream", bytes))
 }
 
-/// Serves `scene` until the process ends: starts the loop thread and the HTTP workers, calls
+/// Serves `scene` until the process ends: starts the loop thread and the server, calls
 /// `listening` with the address once the socket is bound, then blocks.
 pub fn serve(
     scene: Scene,
@@ -86,21 +123,30 @@ pub fn serve(
     if !(opts.rate.is_finite() && (1.0..=20_000.0).contains(&opts.rate)) {
         return Err(format!(
             "the loop rate must be 1 to 20000 Hz, not {}",
-            opts.rate
+            innersphere::error::num(opts.rate)
         ));
+    }
+    if opts.max_connections == 0 {
+        return Err("the server must take at least one connection".into());
     }
     if !(opts.stiffness.is_finite() && opts.stiffness >= 0.0) {
         return Err(format!(
             "the stiffness must be finite and not negative, not {}",
-            opts.stiffness
+            innersphere::error::num(opts.stiffness)
         ));
     }
-    let server = Server::http(("127.0.0.1", opts.port))
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .thread_name("ist-view-http")
+        .enable_all()
+        .build()
+        .map_err(|e| format!("cannot start the server's runtime: {e}"))?;
+    let listener = runtime
+        .block_on(tokio::net::TcpListener::bind(("127.0.0.1", opts.port)))
         .map_err(|e| format!("cannot listen on 127.0.0.1:{}: {e}", opts.port))?;
-    let addr = server
-        .server_addr()
-        .to_ip()
-        .ok_or("the server has no IP address")?;
+    let addr = listener
+        .local_addr()
+        .map_err(|e| format!("the server has no address: {e}"))?;
     // B starts where the motion starts, else beside A, apart along x.
     let start = match &scene.motion {
         Some(m) if !m.frames.is_empty() => m.frames[0].pose,
@@ -147,82 +193,146 @@ pub fn serve(
         stop,
     });
     listening(addr);
-    let server = Arc::new(server);
-    let workers: Vec<_> = (0..WORKERS)
-        .map(|_| {
-            let (server, app) = (server.clone(), app.clone());
-            std::thread::spawn(move || {
-                while let Ok(req) = server.recv() {
-                    handle(&app, req);
-                }
-            })
-        })
-        .collect();
-    for w in workers {
-        let _ = w.join();
-    }
+    let result = runtime.block_on(accept(listener, app.clone()));
     app.stop.store(true, Ordering::Relaxed);
-    Ok(())
+    result
 }
 
-fn handle(app: &Arc<App>, mut req: Request) {
-    let url = req.url().to_string();
-    let (path, query) = url.split_once('?').unwrap_or((&url, ""));
-    let method = req.method().clone();
-    if method == Method::Get && path == "/api/events" {
-        return events(app, req);
+/// Accepts connections until the listener fails, each served by a task of its own.
+async fn accept(listener: tokio::net::TcpListener, app: Arc<App>) -> Result<(), String> {
+    let cap = app.opts.max_connections;
+    let slots = Arc::new(Semaphore::new(cap));
+    loop {
+        let (socket, _) = match listener.accept().await {
+            Ok(c) => c,
+            // Out of file descriptors and the like: wait a moment, go on.
+            Err(_) => {
+                tokio::time::sleep(Duration::from_millis(10)).await;
+                continue;
+            }
+        };
+        let _ = socket.set_nodelay(true);
+        let Ok(slot) = slots.clone().try_acquire_owned() else {
+            tokio::spawn(refuse(socket, cap));
+            continue;
+        };
+        let app = app.clone();
+        tokio::spawn(async move {
+            let mut stream = tokio_io_timeout::TimeoutStream::new(socket);
+            stream.set_write_timeout(Some(WRITE_TIMEOUT));
+            let io = TokioIo::new(Box::pin(stream));
+            let service = hyper::service::service_fn(move |req| {
+                let app = app.clone();
+                async move { Ok::<_, Infallible>(handle(app, req).await) }
+            });
+            let _ = hyper::server::conn::http1::Builder::new()
+                .timer(TokioTimer::new())
+                .header_read_timeout(HEADER_TIMEOUT)
+                .max_buf_size(MAX_HEADER.max(8192))
+                .serve_connection(io, service)
+                .await;
+            drop(slot);
+        });
     }
-    let resp = match (&method, path) {
-        (Method::Get, "/") | (Method::Get, "/index.html") => asset("index.html"),
-        (Method::Get, p) if p.starts_with("/assets/") => asset(&p["/assets/".len()..]),
-        (Method::Get, "/api/info") => json_response(200, &info(app)),
-        (Method::Get, "/api/state") => json_response(200, &state_json(app)),
-        (Method::Get, "/api/spheres") => spheres(app, query),
-        (Method::Get, "/api/mesh") => mesh(app, query),
-        (Method::Post, "/api/pose") => match body(&mut req) {
-            Ok(v) => pose(app, &v),
-            Err(r) => r,
-        },
-        (Method::Post, "/api/mode") => match body(&mut req) {
-            Ok(v) => mode(app, &v),
-            Err(r) => r,
-        },
-        (Method::Post, "/api/motion") => match body(&mut req) {
-            Ok(v) => motion(app, &v),
-            Err(r) => r,
-        },
-        (_, "/" | "/index.html" | "/api/info" | "/api/state" | "/api/spheres" | "/api/mesh")
-        | (_, "/api/pose" | "/api/mode" | "/api/motion" | "/api/events") => {
+}
+
+/// Tells a connection over the cap so, and closes it.
+async fn refuse(mut socket: tokio::net::TcpStream, cap: usize) {
+    let body = format!("{{\"error\":\"the viewer has {cap} connections open; try again\"}}");
+    let text = format!(
+        "HTTP/1.1 503 Service Unavailable\r\nContent-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{body}",
+        body.len()
+    );
+    let _ = tokio::time::timeout(WRITE_TIMEOUT, socket.write_all(text.as_bytes())).await;
+    let _ = socket.shutdown().await;
+}
+
+async fn handle(app: Arc<App>, req: Request<Incoming>) -> Resp {
+    let method = req.method().clone();
+    let path = req.uri().path().to_string();
+    let query = req.uri().query().unwrap_or("").to_string();
+    // HEAD is GET without the body (hyper leaves the body out).
+    let get = method == Method::GET || method == Method::HEAD;
+    if get && path == "/api/events" {
+        return events(&app);
+    }
+    let body = if method == Method::POST && path.starts_with("/api/") {
+        match read_body(req).await {
+            Ok(v) => Some(v),
+            Err(r) => return r,
+        }
+    } else {
+        None
+    };
+    // The answers are computed off the runtime's threads: a query or a large encoding does
+    // not hold up other connections.
+    tokio::task::spawn_blocking(move || route(&app, &method, get, &path, &query, body))
+        .await
+        .unwrap_or_else(|_| error(500, "the request's handler failed"))
+}
+
+fn route(
+    app: &App,
+    method: &Method,
+    get: bool,
+    path: &str,
+    query: &str,
+    body: Option<Value>,
+) -> Resp {
+    match (get, method, path) {
+        (true, _, "/" | "/index.html") => asset("index.html"),
+        (true, _, p) if p.starts_with("/assets/") => asset(&p["/assets/".len()..]),
+        (true, _, "/api/info") => json_response(200, &info(app)),
+        (true, _, "/api/state") => json_response(200, &state_json(app)),
+        (true, _, "/api/spheres") => spheres(app, query),
+        (true, _, "/api/mesh") => mesh(app, query),
+        (_, &Method::POST, "/api/pose") => pose(app, body.as_ref().unwrap_or(&Value::Null)),
+        (_, &Method::POST, "/api/mode") => mode(app, body.as_ref().unwrap_or(&Value::Null)),
+        (_, &Method::POST, "/api/motion") => motion(app, body.as_ref().unwrap_or(&Value::Null)),
+        (_, _, "/" | "/index.html" | "/api/info" | "/api/state" | "/api/spheres" | "/api/mesh")
+        | (_, _, "/api/pose" | "/api/mode" | "/api/motion" | "/api/events") => {
             error(405, format!("{method} is not allowed on {path}"))
         }
-        (_, p) => error(404, format!("nothing at {p}")),
-    };
-    let _ = req.respond(resp);
+        (_, _, p) => error(404, format!("nothing at {p}")),
+    }
 }
 
 fn asset(path: &str) -> Resp {
     match assets::get(path) {
-        Some((ty, bytes)) => {
-            Response::from_data(bytes.to_vec()).with_header(header("Content-Type", ty))
-        }
+        Some((ty, bytes)) => respond(200, ty, bytes.to_vec()),
         None => error(404, format!("no asset {path}")),
     }
 }
 
-/// The request's JSON body, at most [`MAX_BODY`] bytes.
-fn body(req: &mut Request) -> Result<Value, Resp> {
-    if req.body_length().is_some_and(|n| n as u64 > MAX_BODY) {
+/// The request's JSON body: at most [`MAX_BODY`] bytes (else 413), within [`BODY_TIMEOUT`]
+/// (else 408).
+async fn read_body(req: Request<Incoming>) -> Result<Value, Resp> {
+    let declared = req
+        .headers()
+        .get(CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.parse::<u64>().ok());
+    if declared.is_some_and(|n| n > MAX_BODY) {
         return Err(error(413, format!("the body is over {MAX_BODY} bytes")));
     }
-    let mut buf = Vec::new();
-    req.as_reader()
-        .take(MAX_BODY + 1)
-        .read_to_end(&mut buf)
-        .map_err(|e| error(400, format!("reading the body: {e}")))?;
-    if buf.len() as u64 > MAX_BODY {
-        return Err(error(413, format!("the body is over {MAX_BODY} bytes")));
-    }
-    serde_json::from_slice(&buf).map_err(|e| error(400, format!("the body is not JSON: {e}")))
+    let limited = Limited::new(req.into_body(), MAX_BODY as usize);
+    let bytes = match tokio::time::timeout(BODY_TIMEOUT, limited.collect()).await {
+        Err(_) => {
+            return Err(error(
+                408,
+                format!(
+                    "the body did not arrive within {} s",
+                    BODY_TIMEOUT.as_secs()
+                ),
+            ))
+        }
+        Ok(Err(e)) if e.is::<http_body_util::LengthLimitError>() => {
+            return Err(error(413, format!("the body is over {MAX_BODY} bytes")))
+        }
+        Ok(Err(e)) => return Err(error(400, format!("reading the body: {e}"))),
+        Ok(Ok(c)) => c.to_bytes(),
+    };
+    serde_json::from_slice(&bytes).map_err(|e| error(400, format!("the body is not JSON: {e}")))
 }
 
 fn latest(app: &App) -> LoopState {
@@ -440,61 +550,35 @@ fn motion(app: &App, v: &Value) -> Resp {
     )
 }
 
-/// Server-sent events: the state about 30 times a second, in a thread of its own.
-fn events(app: &Arc<App>, req: Request) {
+/// Server-sent events: the state about 30 times a second, as a stream of its own.
+fn events(app: &Arc<App>) -> Resp {
     if app.streams.fetch_add(1, Ordering::SeqCst) >= MAX_STREAMS {
         app.streams.fetch_sub(1, Ordering::SeqCst);
-        let _ = req.respond(error(
-            503,
-            format!("at most {MAX_STREAMS} event streams at once"),
-        ));
-        return;
+        return error(503, format!("at most {MAX_STREAMS} event streams at once"));
     }
-    let app = app.clone();
-    std::thread::spawn(move || {
-        let stream = Events {
-            app: app.clone(),
-            buf: Vec::new(),
-            pos: 0,
-        };
-        let resp = Response::new(
-            StatusCode(200),
-            vec![
-                header("Content-Type", "text/event-stream"),
-                header("Cache-Control", "no-store"),
-            ],
-            stream,
-            None,
-            None,
-        );
-        let _ = req.respond(resp);
-        app.streams.fetch_sub(1, Ordering::SeqCst);
-    });
-}
-
-/// An endless body: one `data:` line of state JSON every 33 ms.
-struct Events {
-    app: Arc<App>,
-    buf: Vec<u8>,
-    pos: usize,
-}
-
-impl Read for Events {
-    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
-        if self.pos >= self.buf.len() {
-            if self.app.stop.load(Ordering::Relaxed) {
-                return Ok(0);
-            }
-            std::thread::sleep(Duration::from_millis(33));
-            self.buf.clear();
-            self.buf.extend_from_slice(b"data: ");
-            serde_json::to_writer(&mut self.buf, &state_json(&self.app))?;
-            self.buf.extend_from_slice(b"\n\n");
-            self.pos = 0;
+    let guard = StreamSlot(app.clone());
+    let frames = futures_util::stream::unfold(guard, |guard| async move {
+        if guard.0.stop.load(Ordering::Relaxed) {
+            return None;
         }
-        let n = out.len().min(self.buf.len() - self.pos);
-        out[..n].copy_from_slice(&self.buf[self.pos..n + self.pos]);
-        self.pos += n;
-        Ok(n)
+        tokio::time::sleep(Duration::from_millis(33)).await;
+        let mut buf = b"data: ".to_vec();
+        let _ = serde_json::to_writer(&mut buf, &state_json(&guard.0));
+        buf.extend_from_slice(b"\n\n");
+        Some((Ok::<_, Infallible>(Frame::data(Bytes::from(buf))), guard))
+    });
+    let mut r = Response::new(StreamBody::new(frames).boxed());
+    r.headers_mut()
+        .insert(CONTENT_TYPE, HeaderValue::from_static("text/event-stream"));
+    no_store(r)
+}
+
+/// One of the [`MAX_STREAMS`] event streams, given back when the stream ends or its client
+/// goes.
+struct StreamSlot(Arc<App>);
+
+impl Drop for StreamSlot {
+    fn drop(&mut self) {
+        self.0.streams.fetch_sub(1, Ordering::SeqCst);
     }
 }

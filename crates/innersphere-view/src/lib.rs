@@ -3,14 +3,17 @@
 //! hands its state to the HTTP side through a lock-free triple buffer; the page (three.js,
 //! vendored and embedded) draws it at screen rate. The server holds no collision logic of
 //! its own: every answer comes from [`innersphere::Pair`] and
-//! [`innersphere::haptic::HapticLoop`]. `docs/VIEWER.md` describes the page and the API.
+//! [`innersphere::haptic::MultirateLoop`]. `docs/VIEWER.md` describes the page and the API.
 
 mod assets;
 mod encode;
 mod http;
 mod sim;
 
-pub use http::{serve, ServeOptions};
+pub use http::{
+    serve, ServeOptions, BODY_TIMEOUT, HEADER_TIMEOUT, MAX_BODY, MAX_CONNECTIONS, MAX_HEADER,
+    WRITE_TIMEOUT,
+};
 pub use sim::{LoopState, Mode};
 
 use innersphere::{BuildOptions, Mesh, Resolution, SharedTree, SphereTree};

@@ -1,13 +1,17 @@
 //! The haptic loop and the occlusion on generated bodies: the coupling is passive, a held
 //! tool settles to the static equilibrium, a tick allocates nothing, the deadline holds with
-//! a tiny budget, and occlusion from several open starts ends in the same bite.
+//! a tiny budget and a late query never kicks the hand, a jump or a far pose of the device
+//! flings nothing, a slow loop is passive with the defaults for its rate, and occlusion from
+//! several open starts ends in the same bite.
 
 mod alloc_util;
 mod haptic_util;
 
 use glam::{DQuat, DVec3};
 use haptic_util::{build, on_slab, options, serial, slab_and_block};
-use innersphere::haptic::{occlude, HapticLoop, OcclusionOptions, RigidBody};
+use innersphere::haptic::{
+    occlude, DeviceClass, HapticLoop, HapticOptions, OcclusionOptions, RigidBody,
+};
 use innersphere::{shapes, Pair, Pose, SphereTree};
 use proptest::prelude::*;
 
@@ -467,4 +471,108 @@ fn a_tool_held_apart_feels_nothing_whatever_the_budget() {
             }
         }
     }
+}
+
+#[test]
+fn a_jump_or_a_far_pose_of_the_device_flings_nothing() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    let o = options();
+    let rest = on_slab(-1.0);
+    // One tick at a far or a huge pose, or 10 mm away, amid a device held still above the
+    // slab; and one at a NaN pose.
+    for glitch in [10.0, 1e6, 1e308, f64::INFINITY, f64::NAN] {
+        let mut hl =
+            HapticLoop::new(Pair::new(a.clone(), b.clone()), Pose::IDENTITY, rest, o).unwrap();
+        let (mut max, mut step, mut last) = (0.0f64, 0.0f64, DVec3::ZERO);
+        for i in 0..400 {
+            let mut dev = rest;
+            if i == 100 {
+                dev.translation.x += glitch;
+            }
+            let t = hl.tick(&dev);
+            assert!(
+                t.force.is_finite() && t.tool.translation.is_finite(),
+                "{glitch}: {t:?}"
+            );
+            max = max.max(t.force.length());
+            step = step.max((t.force - last).length());
+            last = t.force;
+        }
+        let moved = (hl.state().pose.translation - rest.translation).length();
+        assert!(moved < 0.01, "{glitch}: the tool ended {moved} mm away");
+        assert!(max < 0.5, "{glitch}: {max} N");
+        assert!(step < 0.2, "{glitch}: a step of {step} N");
+        assert!(
+            hl.energy_to_user_max() <= 1e-9,
+            "{glitch}: {} J",
+            hl.energy_to_user_max()
+        );
+    }
+}
+
+#[test]
+fn a_slow_loop_is_passive_with_the_defaults_for_its_rate() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    for rate in [100.0, 250.0, 500.0] {
+        let mut o = HapticOptions::for_device_at(DeviceClass::Omega, rate);
+        o.contact_stiffness = 50.0;
+        o.budget = 1.0;
+        let c = o.coupling;
+        assert!(
+            c.damping >= 4.0 * c.stiffness / (2.0 * rate) * (1.0 - 1e-12),
+            "{c:?}"
+        );
+        assert!(c.damping <= o.device.max_damping && c.stiffness <= o.device.max_stiffness);
+        let mut hl = HapticLoop::new(
+            Pair::new(a.clone(), b.clone()),
+            Pose::IDENTITY,
+            on_slab(-0.5),
+            o,
+        )
+        .unwrap();
+        // Pressing 1 mm in over a second, holding, letting go.
+        let n = (3.0 * rate) as usize;
+        let mut max = 0.0f64;
+        for i in 0..n {
+            let s = i as f64 / rate;
+            let into = if s < 1.0 {
+                1.5 * s - 0.5
+            } else if s < 2.0 {
+                1.0
+            } else {
+                1.0 - 1.5 * (s - 2.0)
+            };
+            max = max.max(hl.tick(&on_slab(into)).force.length());
+        }
+        assert!(max > 0.5, "{rate} Hz: the slab was not felt ({max} N)");
+        assert!(
+            hl.energy_to_user_max() <= 1e-9,
+            "{rate} Hz: {} J",
+            hl.energy_to_user_max()
+        );
+    }
+    // The 1 kHz coupling at 100 Hz, and a rate below 100 Hz: refused, saying why.
+    let mut o = HapticOptions::for_device(DeviceClass::Omega);
+    o.rate = 100.0;
+    let e = HapticLoop::new(
+        Pair::new(a.clone(), b.clone()),
+        Pose::IDENTITY,
+        on_slab(-1.0),
+        o,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("below k·T/2"), "{e}");
+    let o = HapticOptions::for_device_at(DeviceClass::Omega, 10.0);
+    let e = HapticLoop::new(
+        Pair::new(a.clone(), b.clone()),
+        Pose::IDENTITY,
+        on_slab(-1.0),
+        o,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("from 100 Hz"), "{e}");
 }

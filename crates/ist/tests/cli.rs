@@ -837,6 +837,74 @@ fn haptic_and_occlude_run_on_generated_bodies_and_refuse_bad_input() {
         assert!(stderr(&out).contains("error"), "{}", stderr(&out));
     }
     assert!(std::fs::read_to_string(&dev).unwrap().starts_with("t,tx"));
+    // Issue 34: a low rate, a trace longer than is kept, a negative joint stiffness: a
+    // sentence with plain numbers, exit 2, at once.
+    let long = dir.path("long.csv");
+    std::fs::write(
+        &long,
+        "t,tx,ty,tz,qw,qx,qy,qz\n0,0,0,2,1,0,0,0\n49999,0,0,2,1,0,0,0\n",
+    )
+    .unwrap();
+    for (args, want) in [
+        (
+            vec!["haptic", s(&ta), s(&tb), "--device", s(&dev), "--rate", "1"],
+            "from 100 Hz",
+        ),
+        (
+            vec![
+                "haptic",
+                s(&ta),
+                s(&tb),
+                "--device",
+                s(&long),
+                "--trace",
+                s(&trace),
+            ],
+            "keeps every tick",
+        ),
+        (
+            vec![
+                "occlude",
+                s(&ta),
+                s(&tb),
+                "--from",
+                "0 0 2 1 0 0 0",
+                "--joint-stiffness=-1",
+            ],
+            "the joint stiffness must be finite and at least 0, not -1 N/mm",
+        ),
+    ] {
+        let t = std::time::Instant::now();
+        let out = ist(&args);
+        let e = stderr(&out);
+        assert_eq!(code(&out), 2, "ist {args:?}: {e}");
+        assert!(e.contains(want), "ist {args:?}: {e}");
+        assert!(!e.contains("DVec3") && !e.contains("Joints {"), "{e}");
+        assert!(
+            t.elapsed().as_secs() < 10,
+            "ist {args:?} took {:?}",
+            t.elapsed()
+        );
+    }
+    // A huge closing axis is a direction like any other.
+    let out = ist(&[
+        "occlude",
+        s(&ta),
+        s(&tb),
+        "--from",
+        "0 0 2 1 0 0 0",
+        "--axis",
+        "0",
+        "0",
+        "-1e200",
+        "--free",
+        "--max-seconds",
+        "0.5",
+        "--json",
+    ]);
+    assert!(matches!(code(&out), 0 | 1), "{}", stderr(&out));
+    let v: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(v["axis"], serde_json::json!([0.0, 0.0, -1.0]), "{v}");
     // Occlusion runs and reports (a frictionless ball on a flat top need not come to rest:
     // exit 1 says so; convergence is tested in the library on a seat that holds).
     let out = ist(&[

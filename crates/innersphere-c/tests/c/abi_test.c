@@ -265,8 +265,37 @@ static void errors(const char* dir, ist_tree* a, ist_tree* b) {
     ist_haptic_output o;
     CHECK(h && ist_haptic_tick(h, &nan_pose, 0.001, &o) == IST_ERR_POSE, "NaN device");
     CHECK(h && ist_haptic_tick(h, &id, 0.001, NULL) == IST_ERR_NULL, "NULL out");
+    /* A dt that is not 0 or a positive time is refused, not replaced. */
+    const double bad_dt[] = {NAN, -1.0, INFINITY};
+    for (int i = 0; i < 3; i++)
+        CHECK(h && ist_haptic_tick(h, &id, bad_dt[i], &o) == IST_ERR_INVALID_ARGUMENT &&
+                  strstr(ist_last_error(), "dt must be 0"),
+              "dt %g", bad_dt[i]);
     ist_haptic_free(h);
     ist_haptic_free(NULL);
+    /* A density whose mass overflows: a sentence with plain numbers, no debug dump. */
+    CHECK(ist_haptic_params_default(IST_DEVICE_OMEGA, &hp) == IST_OK, "omega");
+    hp.density = 1e300;
+    CHECK(ist_haptic_new(pair, &hp) == NULL && !strstr(ist_last_error(), "DMat3") &&
+              !strstr(ist_last_error(), "DVec3") && strlen(ist_last_error()) < 400,
+          "density 1e300");
+    /* A rate below 100 Hz is refused; at 100 Hz the defaults for the rate are passive. */
+    CHECK(ist_haptic_params_for_rate(IST_DEVICE_OMEGA, 10.0, &hp) == IST_OK &&
+              ist_haptic_new(pair, &hp) == NULL && strstr(ist_last_error(), "100 Hz"),
+          "10 Hz");
+    CHECK(ist_haptic_params_for_rate(IST_DEVICE_OMEGA, 100.0, &hp) == IST_OK, "100 Hz");
+    h = ist_haptic_new(pair, &hp);
+    CHECK(h != NULL, "the defaults at 100 Hz");
+    ist_haptic_free(h);
+    /* The 1 kHz defaults at 100 Hz: damping below k·T/2, refused with the reason. */
+    CHECK(ist_haptic_params_default(IST_DEVICE_OMEGA, &hp) == IST_OK, "omega");
+    hp.rate = 100.0;
+    CHECK(ist_haptic_new(pair, &hp) == NULL && strstr(ist_last_error(), "k·T/2"),
+          "1 kHz coupling at 100 Hz");
+    /* A stiffness whose force overflows is refused. */
+    ist_penetration_result pr;
+    CHECK(ist_penetration_with_stiffness(pair, &id, &id, 1e308, &pr) == IST_ERR_INVALID_ARGUMENT,
+          "stiffness 1e308");
     ist_pair_free(pair);
     ist_pair_free(NULL);
     ist_tree_free(NULL);

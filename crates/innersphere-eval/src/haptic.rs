@@ -119,25 +119,6 @@ pub struct HapticRun {
     pub summary: HapticSummary,
 }
 
-/// The device's pose at time `t` along `m` (translation interpolated linearly, rotation by
-/// slerp; held at the ends).
-pub fn sample(m: &Motion, t: f64) -> Pose {
-    let f = &m.frames;
-    let i = f.partition_point(|x| x.t <= t);
-    if i == 0 {
-        return f[0].pose;
-    }
-    if i >= f.len() {
-        return f[f.len() - 1].pose;
-    }
-    let (a, b) = (&f[i - 1], &f[i]);
-    let s = ((t - a.t) / (b.t - a.t)).clamp(0.0, 1.0);
-    Pose {
-        rotation: a.pose.rotation.slerp(b.pose.rotation, s).normalize(),
-        translation: a.pose.translation.lerp(b.pose.translation, s),
-    }
-}
-
 /// The most ticks a session runs (the trajectory's length times the rate).
 pub const MAX_TICKS: usize = 50_000_000;
 
@@ -188,11 +169,11 @@ pub fn run(
         )));
     }
     let at = |i: usize| t0 + i as f64 / opts.rate;
-    let first = sample(device, t0);
+    let first = device.pose_at(t0);
     // Real time: the collision thread is started at a real-time priority just below the
     // servo's (it inherits the policy), so that neither waits behind ordinary threads and
     // the collision thread never preempts the servo.
-    use crate::sysinfo::{realtime_priority, SERVO_PRIORITY};
+    use innersphere::haptic::realtime::{realtime_priority, SERVO_PRIORITY};
     let priority = session.realtime && realtime_priority(Some(SERVO_PRIORITY - 1));
     let made = match session.collision {
         None => HapticLoop::new(pair, Pose::IDENTITY, first, opts).map(Looper::Single),
@@ -221,7 +202,7 @@ pub fn run(
     for i in 0..n {
         // The device's pose: read from the trajectory at the tick's time, as a device driver
         // would be read (a binary search; nothing allocated).
-        let pose = sample(device, at(i));
+        let pose = device.pose_at(at(i));
         if session.realtime {
             pace(start + Duration::from_secs_f64(i as f64 / opts.rate));
         }

@@ -18,7 +18,9 @@ pub mod bench;
 pub mod demo;
 pub mod haptic;
 pub mod histogram;
-pub mod motion;
+/// Motions (their own crate, [`innersphere_motion`]), re-exported under the name the harness
+/// has always used.
+pub use innersphere_motion as motion;
 pub mod paper;
 pub mod plot;
 pub mod replay;

@@ -25,7 +25,7 @@ use innersphere::mesh::io::{to_obj_bytes, to_stl_bytes};
 use innersphere::mesh::{load_bytes, Format, Mesh};
 use innersphere::tree::file;
 use innersphere::{MatrixOrder, MultipointOptions, Pair, Pose, SphereTree};
-use innersphere_eval::motion::Motion;
+use innersphere_motion::Motion;
 
 pub mod seeds;
 
@@ -51,8 +51,8 @@ pub fn target(name: &str) -> Option<Target> {
     TARGETS.iter().find(|(n, _)| *n == name).map(|&(_, f)| f)
 }
 
-/// Coordinates within ±this are in range for any sensible limit a loader may impose (issue
-/// 25 item 1 asks loaders to refuse coordinates the tree's f32 arrays cannot hold). Where an
+/// Coordinates within ±this are in range for any sensible limit a loader may impose (loaders
+/// refuse coordinates the tree's f32 arrays cannot hold, `mesh::MAX_COORDINATE`). Where an
 /// oracle below says "must load", it says so only for files whose coordinates all lie
 /// within it.
 pub const SAFE_COORDINATE: f64 = 1e6;
@@ -293,7 +293,7 @@ fn gzip(parts: &[&[u8]]) -> Vec<u8> {
 /// - clear: the rest is the `.gz` file. It must load exactly when it is valid gzip (per an
 ///   independent decoder) of a file that loads uncompressed, and give the same mesh. A
 ///   loader may refuse, as a likely gzip bomb, data that inflates to more than 16 times its
-///   compressed size (issue 25 item 4), with an error that says gzip.
+///   compressed size, with an error that says gzip.
 /// - set: the second byte is a split point, the rest the plain file, compressed here as two
 ///   gzip members split there. It must load exactly as the plain file does.
 pub fn mesh_gzip(data: &[u8]) {

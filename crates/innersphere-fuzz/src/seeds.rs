@@ -11,7 +11,7 @@ use innersphere::mesh::io::{to_obj_bytes, to_stl_bytes};
 use innersphere::shapes;
 use innersphere::tree::{file, SphereTree, TreeMeta, NO_PARENT};
 use innersphere::{Mesh, Pose};
-use innersphere_eval::motion::{Frame, Motion};
+use innersphere_motion::{Frame, Motion};
 
 /// A tetrahedron, outward facing.
 pub fn tetrahedron() -> Mesh {

@@ -76,7 +76,7 @@ fn other_seeds_load() {
     }
     for s in seeds("motion_csv") {
         let text = std::str::from_utf8(&s).expect("UTF-8");
-        innersphere_eval::motion::Motion::parse(text, "seed").expect("a valid motion");
+        innersphere_motion::Motion::parse(text, "seed").expect("a valid motion");
     }
     for s in seeds("pose_text") {
         let text = std::str::from_utf8(&s).expect("UTF-8");

@@ -1,4 +1,4 @@
-//! Under load (issue 25, item 8), on generated models and motions:
+//! Under load, on generated models and motions:
 //!
 //! - many [`Pair`]s sharing two [`SharedTree`]s, queried from rayon threads (and moved
 //!   between threads from one frame to the next), answer bit for bit what one thread does;
@@ -20,7 +20,7 @@ use innersphere::tree::file;
 use innersphere::{
     shapes, BuildOptions, MultipointOptions, Pair, Pose, Resolution, SharedTree, SphereTree,
 };
-use innersphere_eval::motion::{generate, Scenario};
+use innersphere_motion::{generate, Scenario};
 use rayon::prelude::*;
 
 /// The generated tooth pair, both trees and three generated motions (B in A's frame).

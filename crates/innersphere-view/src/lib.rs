@@ -17,7 +17,7 @@ pub use http::{
 pub use sim::{LoopState, Mode};
 
 use innersphere::{BuildOptions, Mesh, Resolution, SharedTree, SphereTree};
-use innersphere_eval::motion::Motion;
+use innersphere_motion::Motion;
 
 /// What the viewer shows: two trees, optionally their meshes, optionally a motion of B.
 #[derive(Debug, Clone)]
@@ -45,8 +45,8 @@ impl Scene {
         };
         let a = SphereTree::build(&upper, &opts)?;
         let b = SphereTree::build(&lower, &opts)?;
-        let motion = innersphere_eval::motion::generate(
-            innersphere_eval::motion::Scenario::Chew,
+        let motion = innersphere_motion::generate(
+            innersphere_motion::Scenario::Chew,
             6.0,
             1,
             &upper,

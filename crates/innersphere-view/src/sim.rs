@@ -6,8 +6,7 @@
 use innersphere::glam::DVec3;
 use innersphere::haptic::{CollisionOptions, DeviceClass, HapticOptions, MultirateLoop};
 use innersphere::{DistanceOptions, Pair, Patch, PenetrationOptions, Pose, SharedTree};
-use innersphere_eval::haptic::sample;
-use innersphere_eval::motion::Motion;
+use innersphere_motion::Motion;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -191,8 +190,8 @@ pub(crate) fn run(
     let mut last_mode = Mode::Free;
     let mut seek_id = 0u64;
     let mut rate_from = (start, 0u64, 0u64);
-    state.realtime = innersphere_eval::sysinfo::realtime_priority(Some(
-        innersphere_eval::sysinfo::SERVO_PRIORITY,
+    state.realtime = innersphere::haptic::realtime::realtime_priority(Some(
+        innersphere::haptic::realtime::SERVO_PRIORITY,
     ));
     while !io.stop.load(Ordering::Relaxed) {
         deadline += period;
@@ -213,7 +212,7 @@ pub(crate) fn run(
             state.playing = c.playing;
         }
         let target = match (&motion, c.mode) {
-            (Some(m), Mode::Motion) => sample(m, m.frames[0].t + state.motion_t),
+            (Some(m), Mode::Motion) => m.pose_at(m.frames[0].t + state.motion_t),
             _ => c.target,
         };
         // Entering haptic mode puts the tool at rest at the device's pose, its penetration

@@ -20,6 +20,7 @@ mod mat6;
 pub mod model;
 pub mod multirate;
 pub mod occlusion;
+pub mod realtime;
 pub mod render;
 pub mod servo;
 mod step;

@@ -69,32 +69,34 @@ impl Motion {
     /// Reads a motion file (gzip-compressed when the path ends in `.gz`).
     pub fn load(path: impl AsRef<Path>) -> Result<Motion> {
         let path = path.as_ref();
-        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-        let mut bytes = Vec::new();
-        let read = if innersphere::mesh::io::is_gzip(path) {
-            flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file))
-                .take(MAX_FILE_BYTES + 1)
-                .read_to_end(&mut bytes)
-        } else {
-            file.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes)
-        };
-        read.map_err(|e| Error::io(path, e))?;
-        if bytes.len() as u64 > MAX_FILE_BYTES {
-            return Err(motion_error(
-                path,
-                1,
-                format!("file larger than {MAX_FILE_BYTES} bytes; refusing it"),
-            ));
+        Motion::parse(&read_text(path)?, path)
+    }
+
+    /// [`load`](Self::load), with each frame's eight numbers as the file writes them (the
+    /// quaternion before it is normalised): for callers that hand the file's own numbers on
+    /// (the Python module), from the same parser.
+    pub fn load_with_rows(path: impl AsRef<Path>) -> Result<(Motion, Vec<[f64; 8]>)> {
+        let path = path.as_ref();
+        Motion::parse_with_rows(&read_text(path)?, path)
+    }
+
+    /// The pose at time `t`: translation interpolated linearly and rotation by slerp between
+    /// the frames around `t`, held at the ends (as a device driver's last reading would be).
+    /// Allocates nothing (a binary search). The motion must have a frame.
+    pub fn pose_at(&self, t: f64) -> Pose {
+        let f = &self.frames;
+        let i = f.partition_point(|x| x.t <= t);
+        if i == 0 {
+            return f[0].pose;
         }
-        match std::str::from_utf8(&bytes) {
-            Ok(text) => Motion::parse(text, path),
-            Err(e) => {
-                let line = 1 + bytes[..e.valid_up_to()]
-                    .iter()
-                    .filter(|&&b| b == b'\n')
-                    .count();
-                Err(motion_error(path, line, "not UTF-8 text"))
-            }
+        if i >= f.len() {
+            return f[f.len() - 1].pose;
+        }
+        let (a, b) = (&f[i - 1], &f[i]);
+        let s = ((t - a.t) / (b.t - a.t)).clamp(0.0, 1.0);
+        Pose {
+            rotation: a.pose.rotation.slerp(b.pose.rotation, s).normalize(),
+            translation: a.pose.translation.lerp(b.pose.translation, s),
         }
     }
 
@@ -106,8 +108,14 @@ impl Motion {
     /// whose norm is off 1 by more than [`QUAT_NORM_TOLERANCE`] (nearly unit ones are
     /// normalized), times that do not increase, and a file without frames. Never panics.
     pub fn parse(text: &str, path: impl AsRef<Path>) -> Result<Motion> {
+        Motion::parse_with_rows(text, path).map(|(m, _)| m)
+    }
+
+    /// [`parse`](Self::parse), with each frame's eight numbers as written.
+    pub fn parse_with_rows(text: &str, path: impl AsRef<Path>) -> Result<(Motion, Vec<[f64; 8]>)> {
         let path = path.as_ref();
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let mut rows: Vec<[f64; 8]> = Vec::new();
         let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l));
         // The header: the first non-blank line.
         let header = lines.by_ref().find(|(_, l)| !l.trim().is_empty());
@@ -206,6 +214,7 @@ impl Motion {
             let pose = Pose::new(DVec3::new(v[1], v[2], v[3]), q)
                 .map_err(|e| motion_error(path, line, format!("not a valid rigid pose: {e}")))?;
             frames.push(Frame { t, pose });
+            rows.push(v);
         }
         if frames.is_empty() {
             return Err(motion_error(
@@ -214,7 +223,7 @@ impl Motion {
                 "no frames after the header",
             ));
         }
-        Ok(Motion { frames })
+        Ok((Motion { frames }, rows))
     }
 
     /// Checks what [`parse`](Self::parse) would check of a file written from this motion:
@@ -274,6 +283,34 @@ impl Motion {
         self.validate(path)?;
         innersphere::output::write_file(path, self.to_csv().as_bytes())
     }
+}
+
+/// The text of a motion file, decompressed when the path ends in `.gz`, at most
+/// [`MAX_FILE_BYTES`].
+fn read_text(path: &Path) -> Result<String> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut bytes = Vec::new();
+    let read = if innersphere::mesh::io::is_gzip(path) {
+        flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file))
+            .take(MAX_FILE_BYTES + 1)
+            .read_to_end(&mut bytes)
+    } else {
+        file.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes)
+    };
+    read.map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(motion_error(
+            path,
+            1,
+            format!("file larger than {MAX_FILE_BYTES} bytes; refusing it"),
+        ));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let bytes = e.as_bytes();
+        let valid = e.utf8_error().valid_up_to();
+        let line = 1 + bytes[..valid].iter().filter(|&&b| b == b'\n').count();
+        motion_error(path, line, "not UTF-8 text")
+    })
 }
 
 /// True when a quaternion norm is within [`QUAT_NORM_TOLERANCE`] of 1 (false for NaN).

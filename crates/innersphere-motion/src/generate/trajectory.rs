@@ -2,7 +2,7 @@
 //! smoothing, and the sums of sinusoids of the hand tremor.
 
 use super::scenario::Key;
-use crate::motion::rng::Rng;
+use crate::rng::Rng;
 use std::f64::consts::TAU;
 
 /// `count` sinusoids between 2 and 12 Hz with random phases and an RMS of `sigma` together:

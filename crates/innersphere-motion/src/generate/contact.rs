@@ -6,7 +6,7 @@
 use super::kinematics::Kin;
 use super::scenario::{Depth, Key};
 use super::trajectory::{gaussian_smooth, lateral, min_jerk, segment};
-use crate::motion::clearance::ClearanceEstimator;
+use crate::clearance::ClearanceEstimator;
 use innersphere::{Error, Result};
 
 /// Solves keyframes for their opening along the closing rotation (see [`solve`]).

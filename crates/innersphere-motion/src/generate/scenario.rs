@@ -1,7 +1,7 @@
 //! The scenarios ([`Scenario`]) and their plans: keyframes of lateral position, protrusion
 //! and depth (an opening beyond first contact, or a target clearance), drawn from the seed.
 
-use crate::motion::rng::Rng;
+use crate::rng::Rng;
 use innersphere::{Error, Result};
 
 /// A kind of generated motion.

@@ -1,7 +1,11 @@
-//! Motion files and generated motions.
+//! Motions of body B against body A: files, sampling in time, generated motions and haptic
+//! device trajectories. Its own crate, with no plotting, so that the Python module, the
+//! viewer and the fuzz targets read motions without the evaluation harness.
 //!
 //! - [`Motion`] / [`Frame`]: the motion file format (`t,tx,ty,tz,qw,qx,qy,qz`, the pose of
-//!   body B in body A's frame over time), loading with line-numbered errors, saving.
+//!   body B in body A's frame over time), loading with line-numbered errors, saving, and the
+//!   pose at any time ([`Motion::pose_at`]).
+//! - [`press()`]: a smooth haptic device trajectory into a pair's bite and out.
 //! - [`generate()`] / [`generate_with`]: hand-recorded-looking motions of a pair at 1 kHz
 //!   ([`Scenario::Chew`], [`Scenario::OpenClose`], [`Scenario::Grind`]) that pass through
 //!   separated, touching and interpenetrating phases.

@@ -1,8 +1,7 @@
 //! Every query answer on the jaw arches along the recorded chew, bit for bit: a digest of all
-//! answer bits per query kind (and of the node-pair tests, the work done), compared with the
-//! digests recorded before the library's API and `query/` were reorganised. A change to any
-//! answer, or to the work a query does, changes a digest; a deliberate change of an answer
-//! must update the digest here and say why in its commit.
+//! answer bits per query kind (and of the node-pair tests, the work done), compared with
+//! recorded digests. A change to any answer, or to the work a query does, changes a digest;
+//! a deliberate change of an answer must update the digest here and say why in its commit.
 
 #[path = "../../innersphere/tests/common/mod.rs"]
 mod common;
@@ -175,7 +174,7 @@ fn query(kind: usize, st: &mut Pair, pose_b: &Pose, ans: &mut Digest, work: &mut
     }
 }
 
-/// Digests recorded before the reorganisation: (kind, answers, work).
+/// The recorded digests: (kind, answers, work).
 const RECORDED: [(&str, u64, u64); 13] = [
     ("proximity", 0x27a28e9c1598773c, 0x3b91f149fdeca5dc),
     (

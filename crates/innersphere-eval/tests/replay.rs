@@ -322,9 +322,9 @@ fn csv_of(report: &ReplayReport) -> String {
     String::from_utf8(out).unwrap()
 }
 
-/// Issue 25 (5): the CSV of a replay that times only the contact query used to say
-/// `distance=0,contact=false` on every frame, overlapping ones included. Each kind now writes
-/// its own answer, and a column nothing computed is absent or empty.
+/// The CSV of a replay that times only the contact query holds the contact answers, not
+/// `distance=0,contact=false` on every frame: each kind writes its own answer, and a column
+/// nothing computed is absent or empty.
 #[test]
 fn the_csv_holds_each_kinds_own_answer() {
     let (a, b) = (ball_tree(), ball_tree());

@@ -6,11 +6,11 @@ use innersphere::Error;
 use innersphere_fuzz::seeds::small_tree;
 
 /// A node that is nobody's child (an orphan) at depth 65535 with a child: validating the
-/// child computed the orphan's depth + 1 in `u16` before the orphan check ran. With overflow
-/// checks (debug builds, and the fuzzer's `-a` builds) that panicked ("attempt to add with
-/// overflow", `tree/mod.rs` `validate_structure`); without them it wrapped to 0 and the
-/// orphan check refused the tree. Found by `tree_file` (crash-11b287df..., 627 bytes, and two
-/// more of the same cause). The answer must be an error, never a panic, in every build.
+/// child computes the orphan's depth + 1, which does not fit a `u16`. An unchecked add panics
+/// with overflow checks (debug builds, and the fuzzer's `-a` builds: "attempt to add with
+/// overflow" in `tree/mod.rs` `validate_structure`) and wraps to 0 without them. Found by
+/// `tree_file` (crash-11b287df..., 627 bytes, and two more of the same cause). The answer
+/// must be an error, never a panic, in every build.
 fn orphan_at_max_depth() -> SphereTree {
     let mut t = small_tree();
     // Node 0: a leaf root. Node 1: an orphan at depth u16::MAX with node 2 as its child.

@@ -229,7 +229,7 @@ def test_bad_haptic_options(trees):
         innersphere.Haptic(pair, start=[NAN, 0, 0, 1, 0, 0, 0])
 
 
-# --- issue 34: what a hostile caller feeds the new doors ------------------------------------
+# --- what a hostile caller feeds the haptic loop and the pair -----------------------------
 
 
 def test_a_stiffness_whose_force_would_overflow_is_refused(pair):

@@ -31,8 +31,8 @@ fn samples(t: &[DVec3; 3], n: usize) -> Vec<DVec3> {
 }
 
 /// Distance from `p` to the closed triangle `t`. The barycentric closest-point routine alone
-/// loses accuracy on slivers (a point exactly on the long edge of a 1e-5-thin triangle came
-/// out 2.3e-9 away, failing CI once), so the edges' segment distances, which are accurate
+/// loses accuracy on slivers (a point exactly on the long edge of a 1e-5-thin triangle comes
+/// out 2.3e-9 away), so the edges' segment distances, which are accurate
 /// for points on the boundary, also bound it (each candidate is a point of the triangle).
 fn point_tri(p: DVec3, t: &[DVec3; 3]) -> f64 {
     let mut d = (p - closest_point_on_triangle(p, t[0], t[1], t[2])).length();
@@ -99,8 +99,8 @@ fn float_intersect(a: &[DVec3; 3], b: &[DVec3; 3], tol: f64) -> Option<bool> {
     Some(hit)
 }
 
-/// The case that failed CI once: coplanar triangles, `a` a sliver 1.3e-5 thin; the reported
-/// common point lies on `a`'s long edge, which the oracle must see.
+/// A sliver the barycentric routine alone gets wrong: coplanar triangles, `a` 1.3e-5 thin;
+/// the reported common point lies on `a`'s long edge, which the oracle must see.
 #[test]
 fn coplanar_sliver_regression() {
     let a = [

@@ -1,4 +1,4 @@
-//! Issue 25, the library's side of the command line's cases: multipoint with `k = 0` claims
+//! The library's side of the command line's answers and messages: multipoint with `k = 0` claims
 //! no separation, a tree knows whether a mesh is the one it was built from, a huge voxel
 //! blames the voxel size, a tiny quaternion is called too small to normalise. (Outputs never
 //! overwriting inputs and atomic writes: the unit tests of `innersphere::output`.)

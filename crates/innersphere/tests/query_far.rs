@@ -1,6 +1,6 @@
 //! Far and huge poses: every query kind answers any finite pose, to the documented tolerance,
-//! with finite numbers and a bounded number of node-pair tests (the f32 search used to turn
-//! exhaustive once B's rounding slack outgrew the leaves, and to overflow beyond 10¹⁹).
+//! with finite numbers and a bounded number of node-pair tests (a plain f32 search turns
+//! exhaustive once B's rounding slack outgrows the leaves, and overflows beyond 10¹⁹).
 
 use innersphere::glam::{DQuat, DVec3};
 use innersphere::{

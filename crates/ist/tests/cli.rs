@@ -837,7 +837,7 @@ fn haptic_and_occlude_run_on_generated_bodies_and_refuse_bad_input() {
         assert!(stderr(&out).contains("error"), "{}", stderr(&out));
     }
     assert!(std::fs::read_to_string(&dev).unwrap().starts_with("t,tx"));
-    // Issue 34: a low rate, a trace longer than is kept, a negative joint stiffness: a
+    // A low rate, a trace longer than is kept, a negative joint stiffness: a
     // sentence with plain numbers, exit 2, at once.
     let long = dir.path("long.csv");
     std::fs::write(

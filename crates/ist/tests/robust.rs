@@ -1,7 +1,7 @@
-//! Issue 25, the command line's part (items 2, 5 and 6), on inputs the tests write
+//! Files, outputs and error texts of the command line, on inputs the tests write
 //! themselves in a fresh temporary folder: no subcommand overwrites one of its inputs (the
 //! same path, another spelling, a hard or symbolic link) and every output is written whole or
-//! not at all; answers that used to be silently wrong (`replay --query contact --csv`,
+//! not at all; answers that are never silently wrong (`replay --query contact --csv`,
 //! `--k 0`, `check` against another mesh, `replay --exact` with unrelated meshes); and error
 //! texts that say what is wrong (the OS error once, the voxel size blamed for a huge voxel, a
 //! tiny quaternion called too small to normalise, `demo` on one mesh twice refused before it
@@ -97,8 +97,8 @@ fn refused(args: &[&str], victim: &Path) {
     );
 }
 
-/// Issue 25 (2): `build -o self.stl self.stl` used to replace the mesh with a tree and exit
-/// 0, and so did `export`, `motion -o`/`--labels` and `replay --csv` onto their inputs.
+/// `build -o self.stl self.stl` must not replace the mesh with a tree, nor `export`,
+/// `motion -o`/`--labels` and `replay --csv` write onto their inputs: each is refused.
 #[test]
 fn no_subcommand_overwrites_an_input() {
     let dir = fixture("inputs");
@@ -248,7 +248,7 @@ fn outputs_are_replaced_whole_or_not_at_all() {
 
 /// A run whose write fails midway (here: the file size limit, `ulimit -f`, reached with
 /// SIGXFSZ ignored, so that the write returns an error) leaves the previous output whole and
-/// no temporary file; before, the output was truncated to the limit. With SIGXFSZ's default
+/// no temporary file (not an output truncated to the limit). With SIGXFSZ's default
 /// action, which kills the process in the middle of the write (an interrupted run), the
 /// previous output is whole too (only a hidden temporary file may stay behind).
 #[cfg(unix)]
@@ -340,8 +340,8 @@ fn column(csv: &str, name: &str) -> Vec<String> {
         .collect()
 }
 
-/// Issue 25 (5): `replay --query contact --csv` wrote `distance=0,contact=false` on every
-/// frame, overlapping ones included; each kind now writes its own answer.
+/// `replay --query contact --csv` writes the contact answer of every frame, not
+/// `distance=0,contact=false`: each kind writes its own answer.
 #[test]
 fn replay_csv_rows_hold_each_kinds_own_answer() {
     let dir = fixture("replay-csv");
@@ -381,8 +381,8 @@ fn replay_csv_rows_hold_each_kinds_own_answer() {
     }
 }
 
-/// Issue 25 (5): `query --query multipoint --k 0` said "separated by at least inf" for
-/// overlapping bodies; k = 0 is refused (and in `replay`).
+/// `query --query multipoint --k 0` must not say "separated by at least inf" for
+/// overlapping bodies: k = 0 is refused (and in `replay`).
 #[test]
 fn k_zero_is_refused() {
     let dir = fixture("k0");
@@ -415,9 +415,9 @@ fn k_zero_is_refused() {
     assert!(err.contains("--k must be at least 1"), "{err}");
 }
 
-/// Issue 25 (5): `check --mesh OTHER TREE` said ok for a tree inside a larger mesh; a mesh
-/// whose bounding box or volume is not the tree's source's is an error. The same mesh in
-/// another format (here an ASCII STL) still passes.
+/// `check --mesh OTHER TREE` is not ok for a tree inside a larger mesh: a mesh whose
+/// bounding box or volume is not the tree's source's is an error. The same mesh in another
+/// format (here an ASCII STL) passes.
 #[test]
 fn check_refuses_a_mesh_the_tree_was_not_built_from() {
     let dir = fixture("check");
@@ -451,8 +451,8 @@ fn check_refuses_a_mesh_the_tree_was_not_built_from() {
     assert!(stdout(&out).starts_with("ok: "));
 }
 
-/// Issue 25 (5): `replay --exact` with meshes that are not the trees' own warns (and still
-/// runs); with the right meshes it does not.
+/// `replay --exact` with meshes that are not the trees' own warns (and runs); with the
+/// right meshes it does not.
 #[test]
 fn replay_exact_with_unrelated_meshes_warns() {
     let dir = fixture("exact");
@@ -495,7 +495,7 @@ fn replay_exact_with_unrelated_meshes_warns() {
     assert_eq!(err.matches("warning: --exact").count(), 2, "{err}");
 }
 
-/// Issue 25 (6): the OS error of a missing input appears once, in every subcommand.
+/// The OS error of a missing input appears once, in every subcommand.
 #[test]
 fn a_missing_input_is_named_once_with_its_os_error_once() {
     let dir = fixture("missing");
@@ -543,8 +543,8 @@ fn a_missing_input_is_named_once_with_its_os_error_once() {
     }
 }
 
-/// Issue 25 (6): a voxel larger than the mesh used to be reported as "minimum radius too
-/// large" (with the minimum radius 0).
+/// A voxel larger than the mesh is blamed on the voxel size, not reported as "minimum radius
+/// too large" (with the minimum radius 0).
 #[test]
 fn a_huge_voxel_blames_the_voxel_size() {
     let dir = fixture("voxel");
@@ -568,7 +568,7 @@ fn a_huge_voxel_blames_the_voxel_size() {
     assert!(!dir.path("t.ist").exists());
 }
 
-/// Issue 25 (6): a quaternion of length 1e-30 is too small to normalise (not "zero").
+/// A quaternion of length 1e-30 is too small to normalise (not "zero").
 #[test]
 fn a_tiny_quaternion_is_too_small_to_normalise() {
     let dir = fixture("quat");
@@ -578,10 +578,9 @@ fn a_tiny_quaternion_is_too_small_to_normalise() {
     assert!(err.contains("1e-30"), "{err}");
 }
 
-/// Issue 25 (6): `demo --a X --b X` built both trees, then said the bodies never touch
-/// although they coincide. The demo now makes its motion from the meshes first, so a pair that
-/// admits none fails before any build, and the generator says why: the same mesh twice (one
-/// file, or a copy). With `--seconds 0` (build only) it is fine.
+/// `demo --a X --b X`: the bodies coincide. The demo makes its motion from the meshes first,
+/// so a pair that admits none fails before any build, and the generator says why: the same
+/// mesh twice (one file, or a copy). With `--seconds 0` (build only) it is fine.
 #[test]
 fn demo_refuses_one_mesh_twice_before_building() {
     let dir = fixture("demo");

@@ -216,7 +216,7 @@ fn split(
     // the minimal sphere around the leaf spheres below (both enclose every leaf, which is all
     // the queries need). Children's spheres bulge beyond their leaves, and the bulges add up
     // level by level: on the jaw trees the leaf-based sphere is 10–25 % smaller at depths
-    // 2–7, and the queries refine 2.5–5× fewer node pairs (commit 70b6821).
+    // 2–7, and the queries refine 2.5–5× fewer node pairs.
     let balls: Vec<Ball> = children.iter().map(|c| c.ball).collect();
     let (c, _) = enclosing::enclose(&balls);
     let by_children = round_parent(c, &balls);

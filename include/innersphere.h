@@ -300,6 +300,46 @@ typedef struct ist_distance_result {
 } ist_distance_result;
 
 /*
+ Result of ist_penetration_within (world frame): what a time-critical penetration query
+ found within its node-pair budget.
+ */
+typedef struct ist_budgeted_result {
+  /*
+   Volume of the overlapping leaf pairs found (model units³; at most the exact volume).
+   */
+  double volume;
+  /*
+   Proved upper bound on the exact volume (= volume when complete).
+   */
+  double upper_bound;
+  /*
+   1 when every overlapping pair was refined: volume is exact.
+   */
+  int complete;
+  /*
+   Largest leaf overlap found (model units).
+   */
+  double max_depth;
+  /*
+   Unit normal of the pairs found and, when the budget ran out, of the unrefined node
+   pairs counted as their bounds.
+   */
+  double normal[3];
+  /*
+   Penalty force on B of the same (stiffness × volume found and bounds).
+   */
+  double force[3];
+  /*
+   Torque on B about its centre of mass, of the same.
+   */
+  double torque_b[3];
+  /*
+   Node pairs tested.
+   */
+  uint64_t visits;
+} ist_budgeted_result;
+
+/*
  Result of ist_penetration (world frame).
  */
 typedef struct ist_penetration_result {
@@ -537,6 +577,34 @@ int ist_distance(struct ist_pair *pair, const struct ist_pose *pose_a, const str
  Every pointer is NULL or valid.
  */
 int ist_contact(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, int *in_contact);
+
+/*
+ The paper's distance traversal (its first-contact baseline): `*in_contact` = 1 when the
+ packings overlap, else 0 (the same answer as ist_contact).
+
+ # Safety
+ Every pointer is NULL or valid.
+ */
+int ist_distance_traversal(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, int *in_contact);
+
+/*
+ The paper's backtracking traversal (from the pair's previous contact; on a new or reset
+ pair the distance traversal): `*in_contact` = 1 when the packings overlap, else 0.
+
+ # Safety
+ Every pointer is NULL or valid.
+ */
+int ist_backtracking(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, int *in_contact);
+
+/*
+ Time-critical penetration volume: refines the largest overlaps first for at most
+ `budget` node-pair tests (about 75 ns each), answering the volume found and a proved
+ upper bound on the rest; `stiffness` as ist_penetration_with_stiffness.
+
+ # Safety
+ Every pointer is NULL or valid.
+ */
+int ist_penetration_within(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, uint64_t budget, double stiffness, struct ist_budgeted_result *out);
 
 /*
  Penetration volume, normal, force (volume along the normal: stiffness 1), torques and

@@ -7,6 +7,7 @@
 
 use innersphere::glam::{DQuat, DVec3};
 use innersphere::haptic::{DeviceClass, HapticLoop, HapticOptions};
+use innersphere::query::TraversalOptions;
 use innersphere::{shapes, BuildOptions, MultipointOptions, Pair, Pose, Resolution, SphereTree};
 use innersphere::{PenetrationOptions, SharedTree};
 use std::fmt::Write as _;
@@ -113,6 +114,31 @@ fn answer(dir: &Path) -> String {
         );
         let c = pair.contact(&pa, &pb);
         let _ = writeln!(out, "{i} contact {}", c.contact.is_some() as i32);
+        let t = TraversalOptions::default();
+        let dt = pair.paper().distance_traversal(&pa, &pb, &t).in_contact();
+        let bt = pair.paper().backtracking(&pa, &pb, &t).in_contact();
+        let _ = writeln!(out, "{i} traversals {} {}", dt as i32, bt as i32);
+        let w = pair.penetration_within_with(
+            &pa,
+            &pb,
+            500,
+            &PenetrationOptions {
+                stiffness: 2.5,
+                ..Default::default()
+            },
+        );
+        let _ = writeln!(
+            out,
+            "{i} within {} {} {} {} {} {} {} {}",
+            bits(w.volume),
+            bits(w.upper_bound),
+            w.complete as i32,
+            bits(w.max_depth),
+            v(w.normal),
+            v(w.force),
+            v(w.torque_b),
+            w.visits
+        );
         let opts = PenetrationOptions {
             stiffness: 2.5,
             ..Default::default()

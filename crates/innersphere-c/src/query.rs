@@ -4,9 +4,11 @@
 use crate::error::{pointer, status, Fail};
 use crate::tree::ist_tree;
 use crate::types::{
-    ist_contact_point, ist_distance_result, ist_patch, ist_penetration_result, ist_pose,
+    ist_budgeted_result, ist_contact_point, ist_distance_result, ist_patch, ist_penetration_result,
+    ist_pose,
 };
 use crate::{mutable, reference};
+use innersphere::query::TraversalOptions;
 use innersphere::{MultipointOptions, Pair, PenetrationOptions, Pose};
 use std::ffi::c_int;
 
@@ -104,6 +106,86 @@ pub unsafe extern "C" fn ist_contact(
         let (pair, a, b) = unsafe { args(pair, pose_a, pose_b) }?;
         let out = unsafe { mutable(in_contact, "in_contact") }?;
         *out = pair.contact(&a, &b).contact.is_some() as c_int;
+        Ok(())
+    })
+}
+
+/// The paper's distance traversal (its first-contact baseline): `*in_contact` = 1 when the
+/// packings overlap, else 0 (the same answer as ist_contact).
+///
+/// # Safety
+/// Every pointer is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn ist_distance_traversal(
+    pair: *mut ist_pair,
+    pose_a: *const ist_pose,
+    pose_b: *const ist_pose,
+    in_contact: *mut c_int,
+) -> c_int {
+    status(|| {
+        let (pair, a, b) = unsafe { args(pair, pose_a, pose_b) }?;
+        let out = unsafe { mutable(in_contact, "in_contact") }?;
+        let opts = TraversalOptions::default();
+        *out = pair.paper().distance_traversal(&a, &b, &opts).in_contact() as c_int;
+        Ok(())
+    })
+}
+
+/// The paper's backtracking traversal (from the pair's previous contact; on a new or reset
+/// pair the distance traversal): `*in_contact` = 1 when the packings overlap, else 0.
+///
+/// # Safety
+/// Every pointer is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn ist_backtracking(
+    pair: *mut ist_pair,
+    pose_a: *const ist_pose,
+    pose_b: *const ist_pose,
+    in_contact: *mut c_int,
+) -> c_int {
+    status(|| {
+        let (pair, a, b) = unsafe { args(pair, pose_a, pose_b) }?;
+        let out = unsafe { mutable(in_contact, "in_contact") }?;
+        let opts = TraversalOptions::default();
+        *out = pair.paper().backtracking(&a, &b, &opts).in_contact() as c_int;
+        Ok(())
+    })
+}
+
+/// Time-critical penetration volume: refines the largest overlaps first for at most
+/// `budget` node-pair tests (about 75 ns each), answering the volume found and a proved
+/// upper bound on the rest; `stiffness` as ist_penetration_with_stiffness.
+///
+/// # Safety
+/// Every pointer is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn ist_penetration_within(
+    pair: *mut ist_pair,
+    pose_a: *const ist_pose,
+    pose_b: *const ist_pose,
+    budget: u64,
+    stiffness: f64,
+    out: *mut ist_budgeted_result,
+) -> c_int {
+    status(|| {
+        let (pair, a, b) = unsafe { args(pair, pose_a, pose_b) }?;
+        let out = unsafe { mutable(out, "out") }?;
+        let opts = PenetrationOptions {
+            stiffness,
+            ..Default::default()
+        };
+        opts.check()?;
+        let w = pair.penetration_within_with(&a, &b, budget, &opts);
+        *out = ist_budgeted_result {
+            volume: w.volume,
+            upper_bound: w.upper_bound,
+            complete: w.complete as c_int,
+            max_depth: w.max_depth,
+            normal: w.normal.to_array(),
+            force: w.force.to_array(),
+            torque_b: w.torque_b.to_array(),
+            visits: w.visits,
+        };
         Ok(())
     })
 }

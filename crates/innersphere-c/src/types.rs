@@ -86,6 +86,30 @@ pub struct ist_penetration_result {
     pub patch_count: usize,
 }
 
+/// Result of ist_penetration_within (world frame): what a time-critical penetration query
+/// found within its node-pair budget.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ist_budgeted_result {
+    /// Volume of the overlapping leaf pairs found (model units³; at most the exact volume).
+    pub volume: f64,
+    /// Proved upper bound on the exact volume (= volume when complete).
+    pub upper_bound: f64,
+    /// 1 when every overlapping pair was refined: volume is exact.
+    pub complete: c_int,
+    /// Largest leaf overlap found (model units).
+    pub max_depth: f64,
+    /// Unit normal of the pairs found and, when the budget ran out, of the unrefined node
+    /// pairs counted as their bounds.
+    pub normal: [f64; 3],
+    /// Penalty force on B of the same (stiffness × volume found and bounds).
+    pub force: [f64; 3],
+    /// Torque on B about its centre of mass, of the same.
+    pub torque_b: [f64; 3],
+    /// Node pairs tested.
+    pub visits: u64,
+}
+
 /// One contact patch of the last ist_penetration (world frame).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

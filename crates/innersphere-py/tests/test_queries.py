@@ -102,6 +102,32 @@ def test_penetration_equals_cli(pair, tree_files, ist, i, stiffness):
     same(d["torque"], want["torque"])
 
 
+@pytest.mark.parametrize("i", range(len(POSES)))
+def test_traversals_equal_cli(pair, tree_files, ist, i):
+    for kind in ("distance-traversal", "backtracking"):
+        want = ist.query(*tree_files, POSES[i], kind)
+        pair.reset()
+        got = getattr(pair, kind.replace("-", "_"))(POSES[i])
+        assert got is want["contact"], kind
+    pair.reset()
+    assert pair.distance_traversal(POSES[i]) == pair.contact(POSES[i])
+
+
+@pytest.mark.parametrize("budget", [50, 100_000])
+@pytest.mark.parametrize("i", range(len(POSES)))
+def test_penetration_within_equals_cli(pair, tree_files, ist, i, budget):
+    want = ist.query(*tree_files, POSES[i], "penetration-within", "--budget", str(budget), "--stiffness", "2.5")
+    pair.reset()
+    got = pair.penetration_within(POSES[i], budget, 2.5)
+    for k in ("volume", "upper_bound", "max_depth", "normal", "force", "torque"):
+        same(got[k], want[k])
+    assert got["complete"] == want["complete"] and got["visits"] == want["visits"]
+    assert got["volume"] <= got["upper_bound"]
+    if got["complete"]:
+        pair.reset()
+        assert got["volume"] == pytest.approx(pair.penetration(POSES[i]).volume, rel=1e-6, abs=1e-12)
+
+
 def test_some_poses_touch_and_some_do_not(pair):
     """The poses cover both sides of contact (else the tests above prove little)."""
     pair.reset()

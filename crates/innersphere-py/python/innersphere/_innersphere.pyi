@@ -237,6 +237,20 @@ class Pair:
         max_patches: int = 8,
     ) -> PenetrationResult:
         """Penetration volume, normal, penalty force, torques and contact patches."""
+    def penetration_within(
+        self,
+        pose_b: _PoseLike,
+        budget: int = 8000,
+        stiffness: float = 1.0,
+        *,
+        pose_a: Optional[_PoseLike] = None,
+    ) -> Dict[str, Any]:
+        """Time-critical penetration volume within budget node-pair tests: a dict of volume,
+        upper_bound, complete, max_depth, normal, force, torque, visits."""
+    def distance_traversal(self, pose_b: _PoseLike, *, pose_a: Optional[_PoseLike] = None) -> bool:
+        """The paper's distance traversal: whether the packings overlap."""
+    def backtracking(self, pose_b: _PoseLike, *, pose_a: Optional[_PoseLike] = None) -> bool:
+        """The paper's backtracking traversal: whether the packings overlap."""
     def reset(self) -> None:
         """Forgets all temporal coherence: the next query starts from scratch."""
     def distance_many(

@@ -1,0 +1,79 @@
+//! Every query of the library's `Pair` reaches every door: the C ABI (`include/innersphere.h`),
+//! the Python module (its stubs, which `mypy.stubtest` checks against the module in CI) and
+//! `ist query --query`. The queries are read from `Pair`'s own source, so that a new kind
+//! cannot be added to the library and forgotten at a door.
+
+use std::process::Command;
+
+fn read(rel: &str) -> String {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+    std::fs::read_to_string(format!("{root}/{rel}")).unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
+/// The query kinds of `Pair` (and of `pair.paper()`): its public methods that take `&mut
+/// self` and both poses, an options variant (`…_with`) counted as its kind.
+fn kinds() -> Vec<String> {
+    let src = read("crates/innersphere/src/query/pair.rs");
+    let mut out: Vec<String> = vec![];
+    let mut rest = src.as_str();
+    while let Some(i) = rest.find("pub fn ") {
+        rest = &rest[i + "pub fn ".len()..];
+        let name: String = rest
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        let sig = &rest[..rest.find('{').unwrap_or(rest.len())];
+        if sig.contains("&mut self")
+            && sig.contains("pose_a: &Pose")
+            && sig.contains("pose_b: &Pose")
+        {
+            let kind = name.strip_suffix("_with").unwrap_or(&name).to_string();
+            if !out.contains(&kind) {
+                out.push(kind);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn every_query_of_pair_reaches_c_python_and_ist_query() {
+    let kinds = kinds();
+    for k in [
+        "distance",
+        "contact",
+        "multipoint",
+        "penetration",
+        "penetration_within",
+        "distance_traversal",
+        "backtracking",
+    ] {
+        assert!(
+            kinds.iter().any(|x| x == k),
+            "{k} not found in Pair: {kinds:?}"
+        );
+    }
+    let header = read("include/innersphere.h");
+    let stubs = read("crates/innersphere-py/python/innersphere/_innersphere.pyi");
+    let help = Command::new(env!("CARGO_BIN_EXE_ist"))
+        .args(["query", "--help"])
+        .output()
+        .expect("ist runs");
+    let help = String::from_utf8_lossy(&help.stdout);
+    let mut missing = vec![];
+    for k in &kinds {
+        if !header.contains(&format!(" ist_{k}(")) {
+            missing.push(format!("C: ist_{k}"));
+        }
+        if !stubs.contains(&format!("def {k}(")) {
+            missing.push(format!("Python: Pair.{k}"));
+        }
+        if !help.contains(&format!("- {}:", k.replace('_', "-"))) {
+            missing.push(format!("ist query --query {}", k.replace('_', "-")));
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "queries of Pair missing at a door: {missing:?}"
+    );
+}

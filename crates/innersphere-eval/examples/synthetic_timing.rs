@@ -26,19 +26,7 @@ fn main() {
         t.elapsed().as_secs_f64()
     );
     let t = Instant::now();
-    let meta = innersphere::tree::TreeMeta {
-        fanout: 4,
-        voxel_size: h,
-        min_radius: 0.0,
-        mesh_volume: 1.0,
-        center_of_mass: [0.0; 3],
-        bbox_min: [0.0; 3],
-        bbox_max: [0.0; 3],
-        coverage: 0.0,
-        mesh_closed: true,
-        built_by: None,
-        inertia: None,
-    };
+    let meta = innersphere::tree::TreeMeta::unmeasured(4, h, [0.0; 3], [0.0; 3]);
     let (tree, stats) =
         innersphere::hierarchy::build(&spheres, &Default::default(), meta, &Silent).unwrap();
     println!(

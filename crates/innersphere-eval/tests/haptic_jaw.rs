@@ -6,8 +6,7 @@
 //! 0.5 mm of the scanned one. The timings themselves are reported by
 //! `ist haptic` (docs/HAPTICS.md); here only what the loop guarantees is asserted.
 
-#[path = "../../innersphere/tests/common/mod.rs"]
-mod common;
+use innersphere_testkit::data as common;
 
 use innersphere::glam::DQuat;
 use innersphere::haptic::{

@@ -2,8 +2,7 @@
 //! the clearance estimate, the anatomical frame and generated motions: on the generated
 //! tooth pair always, on the real jaw pair with `--ignored`.
 
-#[path = "../../innersphere/tests/common/mod.rs"]
-mod common;
+use innersphere_testkit::data as common;
 
 use glam::{DQuat, DVec3};
 use innersphere::Pose;

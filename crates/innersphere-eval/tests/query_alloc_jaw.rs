@@ -3,10 +3,11 @@
 //! it lives here because the core crate does not generate motions. The counting allocator
 //! and the query-kind matrix are the core test's `alloc_util`, included by path.
 
-#[path = "../../innersphere/tests/alloc_util/mod.rs"]
-mod alloc_util;
-#[path = "../../innersphere/tests/common/mod.rs"]
-mod common;
+use innersphere_testkit::alloc as alloc_util;
+
+#[global_allocator]
+static COUNTING: alloc_util::Counting = alloc_util::Counting;
+use innersphere_testkit::data as common;
 
 use alloc_util::*;
 use innersphere::build::{build_tree, BuildOptions, Resolution};

@@ -3,8 +3,7 @@
 //! recorded digests. A change to any answer, or to the work a query does, changes a digest;
 //! a deliberate change of an answer must update the digest here and say why in its commit.
 
-#[path = "../../innersphere/tests/common/mod.rs"]
-mod common;
+use innersphere_testkit::data as common;
 
 use innersphere::build::{build_tree, BuildOptions, Resolution};
 use innersphere::glam::DVec3;

@@ -23,17 +23,9 @@ fn ball_tree() -> SharedTree {
     let spheres = packing::pack(&field, &PackingOptions::default(), None, &Silent);
     assert!((spheres[0].radius - 1.0).abs() < 1e-9);
     let meta = TreeMeta {
-        fanout: 4,
-        voxel_size: 0.1,
-        min_radius: 0.0,
         mesh_volume: 4.0 / 3.0 * std::f64::consts::PI,
-        center_of_mass: [0.0; 3],
-        bbox_min: [-1.0; 3],
-        bbox_max: [1.0; 3],
         coverage: 1.0,
-        mesh_closed: true,
-        built_by: None,
-        inertia: None,
+        ..TreeMeta::unmeasured(4, 0.1, [-1.0; 3], [1.0; 3])
     };
     SharedTree::new(
         hierarchy::build(&spheres, &HierarchyOptions::default(), meta, &Silent)

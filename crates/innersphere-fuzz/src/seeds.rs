@@ -244,17 +244,9 @@ pub fn small_tree() -> SphereTree {
         parent: vec![NO_PARENT, 0, 0],
         depth: vec![0, 1, 1],
         meta: TreeMeta {
-            fanout: 2,
-            voxel_size: 0.25,
-            min_radius: 0.0,
-            mesh_volume: 1.0,
-            center_of_mass: [0.0; 3],
-            bbox_min: [-1.0; 3],
-            bbox_max: [1.0; 3],
             coverage: 0.5,
-            mesh_closed: true,
             built_by: Some(innersphere::tree::BuildStamp::current(0)),
-            inertia: None,
+            ..TreeMeta::unmeasured(2, 0.25, [-1.0; 3], [1.0; 3])
         },
     }
 }

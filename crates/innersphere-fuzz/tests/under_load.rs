@@ -9,8 +9,10 @@
 //!
 //! The figures are in `docs/RELIABILITY.md`, "Under load".
 
-#[path = "../../innersphere/tests/alloc_util/mod.rs"]
-mod alloc_util;
+use innersphere_testkit::alloc as alloc_util;
+
+#[global_allocator]
+static COUNTING: alloc_util::Counting = alloc_util::Counting;
 
 use std::hash::{Hash, Hasher};
 use std::sync::OnceLock;

@@ -134,13 +134,13 @@ impl Pose {
         }
         let length = rotation.length();
         if !(length.is_finite() && length > MIN_QUATERNION_LENGTH) {
-            // Its true length for the message: the square underflows below about 1e-154
-            // and overflows above 1e154.
+            // Too short: its true length for the message (the square underflows below
+            // about 1e-154). Too long: its length overflowed, said as such.
             let scale = DVec4::from(rotation).abs().max_element();
-            let length = if scale > 0.0 {
+            let length = if length.is_finite() && scale > 0.0 {
                 (rotation / scale).length() * scale
             } else {
-                0.0
+                length
             };
             return Err(PoseError::BadQuaternion { length });
         }

@@ -2,7 +2,7 @@
 //! meshes (`--ignored`): the tree passes the independent check, the build is deterministic,
 //! and bad inputs are clear errors.
 
-mod common;
+use innersphere_testkit::data as common;
 
 use glam::DVec3;
 use innersphere::build::{build_tree, BuildOptions, Resolution};

@@ -541,19 +541,7 @@ fn max_leaf_overlap_is_zero_on_disjoint_leaves_and_finds_an_overlap() {
 }
 
 fn meta() -> TreeMeta {
-    TreeMeta {
-        fanout: 4,
-        voxel_size: 0.1,
-        min_radius: 0.0,
-        mesh_volume: 1.0,
-        center_of_mass: [0.0; 3],
-        bbox_min: [0.0; 3],
-        bbox_max: [0.0; 3],
-        coverage: 0.0,
-        mesh_closed: true,
-        built_by: None,
-        inertia: None,
-    }
+    TreeMeta::unmeasured(4, 0.1, [0.0; 3], [0.0; 3])
 }
 
 /// Nodes may miss their leaves by up to the tolerance, so two leaves can overlap by up to

@@ -4,7 +4,10 @@
 //! flings nothing, a slow loop is passive with the defaults for its rate, and occlusion from
 //! several open starts ends in the same bite.
 
-mod alloc_util;
+use innersphere_testkit::alloc as alloc_util;
+
+#[global_allocator]
+static COUNTING: alloc_util::Counting = alloc_util::Counting;
 mod haptic_util;
 
 use glam::{DQuat, DVec3};

@@ -3,7 +3,7 @@
 //! Tests on the real data in `../shared/data` are `#[ignore]`d; run them with
 //! `cargo test -p innersphere --release --test mesh_io -- --include-ignored`.
 
-mod common;
+use innersphere_testkit::data as common;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

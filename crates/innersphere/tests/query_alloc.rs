@@ -6,7 +6,10 @@
 //!
 //! `INNERSPHERE_ALLOC_TRACE=1` prints a backtrace of every counted allocation.
 
-mod alloc_util;
+use innersphere_testkit::alloc as alloc_util;
+
+#[global_allocator]
+static COUNTING: alloc_util::Counting = alloc_util::Counting;
 mod query_util;
 
 use alloc_util::*;

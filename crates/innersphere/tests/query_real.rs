@@ -2,7 +2,7 @@
 //! and the opposing molar pair of the jaw data set). Ignored by default:
 //! `cargo test -p innersphere --release --test query_real -- --ignored`.
 
-mod common;
+use innersphere_testkit::data as common;
 mod query_util;
 mod reference;
 

@@ -40,6 +40,33 @@ pub struct TreeMeta {
     pub inertia: Option<[f64; 6]>,
 }
 
+impl TreeMeta {
+    /// The meta of spheres that were not packed from a mesh (a hand-made or analytic sphere
+    /// set given to [`hierarchy::build`](crate::hierarchy::build)): its fan-out, voxel size
+    /// and box; a mesh volume of 1, the centre of mass at the origin, no coverage, no stamp,
+    /// no inertia. Change the fields that matter afterwards.
+    pub fn unmeasured(
+        fanout: u32,
+        voxel_size: f64,
+        bbox_min: [f64; 3],
+        bbox_max: [f64; 3],
+    ) -> TreeMeta {
+        TreeMeta {
+            fanout,
+            voxel_size,
+            min_radius: 0.0,
+            mesh_volume: 1.0,
+            center_of_mass: [0.0; 3],
+            bbox_min,
+            bbox_max,
+            coverage: 0.0,
+            mesh_closed: true,
+            built_by: None,
+            inertia: None,
+        }
+    }
+}
+
 /// Revision of the tree construction whose node spheres the queries' speed figures assume;
 /// raised whenever the builder changes the trees it makes (not their file layout). Revision 2:
 /// every node's sphere encloses the leaves below it (revision 1 enclosed the children's

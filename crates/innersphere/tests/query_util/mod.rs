@@ -25,17 +25,8 @@ pub fn analytic_tree(
     let field = DistanceField::from_signed_distance(grid, sdf);
     let spheres = packing::pack(&field, &PackingOptions::default(), None, &Silent);
     let meta = TreeMeta {
-        fanout,
-        voxel_size: h,
-        min_radius: 0.0,
-        mesh_volume: 1.0,
         center_of_mass: com.to_array(),
-        bbox_min: lo.to_array(),
-        bbox_max: hi.to_array(),
-        coverage: 0.0,
-        mesh_closed: true,
-        built_by: None,
-        inertia: None,
+        ..TreeMeta::unmeasured(fanout, h, lo.to_array(), hi.to_array())
     };
     let opts = HierarchyOptions {
         fanout,

@@ -373,17 +373,8 @@ pub fn hand_tree(leaves: &[(V3, f64)], com: V3) -> SphereTree {
     use innersphere::tree::{TreeMeta, NO_PARENT};
     assert!(!leaves.is_empty() && leaves.len() <= 4);
     let meta = TreeMeta {
-        fanout: 4,
-        voxel_size: 0.1,
-        min_radius: 0.0,
-        mesh_volume: 1.0,
         center_of_mass: com,
-        bbox_min: [-10.0; 3],
-        bbox_max: [10.0; 3],
-        coverage: 0.0,
-        mesh_closed: true,
-        built_by: None,
-        inertia: None,
+        ..TreeMeta::unmeasured(4, 0.1, [-10.0; 3], [10.0; 3])
     };
     if leaves.len() == 1 {
         let (c, r) = leaves[0];

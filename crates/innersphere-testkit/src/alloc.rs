@@ -4,7 +4,6 @@
 //! (`tests/query_alloc_jaw.rs`, which needs its generated motions).
 //!
 //! `INNERSPHERE_ALLOC_TRACE=1` prints a backtrace of every counted allocation.
-#![allow(dead_code)]
 
 use innersphere::query::TraversalOptions;
 use innersphere::{
@@ -13,7 +12,10 @@ use innersphere::{
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
-struct Counting;
+/// A global allocator that counts, on each thread, the allocations made while [`counted`]
+/// runs there: declare it in a test binary with
+/// `#[global_allocator] static A: Counting = Counting;`.
+pub struct Counting;
 
 // Both the switch and the counts are per thread: the test harness runs tests on parallel
 // threads, and a count shared between them would see the other tests' allocations.
@@ -57,9 +59,6 @@ unsafe impl GlobalAlloc for Counting {
         unsafe { System.dealloc(p, l) }
     }
 }
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 /// (allocations, bytes) made by `f` on this thread; `f`'s result.
 pub fn counted<R>(f: impl FnOnce() -> R) -> (u64, u64, R) {

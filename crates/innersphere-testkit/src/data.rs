@@ -1,5 +1,4 @@
-//! Shared helpers for integration tests.
-#![allow(dead_code)]
+//! The real-data folder beside the repository.
 
 use std::path::PathBuf;
 

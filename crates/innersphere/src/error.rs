@@ -40,7 +40,7 @@ pub enum Error {
     Output(String),
     /// Numbers that are no rigid pose (see [`PoseError`](crate::PoseError)).
     #[error("invalid pose: {0}")]
-    Pose(#[from] crate::PoseError),
+    Pose(#[from] crate::pose::PoseError),
     /// A motion file that cannot be used.
     #[error("{path}:{line}: {message}")]
     Motion {

@@ -32,16 +32,20 @@
 //! packing/    greedy packing of non-overlapping inner spheres
 //! hierarchy/  batch neural gas clustering, minimal enclosing spheres, flat layout
 //! tree/       the finished tree (structure of arrays) and its file format
-//! build.rs    the whole build, its options and presets ([`SphereTree::build`])
+//! build/      the whole build: options, presets, mesh verdicts, the pipeline, mass
+//!             properties ([`SphereTree::build`])
 //! pose.rs     rigid poses: from quaternions, rotation matrices, 4×4 matrices, text
 //! query/      the Pair and one file per query kind, over a kernel and the fronts
 //! exact/      exact mesh-mesh distance, intersection and penetration depth (also the
 //!             accuracy reference of the sphere queries)
+//! haptic/     6-DOF haptic rendering: the contact model, the servo, the single-thread and
+//!             multi-rate loops, occlusion
 //! output.rs   writing outputs: never onto an input, through a temporary file renamed
 //!             into place
 //! ```
 //!
-//! Motion files, replay, benchmarks and the paper's figures are the `innersphere-eval` crate.
+//! Motion files and generated motions are the `innersphere-motion` crate; replay,
+//! benchmarks and the paper's figures the `innersphere-eval` crate.
 
 #![deny(missing_docs)]
 

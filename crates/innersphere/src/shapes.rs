@@ -1,7 +1,7 @@
 //! Closed meshes the project generates itself: for tests, benchmarks and the demo, so that a
 //! fresh clone needs no data files.
 
-use crate::Mesh;
+use crate::mesh::Mesh;
 use glam::DVec3;
 
 /// A unit icosphere with `subdivisions` loop subdivisions (20·4^s triangles), outward facing.

@@ -75,9 +75,9 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             // the minutes of work.
             let outputs: Vec<PathBuf> = FILES.iter().map(|f| out.join(f)).collect();
             let outputs: Vec<&std::path::Path> = outputs.iter().map(|p| p.as_path()).collect();
-            crate::check_outputs(&outputs, &[&a, &b, &motion])?;
-            let ma = crate::load_mesh(&a)?;
-            let mb = crate::load_mesh(&b)?;
+            crate::files::check_outputs(&outputs, &[&a, &b, &motion])?;
+            let ma = crate::files::load_mesh(&a)?;
+            let mb = crate::files::load_mesh(&b)?;
             let m = innersphere_eval::motion::Motion::load(&motion)?;
             let size = [ma.bbox(), mb.bbox()]
                 .iter()
@@ -93,7 +93,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             innersphere::build::validate_options(&po.main)?;
             let s = run(&ma, &mb, &m, &po, &out, &mut |line| eprintln!("{line}"))?;
             if json {
-                crate::print_json(&s)?;
+                crate::print::print_json(&s)?;
             } else {
                 println!("machine: {}", innersphere_eval::sysinfo::cpu_description());
                 println!("wrote {} files to {}", s.files.len(), out.display());
@@ -122,7 +122,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             let mut rows = Vec::new();
             if !json {
                 println!("machine: {}", innersphere_eval::sysinfo::cpu_description());
-                println!("{}", crate::UNITS);
+                println!("{}", crate::print::UNITS);
                 println!("| mesh | triangles | voxel (units) | inside voxels | spheres | depth | coverage | load s | field s | packing s | hierarchy s | total s (min–max) | peak MiB |");
                 println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
             }
@@ -140,7 +140,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 rows.push(r);
             }
             if json {
-                crate::print_json(&rows)?;
+                crate::print::print_json(&rows)?;
             }
             Ok(0)
         }

@@ -124,9 +124,9 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     // Bad flags and an output that would overwrite the mesh fail before a large mesh is
     // loaded.
     innersphere::build::validate_options(&args.opts.options())?;
-    crate::check_outputs(&[&args.output], &[&args.mesh])?;
+    crate::files::check_outputs(&[&args.output], &[&args.mesh])?;
     let bars = Bars::new(args.quiet);
-    let mesh = crate::load_mesh(&args.mesh)?;
+    let mesh = crate::files::load_mesh(&args.mesh)?;
     let t_load = t0.elapsed().as_secs_f64();
     let opts = match args.preset {
         Some(p) => args.opts.apply(
@@ -168,22 +168,22 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             o[k] = val.clone();
         }
         v["options"] = o;
-        crate::print_json(&v)?;
+        crate::print::print_json(&v)?;
     } else {
         for w in &report.warnings {
             eprintln!("warning: {w}");
         }
         let s = &report.stage_seconds;
         println!("{} -> {}", args.mesh.display(), args.output.display());
-        println!("  units       {}", crate::UNITS);
+        println!("  units       {}", crate::print::UNITS);
         println!(
             "  options     {}{}, min radius {} units, {} refinement steps, fan-out {}{}",
             preset.map(|p| format!("preset {p}: ")).unwrap_or_default(),
             match opts.resolution {
-                Resolution::VoxelSize(h) => format!("voxel size {} units", crate::short(h)),
+                Resolution::VoxelSize(h) => format!("voxel size {} units", crate::print::short(h)),
                 Resolution::Cells(n) => format!("{n} cells along the longest side"),
             },
-            crate::short(opts.packing.min_radius),
+            crate::print::short(opts.packing.min_radius),
             opts.packing.refine_steps,
             opts.hierarchy.fanout,
             if opts.packing.max_spheres == usize::MAX {

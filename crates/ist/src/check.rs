@@ -18,8 +18,8 @@ pub struct Args {
 
 /// Runs the subcommand; returns the process exit code (1 when not ok).
 pub fn run(args: Args) -> anyhow::Result<i32> {
-    let tree = crate::load_tree(&args.tree)?;
-    let mesh = crate::load_mesh(&args.mesh)?;
+    let tree = crate::files::load_tree(&args.tree)?;
+    let mesh = crate::files::load_mesh(&args.mesh)?;
     // A mesh other than the tree's own (by the facts the tree keeps) is an error, not "ok".
     let report = innersphere::tree::check::check_built_from(&tree, &mesh).with_context(|| {
         format!(
@@ -29,7 +29,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         )
     })?;
     if args.json {
-        crate::print_json(&report)?;
+        crate::print::print_json(&report)?;
     } else {
         println!(
             "{}: {} spheres, {} nodes, max protrusion {:.3e} units, max overlap {:.3e} units, {} enclosure violations, {} centres outside (tolerance {:.1e} units; model units, mm for the jaw scans)",

@@ -35,7 +35,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         "--seconds must be between 0 and 600"
     );
     let (ma, mb) = match (&args.a, &args.b) {
-        (Some(a), Some(b)) => (crate::load_mesh(a)?, crate::load_mesh(b)?),
+        (Some(a), Some(b)) => (crate::files::load_mesh(a)?, crate::files::load_mesh(b)?),
         _ => innersphere::shapes::tooth_pair(innersphere_eval::demo::TOOTH_SUBDIVISIONS),
     };
     // The motion first: it needs only the meshes, so a pair that admits none (the same mesh
@@ -58,7 +58,9 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         None => None,
     };
     if args.json {
-        crate::print_json(&serde_json::json!({ "a": pair.a.2, "b": pair.b.2, "replay": replay }))?;
+        crate::print::print_json(
+            &serde_json::json!({ "a": pair.a.2, "b": pair.b.2, "replay": replay }),
+        )?;
         return Ok(0);
     }
     let unit = match (&args.a, &args.b) {
@@ -67,7 +69,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 "innersphere demo: {} (A) and {} (B); {}",
                 a.display(),
                 b.display(),
-                crate::UNITS
+                crate::print::UNITS
             );
             "units"
         }

@@ -29,9 +29,9 @@ enum Format {
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     if let Some(p) = &args.output {
-        crate::check_outputs(&[p], &[&args.tree])?;
+        crate::files::check_outputs(&[p], &[&args.tree])?;
     }
-    let tree = crate::load_tree(&args.tree)?;
+    let tree = crate::files::load_tree(&args.tree)?;
     let which = if args.all_nodes {
         Which::All
     } else {

@@ -74,7 +74,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let mut outputs = vec![];
     outputs.extend(args.trace.as_deref());
     outputs.extend(args.plot.as_deref());
-    crate::check_outputs(&outputs, &[&args.a, &args.b, &args.device])?;
+    crate::files::check_outputs(&outputs, &[&args.a, &args.b, &args.device])?;
     let mut opts = HapticOptions::for_device_at(args.device_class, args.rate);
     opts.budget = args.budget_us.map_or(1.0 / args.rate, |us| us * 1e-6);
     if let Some(k) = args.stiffness {
@@ -99,8 +99,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     } else {
         None
     };
-    let a = crate::load_tree(&args.a)?;
-    let b = crate::load_tree(&args.b)?;
+    let a = crate::files::load_tree(&args.a)?;
+    let b = crate::files::load_tree(&args.b)?;
     let device = Motion::load(&args.device)?;
     let session = Session {
         realtime: args.realtime,

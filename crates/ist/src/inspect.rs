@@ -74,7 +74,7 @@ pub fn verdict_text(r: &MeshReport) -> String {
 
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
-    let mesh = crate::load_mesh(&args.mesh)?;
+    let mesh = crate::files::load_mesh(&args.mesh)?;
     let report = MeshReport::of(&mesh);
     let verdict = MeshVerdict::of(&report);
     let text = verdict_text(&report);
@@ -82,9 +82,9 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     if args.json {
         v["verdict"] = serde_json::to_value(verdict)?;
         v["verdict_text"] = text.into();
-        crate::print_json(&v)?;
+        crate::print::print_json(&v)?;
     } else {
-        println!("{:>22}  {}", "units", crate::UNITS);
+        println!("{:>22}  {}", "units", crate::print::UNITS);
         if let Some(map) = v.as_object() {
             for (k, val) in map {
                 println!("{k:>22}  {val}{}", unit(k));

@@ -68,10 +68,10 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let start = Instant::now();
     let mut outputs = vec![args.output.as_path()];
     outputs.extend(args.labels.as_deref());
-    crate::check_outputs(&outputs, &[&args.a, &args.b])?;
+    crate::files::check_outputs(&outputs, &[&args.a, &args.b])?;
     // The library's errors name the file; the context says which body it was.
-    let a = crate::load_mesh(&args.a).context("loading body A (--a)")?;
-    let b = crate::load_mesh(&args.b).context("loading body B (--b)")?;
+    let a = crate::files::load_mesh(&args.a).context("loading body A (--a)")?;
+    let b = crate::files::load_mesh(&args.b).context("loading body B (--b)")?;
     let scenario = match args.scenario {
         Kind::Hand(s) => s,
         Kind::Press => {

@@ -70,8 +70,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         .reference
         .parse()
         .with_context(|| format!("--reference \"{}\"", args.reference))?;
-    let a = crate::load_tree(&args.a)?;
-    let b = crate::load_tree(&args.b)?;
+    let a = crate::files::load_tree(&args.a)?;
+    let b = crate::files::load_tree(&args.b)?;
     let frame = AnatomicalFrame::from_points(&leaf_centres(&a), &leaf_centres(&b))?;
     let axis = match &args.axis {
         Some(v) => DVec3::new(v[0], v[1], v[2]),

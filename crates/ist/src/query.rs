@@ -96,10 +96,10 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     if args.k == 0 {
         anyhow::bail!("--k must be at least 1 (the most contacts multipoint reports)");
     }
-    let a = crate::load_tree(&args.a)?;
-    let b = crate::load_tree(&args.b)?;
-    crate::warn_if_stale(&args.a, &a);
-    crate::warn_if_stale(&args.b, &b);
+    let a = crate::files::load_tree(&args.a)?;
+    let b = crate::files::load_tree(&args.b)?;
+    crate::files::warn_if_stale(&args.a, &a);
+    crate::files::warn_if_stale(&args.b, &b);
     let pose_a = Pose::IDENTITY;
     let mut pair = Pair::new(a, b);
     let t0 = std::time::Instant::now();
@@ -330,7 +330,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         }
     };
     if args.json {
-        crate::print_json(&out)?;
+        crate::print::print_json(&out)?;
     } else {
         println!("{summary}");
     }

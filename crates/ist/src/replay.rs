@@ -66,16 +66,19 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     if let Some(csv) = &args.csv {
         let mut inputs = vec![args.a.as_path(), args.b.as_path(), args.motion.as_path()];
         inputs.extend(args.exact.iter().flatten().map(|p| p.as_path()));
-        crate::check_outputs(&[csv], &inputs)?;
+        crate::files::check_outputs(&[csv], &inputs)?;
     }
-    let a = innersphere::SharedTree::new(crate::load_tree(&args.a)?);
-    let b = innersphere::SharedTree::new(crate::load_tree(&args.b)?);
-    crate::warn_if_stale(&args.a, &a);
-    crate::warn_if_stale(&args.b, &b);
+    let a = innersphere::SharedTree::new(crate::files::load_tree(&args.a)?);
+    let b = innersphere::SharedTree::new(crate::files::load_tree(&args.b)?);
+    crate::files::warn_if_stale(&args.a, &a);
+    crate::files::warn_if_stale(&args.b, &b);
     let motion = innersphere_eval::motion::Motion::load(&args.motion)?;
     let exact = match &args.exact {
         Some(m) => {
-            let (ma, mb) = (crate::load_mesh(&m[0])?, crate::load_mesh(&m[1])?);
+            let (ma, mb) = (
+                crate::files::load_mesh(&m[0])?,
+                crate::files::load_mesh(&m[1])?,
+            );
             // Meshes that are not the trees' own make the accuracy meaningless: say so.
             for (mesh, path, tree, tree_path) in
                 [(&ma, &m[0], &a, &args.a), (&mb, &m[1], &b, &args.b)]
@@ -112,7 +115,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         innersphere::output::write_atomic(path, |w| report.write_csv(w))?;
     }
     if args.json {
-        crate::print_json(&report)?;
+        crate::print::print_json(&report)?;
         return Ok(0);
     }
     let n = report.passes;

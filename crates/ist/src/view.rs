@@ -49,12 +49,12 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         };
         let mesh = |p: &Option<PathBuf>, which: &str| -> anyhow::Result<_> {
             p.as_ref()
-                .map(|p| crate::load_mesh(p).with_context(|| format!("loading {which}")))
+                .map(|p| crate::files::load_mesh(p).with_context(|| format!("loading {which}")))
                 .transpose()
         };
         Scene {
-            a: SharedTree::new(crate::load_tree(a)?),
-            b: SharedTree::new(crate::load_tree(b)?),
+            a: SharedTree::new(crate::files::load_tree(a)?),
+            b: SharedTree::new(crate::files::load_tree(b)?),
             mesh_a: mesh(&args.mesh_a, "--mesh-a")?,
             mesh_b: mesh(&args.mesh_b, "--mesh-b")?,
             motion: args

@@ -3,7 +3,7 @@
 
 use super::frame::{size_sq, tri_box, Frame};
 use super::mesh::ExactMesh;
-use super::scratch::ExactStats;
+use super::scratch::{ExactStats, HeapItem};
 use super::tri_tri::{triangle_distance_hint, TriDistance};
 use crate::mesh::bvh::{BvhNode, LEAF_SIZE};
 use glam::DVec3;
@@ -120,21 +120,6 @@ fn plane_gap_sq(o: DVec3, n: DVec3, t: &[DVec3; 3]) -> f64 {
     // Shrunk by a relative hair so that rounding never prunes the closest pair.
     let g = g * (1.0 - 1e-12);
     g * g
-}
-
-/// A node pair on the best-first queue, smallest lower bound on top.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct HeapItem(f64, u32, u32);
-impl Eq for HeapItem {}
-impl PartialOrd for HeapItem {
-    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl Ord for HeapItem {
-    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
-        o.0.total_cmp(&self.0)
-    }
 }
 
 /// Best-first branch and bound of [`distance`](fn@super::distance): node pairs in the order of

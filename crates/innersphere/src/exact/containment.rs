@@ -3,7 +3,7 @@
 
 use super::frame::Frame;
 use super::mesh::ExactMesh;
-use crate::Pose;
+use crate::pose::Pose;
 use glam::DVec3;
 
 impl ExactMesh {

@@ -9,7 +9,7 @@ use super::mesh::ExactMesh;
 use super::overlap::overlap_pairs;
 use super::scratch::{ExactScratch, ExactStats};
 use super::tri_tri::{self, triangle_distance, triangle_distance_hint};
-use crate::Pose;
+use crate::pose::Pose;
 use glam::DVec3;
 
 /// The answer of [`distance`] (points in the world frame).

@@ -3,7 +3,7 @@
 
 use super::bound;
 use crate::mesh::bvh::{BvhNode, TriangleBvh};
-use crate::Pose;
+use crate::pose::Pose;
 use glam::{DMat3, DVec3};
 
 /// B's local frame mapped into A's: `p_A = r · p_B + t`.

@@ -8,7 +8,7 @@ use super::mesh::ExactMesh;
 use super::overlap::overlap_pairs;
 use super::scratch::{ExactScratch, ExactStats};
 use super::tri_tri;
-use crate::Pose;
+use crate::pose::Pose;
 
 /// True when A and B at their world poses intersect: some triangle pair crosses or touches
 /// (exact predicates), or one body lies entirely inside the other. False for a non-finite

@@ -4,7 +4,7 @@
 use super::bound;
 use crate::mesh::bvh::TriangleBvh;
 use crate::mesh::winding::FastWinding;
-use crate::Mesh;
+use crate::mesh::Mesh;
 use glam::DVec3;
 
 /// One connected component of a mesh (for the containment test).
@@ -36,7 +36,7 @@ pub struct ExactMesh {
 
 impl ExactMesh {
     /// Prepares `mesh` (which must pass [`Mesh::validate`]: not empty, finite, valid indices).
-    pub fn new(mesh: &Mesh) -> crate::Result<Self> {
+    pub fn new(mesh: &Mesh) -> crate::error::Result<Self> {
         mesh.validate()?;
         let winding = FastWinding::new(mesh);
         let (shapes, normals) = bound::shapes(winding.bvh());

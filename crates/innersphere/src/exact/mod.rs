@@ -60,8 +60,5 @@ pub use tri_tri::{
     triangles_intersect, TriDistance,
 };
 
-pub(crate) use frame::Frame;
-pub(crate) use overlap::overlap_pairs;
-
 #[cfg(doc)]
 use crate::mesh::bvh::TriangleBvh;

@@ -14,9 +14,12 @@
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x < y)` is deliberate: true for NaN too.
 
+use super::frame::Frame;
+use super::mesh::ExactMesh;
+use super::overlap::overlap_pairs;
+use super::scratch::ExactScratch;
 use super::tri_tri::segment_triangle_intersect;
-use super::{overlap_pairs, ExactMesh, ExactScratch, Frame};
-use crate::Pose;
+use crate::pose::Pose;
 use glam::DVec3;
 
 /// One of the two bodies of a query.

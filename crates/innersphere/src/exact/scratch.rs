@@ -1,7 +1,7 @@
-//! [`ExactScratch`], the per-pair memory and warm-start state of the exact queries, and
-//! its work counters [`ExactStats`].
+//! [`ExactScratch`], the per-pair memory and warm-start state of the exact queries, its
+//! work counters [`ExactStats`], and `HeapItem`, the node pair on the branch and bound's
+//! queue (kept here, with the queue it fills, so that the scratch needs nothing from `bnb`).
 
-use super::bnb::HeapItem;
 use super::penetration;
 
 /// Reusable memory and warm-start state of the exact queries for one pair of meshes (or
@@ -71,5 +71,20 @@ impl ExactScratch {
     pub fn reset(&mut self) {
         self.last_pair = None;
         self.last_hit = None;
+    }
+}
+
+/// A node pair on the best-first queue, smallest lower bound on top.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct HeapItem(pub(super) f64, pub(super) u32, pub(super) u32);
+impl Eq for HeapItem {}
+impl PartialOrd for HeapItem {
+    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for HeapItem {
+    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+        o.0.total_cmp(&self.0)
     }
 }

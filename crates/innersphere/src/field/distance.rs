@@ -10,8 +10,8 @@
 use super::inside::classify;
 use super::{DistanceField, VoxelGrid};
 use crate::mesh::bvh::TriangleBvh;
+use crate::mesh::Mesh;
 use crate::progress::Progress;
-use crate::Mesh;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -27,7 +27,7 @@ pub fn compute(
     mesh: &Mesh,
     grid: VoxelGrid,
     progress: &dyn Progress,
-) -> crate::Result<DistanceField> {
+) -> crate::error::Result<DistanceField> {
     let (inside, method) = classify(mesh, &grid, progress)?;
     progress.start("triangle tree", 1);
     let bvh = TriangleBvh::new(mesh);

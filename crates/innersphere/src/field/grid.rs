@@ -20,14 +20,14 @@ pub struct VoxelGrid {
 
 impl VoxelGrid {
     /// A grid of cell size `h` covering the box `[lo, hi]` with the box centred in the grid.
-    pub fn covering(lo: DVec3, hi: DVec3, h: f64) -> crate::Result<Self> {
+    pub fn covering(lo: DVec3, hi: DVec3, h: f64) -> crate::error::Result<Self> {
         if !(h.is_finite() && h > 0.0) {
-            return Err(crate::Error::InvalidOption(format!(
+            return Err(crate::error::Error::InvalidOption(format!(
                 "voxel size must be a positive number, got {h}"
             )));
         }
         if !(lo.is_finite() && hi.is_finite()) || hi.cmplt(lo).any() {
-            return Err(crate::Error::InvalidMesh(
+            return Err(crate::error::Error::InvalidMesh(
                 "empty or non-finite bounding box".into(),
             ));
         }
@@ -51,21 +51,23 @@ impl VoxelGrid {
     }
 
     /// A grid with `n` cells along the longest side of the box `[lo, hi]`.
-    pub fn with_resolution(lo: DVec3, hi: DVec3, n: u32) -> crate::Result<Self> {
+    pub fn with_resolution(lo: DVec3, hi: DVec3, n: u32) -> crate::error::Result<Self> {
         if n < 2 {
-            return Err(crate::Error::InvalidOption(format!(
+            return Err(crate::error::Error::InvalidOption(format!(
                 "resolution must be at least 2 cells, got {n}"
             )));
         }
         let longest = (hi - lo).max_element();
         if !(longest.is_finite() && longest > 0.0) {
-            return Err(crate::Error::InvalidMesh("the mesh has no extent".into()));
+            return Err(crate::error::Error::InvalidMesh(
+                "the mesh has no extent".into(),
+            ));
         }
         // Said in the caller's terms: cells, not the voxel size they come to.
         Self::covering(lo, hi, longest / n as f64).map_err(|_| {
             let ext = hi - lo;
             let most = (MAX_CELLS as f64 * longest.powi(3) / (ext.x * ext.y * ext.z)).cbrt();
-            crate::Error::InvalidOption(format!(
+            crate::error::Error::InvalidOption(format!(
                 "a resolution of {n} cells along the longest side gives a grid of more than \
                  {MAX_CELLS} cells over this mesh's {} × {} × {} box; at most about {} cells \
                  along its longest side fit",
@@ -77,8 +79,8 @@ impl VoxelGrid {
         })
     }
 
-    fn too_large(h: f64, ext: DVec3) -> crate::Error {
-        crate::Error::InvalidOption(format!(
+    fn too_large(h: f64, ext: DVec3) -> crate::error::Error {
+        crate::error::Error::InvalidOption(format!(
             "a voxel size of {} gives a grid of more than {MAX_CELLS} cells over this mesh's \
              {} × {} × {} box; use a larger voxel size",
             num(h),

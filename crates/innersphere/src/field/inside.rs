@@ -17,8 +17,8 @@
 use super::{InsideMethod, VoxelGrid};
 use crate::mesh::closest::closest_point_on_segment;
 use crate::mesh::winding::FastWinding;
+use crate::mesh::Mesh;
 use crate::progress::Progress;
-use crate::Mesh;
 use glam::DVec3;
 use rayon::prelude::*;
 use robust::{orient2d, Coord};
@@ -39,10 +39,10 @@ pub fn classify(
     mesh: &Mesh,
     grid: &VoxelGrid,
     progress: &dyn Progress,
-) -> crate::Result<(Vec<u32>, InsideMethod)> {
+) -> crate::error::Result<(Vec<u32>, InsideMethod)> {
     mesh.validate()?;
     if grid.len() > u32::MAX as usize {
-        return Err(crate::Error::InvalidOption(format!(
+        return Err(crate::error::Error::InvalidOption(format!(
             "a grid of {} cells is too large",
             grid.len()
         )));

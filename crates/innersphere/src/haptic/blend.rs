@@ -13,7 +13,7 @@ use super::device::LEVER;
 use super::mat6::Mat6;
 use super::model::ContactModel;
 use super::step::Wrench;
-use crate::Pose;
+use crate::pose::Pose;
 use glam::DVec3;
 
 /// The contact in use: a blend from one model to another.

@@ -1,7 +1,9 @@
 //! The haptic tool as a rigid body: mass and inertia from its tree's meta, and its state.
 
 use crate::error::{num, vec3};
-use crate::{Error, Pose, Result, SphereTree};
+use crate::error::{Error, Result};
+use crate::pose::Pose;
+use crate::tree::SphereTree;
 use glam::{DMat3, DQuat, DVec3};
 
 /// Density of teeth (enamel about 2.9 g/cm³, dentin about 2.1 g/cm³), kg/mm³: the default

@@ -6,7 +6,8 @@
 //! kicks the hand).
 
 use super::model::ContactModel;
-use crate::{Pair, PenetrationOptions, Pose};
+use crate::pose::Pose;
+use crate::query::{Pair, PenetrationOptions};
 use std::time::{Duration, Instant};
 
 /// A node-pair test of the time-critical query, assumed before any was measured (s): the

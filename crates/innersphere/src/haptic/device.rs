@@ -2,7 +2,7 @@
 //!
 //! Units throughout the haptic module: millimetres, newtons, seconds, kilograms, radians.
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// The limits of a haptic device: what it can push and how stiff a spring it renders stably.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]

@@ -6,7 +6,8 @@
 use super::body::rotation_between;
 use super::mat6::{self, Mat6};
 use super::step::Wrench;
-use crate::{Penetration, Pose};
+use crate::pose::Pose;
+use crate::query::Penetration;
 use glam::DVec3;
 use std::time::Instant;
 

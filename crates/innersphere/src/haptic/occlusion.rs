@@ -6,7 +6,9 @@ use super::body::{rotation_between, BodyState, RigidBody, TOOTH_DENSITY};
 use super::mat6::Mat6;
 use super::step::{add_block, contact_damping, implicit_step, Wrench};
 use crate::error::{num, vec3};
-use crate::{Error, Pair, Patch, PenetrationOptions, Pose, Result};
+use crate::error::{Error, Result};
+use crate::pose::Pose;
+use crate::query::{Pair, Patch, PenetrationOptions};
 use glam::{DMat3, DVec3};
 
 /// `[r]×`.

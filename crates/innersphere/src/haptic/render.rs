@@ -7,7 +7,9 @@ use super::device::{Coupling, DeviceClass, DeviceLimits};
 use super::model::ContactModel;
 use super::servo::Servo;
 use crate::error::num;
-use crate::{Error, Pair, PenetrationOptions, Pose, Result};
+use crate::error::{Error, Result};
+use crate::pose::Pose;
+use crate::query::{Pair, PenetrationOptions};
 use glam::DVec3;
 use std::time::{Duration, Instant};
 

@@ -10,7 +10,8 @@ use super::mat6::Mat6;
 use super::model::ContactModel;
 use super::step::{contact_damping, implicit_step, Wrench};
 use super::{HapticOptions, Tick};
-use crate::{Pose, Result};
+use crate::error::Result;
+use crate::pose::Pose;
 use glam::{DQuat, DVec3};
 use std::time::Instant;
 

@@ -4,7 +4,7 @@
 
 use super::body::{exp, BodyState, RigidBody};
 use super::mat6::{solve_spd, Mat6};
-use crate::Pose;
+use crate::pose::Pose;
 use glam::{DMat3, DVec3};
 
 /// Kilograms times mm/s² per newton: `F = m·a` with `a` in mm/s² needs `m` in kg / 1000.

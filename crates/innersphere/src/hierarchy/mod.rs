@@ -62,15 +62,15 @@ pub fn build(
     opts: &HierarchyOptions,
     meta: TreeMeta,
     progress: &dyn crate::progress::Progress,
-) -> crate::Result<(SphereTree, HierarchyStats)> {
+) -> crate::error::Result<(SphereTree, HierarchyStats)> {
     if spheres.is_empty() {
-        return Err(crate::Error::InvalidMesh(
+        return Err(crate::error::Error::InvalidMesh(
             "no inner sphere could be placed (the mesh encloses no volume at this voxel size)"
                 .into(),
         ));
     }
     if !(2..=bng::MAX_PROTOTYPES as u32).contains(&opts.fanout) {
-        return Err(crate::Error::InvalidOption(format!(
+        return Err(crate::error::Error::InvalidOption(format!(
             "fanout must be between 2 and {}, got {}",
             bng::MAX_PROTOTYPES,
             opts.fanout

@@ -9,7 +9,7 @@
 //! result depends only on the input, never on thread scheduling.
 
 use super::closest::closest_point_on_triangle;
-use crate::Mesh;
+use crate::mesh::Mesh;
 use glam::DVec3;
 
 /// Most triangles in a leaf.

@@ -60,7 +60,7 @@ impl Mesh {
     /// Loads a mesh file: STL (binary or ASCII), OBJ, PLY or OFF by its extension, optionally
     /// gzip-compressed (`.stl.gz`, ...); welded and validated (see [`io::load`]). Coordinates
     /// are kept in the file's own unit (the library is unit-agnostic).
-    pub fn load(path: impl AsRef<std::path::Path>) -> crate::Result<Mesh> {
+    pub fn load(path: impl AsRef<std::path::Path>) -> crate::error::Result<Mesh> {
         io::load(path.as_ref())
     }
 
@@ -156,16 +156,16 @@ impl Mesh {
 
     /// Checks that the mesh can be used at all: not empty, finite coordinates within
     /// ±[`MAX_COORDINATE`], valid indices.
-    pub fn validate(&self) -> crate::Result<()> {
+    pub fn validate(&self) -> crate::error::Result<()> {
         if self.triangles.is_empty() {
-            return Err(crate::Error::InvalidMesh(
+            return Err(crate::error::Error::InvalidMesh(
                 "the mesh has no triangles".into(),
             ));
         }
         for (i, v) in self.vertices.iter().enumerate() {
             for (axis, x) in ["x", "y", "z"].into_iter().zip(v.to_array()) {
                 if let Some(problem) = coordinate_problem(x) {
-                    return Err(crate::Error::InvalidMesh(format!(
+                    return Err(crate::error::Error::InvalidMesh(format!(
                         "vertex {i} ({v}): its {axis} coordinate {x:e} {problem}"
                     )));
                 }
@@ -177,7 +177,7 @@ impl Mesh {
             .iter()
             .position(|t| t.iter().any(|&i| i >= n))
         {
-            return Err(crate::Error::InvalidMesh(format!(
+            return Err(crate::error::Error::InvalidMesh(format!(
                 "triangle {t} refers to a vertex that does not exist"
             )));
         }

@@ -11,7 +11,7 @@
 //! point contribute their exact solid angles.
 
 use super::bvh::{TriangleBvh, MAX_DEPTH};
-use crate::Mesh;
+use crate::mesh::Mesh;
 use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
 

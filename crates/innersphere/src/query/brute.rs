@@ -3,8 +3,8 @@
 
 use super::kernel::geometry::{overlaps, sphere_distance, Rel32};
 use super::penetration::Sums;
-use crate::Pose;
-use crate::SphereTree;
+use crate::pose::Pose;
+use crate::tree::SphereTree;
 use glam::DVec3;
 
 /// Leaf indices of A, leaves of B with their centres in A's frame, and the relative pose.

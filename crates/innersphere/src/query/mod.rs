@@ -57,4 +57,5 @@ pub use pair::{Pair, Paper, SharedTree};
 pub use paper::TraversalOptions;
 pub use penetration::{
     ContactStiffness, Patch, Penetration, PenetrationOptions, Tracking, AUTO_FRONT_NODES,
+    MAX_STIFFNESS,
 };

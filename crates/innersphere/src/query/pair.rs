@@ -16,7 +16,8 @@ use super::penetration::{self, Patch, Penetration, PenetrationOptions, Penetrati
 use super::search::block_front::BlockFront;
 use super::search::descent::Descent;
 use super::search::front::Front;
-use crate::{Pose, SphereTree};
+use crate::pose::Pose;
+use crate::tree::SphereTree;
 use std::sync::Arc;
 
 /// A tree ready for queries: the tree and its query-side facts ([`TreeInfo`], computed once

@@ -64,9 +64,9 @@ pub const MAX_STIFFNESS: f64 = 1e30;
 impl PenetrationOptions {
     /// Refuses a stiffness that is negative, not finite or above [`MAX_STIFFNESS`] (a force
     /// that would overflow to infinity and NaN).
-    pub fn check(&self) -> crate::Result<()> {
+    pub fn check(&self) -> crate::error::Result<()> {
         if !(self.stiffness.is_finite() && (0.0..=MAX_STIFFNESS).contains(&self.stiffness)) {
-            return Err(crate::Error::InvalidOption(format!(
+            return Err(crate::error::Error::InvalidOption(format!(
                 "the stiffness must be from 0 to {} (force per unit volume), not {}",
                 crate::error::num(MAX_STIFFNESS),
                 crate::error::num(self.stiffness)

@@ -6,7 +6,7 @@
 use super::SphereTree;
 use crate::mesh::bvh::TriangleBvh;
 use crate::mesh::winding::FastWinding;
-use crate::Mesh;
+use crate::mesh::Mesh;
 use rayon::prelude::*;
 
 /// Result of [`check`]; `ok` is the verdict.
@@ -81,10 +81,10 @@ pub fn source_mismatch(tree: &SphereTree, mesh: &Mesh) -> Option<String> {
 /// [`check`] of `tree` against the mesh it was built from: an error when `mesh` is not that
 /// mesh ([`source_mismatch`]), since the spheres of a tree checked against another mesh say
 /// nothing about either (a smaller tree fits inside a larger mesh and would pass).
-pub fn check_built_from(tree: &SphereTree, mesh: &Mesh) -> crate::Result<CheckReport> {
+pub fn check_built_from(tree: &SphereTree, mesh: &Mesh) -> crate::error::Result<CheckReport> {
     mesh.validate()?;
     if let Some(why) = source_mismatch(tree, mesh) {
-        return Err(crate::Error::InvalidMesh(format!(
+        return Err(crate::error::Error::InvalidMesh(format!(
             "not the mesh the tree was built from: {why}"
         )));
     }
@@ -93,7 +93,7 @@ pub fn check_built_from(tree: &SphereTree, mesh: &Mesh) -> crate::Result<CheckRe
 
 /// Verifies `tree` against `mesh` (any mesh: [`check_built_from`] first makes sure it is
 /// the tree's own).
-pub fn check(tree: &SphereTree, mesh: &Mesh) -> crate::Result<CheckReport> {
+pub fn check(tree: &SphereTree, mesh: &Mesh) -> crate::error::Result<CheckReport> {
     mesh.validate()?;
     tree.validate_structure()?;
     let (lo, hi) = mesh.bbox();

@@ -29,7 +29,7 @@
 //! back.
 
 use super::{SphereTree, TreeMeta};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use std::io::Read;
 use std::path::Path;
 

@@ -205,9 +205,9 @@ impl SphereTree {
     /// children contiguous and after their parent, parents and depths consistent, finite
     /// non-negative spheres. Loading a file runs this, so a corrupt file cannot make a
     /// traversal misbehave.
-    pub fn validate_structure(&self) -> crate::Result<()> {
+    pub fn validate_structure(&self) -> crate::error::Result<()> {
         let n = self.r.len();
-        let bad = |m: String| Err(crate::Error::CorruptTree(m));
+        let bad = |m: String| Err(crate::error::Error::CorruptTree(m));
         if n == 0 {
             return bad("the tree has no nodes".into());
         }

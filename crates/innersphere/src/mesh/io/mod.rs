@@ -40,7 +40,7 @@ use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
 use super::Mesh;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// The most mesh data accepted from one file, after decompression (4 GiB): a larger file, or
 /// a gzip file that decompresses to more, is refused (binary STL at this size holds 86

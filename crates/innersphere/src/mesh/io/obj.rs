@@ -7,8 +7,8 @@ use glam::DVec3;
 use super::check_writable;
 use super::text::{lines, parse_point, show, strip_comment, tokens};
 use super::weld::weld_indexed;
+use crate::error::{Error, Result};
 use crate::mesh::Mesh;
-use crate::{Error, Result};
 
 /// The bytes of an OBJ file of the mesh (what [`save_obj`](super::save_obj) writes,
 /// uncompressed).

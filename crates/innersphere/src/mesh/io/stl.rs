@@ -6,8 +6,8 @@ use glam::DVec3;
 use super::check_writable;
 use super::text::{lines, parse_point, show, tokens};
 use super::weld::Welder;
+use crate::error::{Error, Result};
 use crate::mesh::Mesh;
-use crate::{Error, Result};
 
 /// The bytes of a binary STL file of the mesh (what [`save_stl`](super::save_stl) writes,
 /// uncompressed). Fails when a coordinate does not fit in `f32`.

@@ -15,7 +15,7 @@
 //! beyond several metres; nothing nearer changes.
 
 use super::info::TreeInfo;
-use crate::Pose;
+use crate::pose::Pose;
 use glam::DVec3;
 
 /// A pose is near while the f32 rounding slack stays below this fraction of the median leaf

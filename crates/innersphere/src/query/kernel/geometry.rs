@@ -2,7 +2,7 @@
 //! volumes and centroids, contacts of leaf pairs.
 
 use super::info::Node;
-use crate::Pose;
+use crate::pose::Pose;
 use glam::{DMat3, DVec3};
 
 /// The pose of B in A's frame in f32, applied to B's node centres during a traversal.

@@ -1,6 +1,6 @@
 //! Per-tree facts the queries need beyond the tree itself, computed once per tree.
 
-use crate::SphereTree;
+use crate::tree::SphereTree;
 use glam::DVec3;
 
 /// One node in the queries' packed layout: everything a traversal reads about a node in one

@@ -5,15 +5,17 @@
 
 pub(crate) mod block;
 pub(crate) mod buckets;
+pub(crate) mod expiry;
 pub(crate) mod far;
 pub(crate) mod geometry;
 pub(crate) mod heap;
 pub(crate) mod info;
 pub(crate) mod lanes;
+pub(crate) mod nearest;
 pub(crate) mod separation;
 pub(crate) mod simd;
 
-use crate::Pose;
+use crate::pose::Pose;
 use geometry::Rel32;
 use info::{Block, Node};
 

@@ -5,7 +5,7 @@
 use super::geometry::{pruning_slack, Rel32};
 use super::info::TreeInfo;
 use super::Ctx;
-use crate::Pose;
+use crate::pose::Pose;
 use glam::DVec3;
 
 /// A lower bound on the separation of the two sphere sets, proved by a query at a relative

@@ -3,7 +3,7 @@
 //! only re-runs the 4×4 steps whose outcome the motion since could have changed.
 //!
 //! Every entry is an overlapping node pair whose child pairs (all children of one node
-//! against all children of the other, one vectorised [`block_step`](super::traversal)) were
+//! against all children of the other, one vectorised [`block_step`](crate::query::kernel::block::block_step)) were
 //! tested at some pose. Each child pair is then either separated, an overlapping leaf pair (a
 //! *hit*), or an overlapping inner pair with an entry of its own. The entry stays valid while
 //! its B node has moved less than the smallest |separation| or overlap depth of its separated
@@ -17,7 +17,7 @@
 //! that separated are dropped with everything below them (the front coarsens where contact
 //! ends). After a complete update the hits are exactly
 //! the overlapping leaf pairs of a full traversal, so the contact answer equals
-//! [`distance_traversal`](super::distance_traversal)'s on every frame; an update may also
+//! the paper's distance traversal's (`query/paper.rs`) on every frame; an update may also
 //! stop at the first hit, the unfinished steps staying due.
 //!
 //! Why blocks and not single pairs ([`front`](super::front)): re-testing one expired pair at
@@ -34,7 +34,7 @@
 //! five checks per saved step (BENCHMARKS.md, "Tried and did not pay").
 //!
 //! Keeping every hit up to date through a deep contact costs far more than backtracking, so
-//! [`contact`](super::contact) answers from recent contact pairs while in contact, and the
+//! `contact` (`query/contact.rs`) answers from recent contact pairs while in contact, and the
 //! front only [tends](BlockFront::tend) its backlog there, a fixed number of steps a frame:
 //! with the scan branch-free and no sort, the backlog of a deep contact costs ≈ 0.5 µs a frame
 //! to scan (a scanned and sorted backlog made such a budget cost more than it saved). When the
@@ -42,12 +42,13 @@
 //! pair needed a second slow frame when the contact had ended, and deepest first cut
 //! `contact`'s p99 along the chew by about a third in the same process.
 
+use crate::pose::Pose;
 use crate::query::kernel::block::{block_gaps, inner_gaps, sides, TItem, B_LEAF};
+use crate::query::kernel::expiry::{due_entries, CHUNK};
 use crate::query::kernel::info::{TreeInfo, LANES};
 use crate::query::kernel::separation::motion_bound;
 use crate::query::kernel::simd;
 use crate::query::kernel::Ctx;
-use crate::Pose;
 
 const NONE: u32 = u32::MAX;
 
@@ -579,89 +580,6 @@ impl BlockFront {
     }
 }
 
-/// Slots per chunk: one depth key per chunk, and a vector's worth of expiries per branch of
-/// the scan.
-const CHUNK: usize = 8;
-
-/// Sets `due` to the slots of `chunks` (in that order, each chunk's in slot order) whose
-/// expiry is ≤ `moved`. Runs over every slot every frame, and nearly all are not due.
-#[inline(always)]
-fn due_entries(expiry: &[f64], chunks: &[u32], moved: f64, due: &mut Vec<u32>) {
-    #[cfg(target_arch = "x86_64")]
-    if simd::avx2() {
-        // SAFETY: the CPU has AVX2 (checked just above).
-        unsafe { due_entries_avx2(expiry, chunks, moved, due) };
-        return;
-    }
-    due_entries_portable(expiry, chunks, moved, due)
-}
-
-/// [`due_entries`] without intrinsics.
-#[inline(always)]
-fn due_entries_portable(expiry: &[f64], chunks: &[u32], moved: f64, due: &mut Vec<u32>) {
-    due.clear();
-    for &c in chunks {
-        let base = c as usize * CHUNK;
-        for (k, &e) in expiry[base..base + CHUNK].iter().enumerate() {
-            if e <= moved {
-                due.push((base + k) as u32);
-            }
-        }
-    }
-}
-
-/// Per 8-bit mask: the positions of its set bits, one per byte, lowest first.
-const COMPRESS: [u64; 256] = {
-    let mut t = [0u64; 256];
-    let mut m = 0;
-    while m < 256 {
-        let (mut k, mut b, mut x) = (0, 0, 0u64);
-        while b < 8 {
-            if (m >> b) & 1 == 1 {
-                x |= (b as u64) << (8 * k);
-                k += 1;
-            }
-            b += 1;
-        }
-        t[m] = x;
-        m += 1;
-    }
-    t
-};
-
-/// [`due_entries`] in AVX2 intrinsics, branch-free per chunk: the mask of a chunk's eight
-/// comparisons picks its due slots' positions from [`COMPRESS`], all eight lanes are
-/// stored and the length advances by the mask's popcount. A loop over the mask's bits (one
-/// push each) mispredicted its exit on most chunks: the scan took ≈ 3× as long on the jaw
-/// chew, where a quarter of the slots are due on the busy frames.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline]
-unsafe fn due_entries_avx2(expiry: &[f64], chunks: &[u32], moved: f64, due: &mut Vec<u32>) {
-    use std::arch::x86_64::*;
-    due.clear();
-    due.reserve(chunks.len() * CHUNK);
-    let out = due.as_mut_ptr();
-    let m = _mm256_set1_pd(moved);
-    let mut len = 0;
-    for &c in chunks {
-        let base = c as usize * CHUNK;
-        let s = &expiry[base..base + CHUNK];
-        // SAFETY: `s` holds 8 values; `len + 8 ≤ 8 · (chunks done + 1) ≤ capacity`.
-        unsafe {
-            let a = _mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_loadu_pd(s.as_ptr()), m);
-            let b = _mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_loadu_pd(s.as_ptr().add(4)), m);
-            let bits = (_mm256_movemask_pd(a) | (_mm256_movemask_pd(b) << 4)) as usize;
-            let pos = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(COMPRESS[bits] as i64));
-            let idx = _mm256_add_epi32(pos, _mm256_set1_epi32(base as i32));
-            _mm256_storeu_si256(out.add(len) as *mut __m256i, idx);
-            len += bits.count_ones() as usize;
-        }
-    }
-    // SAFETY: the first `len` values were written above.
-    unsafe { due.set_len(len) };
-}
-
 /// `chunks` set to every chunk index, ordered by its depth key (a counting sort; run only
 /// when chunks were added).
 #[cold]
@@ -705,47 +623,6 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
-        /// The scans find exactly the slots with expiry ≤ `moved`, chunk by chunk in the
-        /// given order (AVX2 and portable alike), infinities and NaN included (a NaN expiry
-        /// is never due).
-        #[test]
-        fn due_scan_finds_expired_slots_in_chunk_order(
-            v in prop::collection::vec(prop_oneof![
-                -10.0f64..10.0,
-                Just(f64::INFINITY),
-                Just(f64::NEG_INFINITY),
-                Just(f64::NAN),
-            ], 0..12usize).prop_flat_map(|c| prop::collection::vec(prop_oneof![
-                -10.0f64..10.0,
-                Just(f64::INFINITY),
-                Just(f64::NEG_INFINITY),
-                Just(f64::NAN),
-            ], c.len() * CHUNK)),
-            perm in any::<prop::sample::Index>(),
-            moved in -10.0f64..10.0,
-        ) {
-            let n = (v.len() / CHUNK) as u32;
-            let mut chunks: Vec<u32> = (0..n).collect();
-            if n > 0 {
-                chunks.rotate_left(perm.index(n as usize));
-            }
-            let want: Vec<u32> = chunks
-                .iter()
-                .flat_map(|&c| c * CHUNK as u32..(c + 1) * CHUNK as u32)
-                .filter(|&i| v[i as usize] <= moved)
-                .collect();
-            let mut p = vec![7];
-            due_entries_portable(&v, &chunks, moved, &mut p);
-            prop_assert_eq!(&p, &want);
-            #[cfg(target_arch = "x86_64")]
-            if simd::avx2() {
-                let mut a = vec![7];
-                // SAFETY: the CPU has AVX2 (checked just above).
-                unsafe { due_entries_avx2(&v, &chunks, moved, &mut a) };
-                prop_assert_eq!(&a, &want);
-            }
-        }
-
         /// The chunk order lists every chunk once, by depth key.
         #[test]
         fn chunks_are_ordered_by_depth(depth in prop::collection::vec(0u8..DEPTHS as u8, 0..60)) {

@@ -21,11 +21,11 @@
 //! (with a floor of 2¹⁴ the jaw chew rebuilt as contact began: worst penetration frame
 //! 578 → 342–374 µs in that phase, p99 unchanged).
 
+use crate::pose::Pose;
 use crate::query::kernel::buckets::{Buckets, Sep};
 use crate::query::kernel::info::TreeInfo;
 use crate::query::kernel::separation::motion_bound;
 use crate::query::kernel::{expand_larger, Ctx, Item};
-use crate::Pose;
 
 /// How far ahead the re-test loops prefetch the nodes of the pairs they will test (the pairs
 /// lie scattered over both trees, so every test would otherwise wait for two cache misses).

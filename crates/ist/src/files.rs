@@ -1,0 +1,71 @@
+//! The files a subcommand reads and writes: trees and meshes loaded with an error that names
+//! a file of the other kind (and the fix), outputs checked against the inputs before any
+//! work, and the warning for a tree not built by the current builder.
+
+/// Refuses, before any work, outputs that are one of the inputs or the same file twice: the
+/// library's [`innersphere::output`] checks (canonical paths, and device and inode on Unix, so
+/// links are caught). Every output is then written through
+/// [`innersphere::output::write_atomic`].
+pub fn check_outputs(
+    outputs: &[&std::path::Path],
+    inputs: &[&std::path::Path],
+) -> anyhow::Result<()> {
+    innersphere::output::ensure_distinct_outputs(outputs)?;
+    for o in outputs {
+        innersphere::output::ensure_not_input(o, inputs)?;
+    }
+    Ok(())
+}
+
+/// Loads a tree file; a mesh given instead (by its extension) is named as such, with the fix.
+/// Every error names the file once (the library's errors already carry the path).
+pub fn load_tree(path: &std::path::Path) -> anyhow::Result<innersphere::SphereTree> {
+    match innersphere::SphereTree::load(path) {
+        Ok(tree) => Ok(tree),
+        Err(innersphere::Error::CorruptTree(_))
+            if innersphere::mesh::Format::from_path(path).is_ok() =>
+        {
+            anyhow::bail!(
+                "{} is a mesh, not a tree file: run `ist build` on it first (`ist build MESH -o TREE.ist`) and give the tree",
+                path.display()
+            )
+        }
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// Loads a mesh file; a tree file given instead (by its magic number) is named as such, with
+/// the fix. Every error names the file once.
+pub fn load_mesh(path: &std::path::Path) -> anyhow::Result<innersphere::Mesh> {
+    match innersphere::Mesh::load(path) {
+        Ok(mesh) => Ok(mesh),
+        Err(e @ (innersphere::Error::UnsupportedFormat(_) | innersphere::Error::Parse { .. })) => {
+            if is_tree_file(path) {
+                anyhow::bail!(
+                    "{} is an Inner Sphere Tree file, not a mesh: give a mesh file here (.stl, .obj, .ply or .off, optionally .gz; for `ist check --mesh`, the mesh the tree was built from)",
+                    path.display()
+                )
+            }
+            Err(e.into())
+        }
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// True when the file starts with the tree file's magic number.
+fn is_tree_file(path: &std::path::Path) -> bool {
+    use std::io::Read;
+    let mut magic = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut magic))
+        .is_ok()
+        && magic == innersphere::tree::file::MAGIC
+}
+
+/// Prints the library's warning about a tree not built by the current builder
+/// ([`innersphere::SphereTree::staleness`]) to stderr; the command goes on.
+pub fn warn_if_stale(path: &std::path::Path, tree: &innersphere::SphereTree) {
+    if let Some(w) = tree.staleness() {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+}

@@ -1,6 +1,6 @@
 //! The committed header `include/innersphere.h` is what cbindgen makes of this crate now:
 //! a change to the C ABI that forgets the header fails here. `INNERSPHERE_BLESS_HEADER=1`
-//! writes the fresh header instead.
+//! writes the fresh header instead. Built with `--features header` only (CI runs it).
 
 use std::path::Path;
 
@@ -24,6 +24,6 @@ fn the_committed_header_is_current() {
     assert!(
         committed == fresh,
         "include/innersphere.h is stale: regenerate it with \
-         `INNERSPHERE_BLESS_HEADER=1 cargo test -p innersphere-c --test header` and commit it"
+         `INNERSPHERE_BLESS_HEADER=1 cargo test -p innersphere-c --features header --test header` and commit it"
     );
 }

@@ -55,6 +55,11 @@ pub struct ServeOptions {
     pub rate: f64,
     /// Connections open at once; the next is told 503 and closed.
     pub max_connections: usize,
+    /// Time a client has for a request's head, and between requests on a kept-alive
+    /// connection ([`HEADER_TIMEOUT`] by default).
+    pub header_timeout: Duration,
+    /// Time a client has for a request's body ([`BODY_TIMEOUT`] by default).
+    pub body_timeout: Duration,
 }
 
 impl Default for ServeOptions {
@@ -64,6 +69,8 @@ impl Default for ServeOptions {
             stiffness: 1.0,
             rate: 1000.0,
             max_connections: MAX_CONNECTIONS,
+            header_timeout: HEADER_TIMEOUT,
+            body_timeout: BODY_TIMEOUT,
         }
     }
 }
@@ -125,6 +132,9 @@ pub fn serve(
             "the loop rate must be 1 to 20000 Hz, not {}",
             innersphere::error::num(opts.rate)
         ));
+    }
+    if opts.header_timeout.is_zero() || opts.body_timeout.is_zero() {
+        return Err("the header and body timeouts must be above zero".into());
     }
     if opts.max_connections == 0 {
         return Err("the server must take at least one connection".into());
@@ -217,6 +227,7 @@ async fn accept(listener: tokio::net::TcpListener, app: Arc<App>) -> Result<(), 
             continue;
         };
         let app = app.clone();
+        let header_timeout = app.opts.header_timeout;
         tokio::spawn(async move {
             let mut stream = tokio_io_timeout::TimeoutStream::new(socket);
             stream.set_write_timeout(Some(WRITE_TIMEOUT));
@@ -227,7 +238,7 @@ async fn accept(listener: tokio::net::TcpListener, app: Arc<App>) -> Result<(), 
             });
             let _ = hyper::server::conn::http1::Builder::new()
                 .timer(TokioTimer::new())
-                .header_read_timeout(HEADER_TIMEOUT)
+                .header_read_timeout(header_timeout)
                 .max_buf_size(MAX_HEADER.max(8192))
                 .serve_connection(io, service)
                 .await;
@@ -257,7 +268,7 @@ async fn handle(app: Arc<App>, req: Request<Incoming>) -> Resp {
         return events(&app);
     }
     let body = if method == Method::POST && path.starts_with("/api/") {
-        match read_body(req).await {
+        match read_body(req, app.opts.body_timeout).await {
             Ok(v) => Some(v),
             Err(r) => return r,
         }
@@ -304,9 +315,9 @@ fn asset(path: &str) -> Resp {
     }
 }
 
-/// The request's JSON body: at most [`MAX_BODY`] bytes (else 413), within [`BODY_TIMEOUT`]
-/// (else 408).
-async fn read_body(req: Request<Incoming>) -> Result<Value, Resp> {
+/// The request's JSON body: at most [`MAX_BODY`] bytes (else 413), within `timeout` (else
+/// 408).
+async fn read_body(req: Request<Incoming>, timeout: Duration) -> Result<Value, Resp> {
     let declared = req
         .headers()
         .get(CONTENT_LENGTH)
@@ -316,14 +327,11 @@ async fn read_body(req: Request<Incoming>) -> Result<Value, Resp> {
         return Err(error(413, format!("the body is over {MAX_BODY} bytes")));
     }
     let limited = Limited::new(req.into_body(), MAX_BODY as usize);
-    let bytes = match tokio::time::timeout(BODY_TIMEOUT, limited.collect()).await {
+    let bytes = match tokio::time::timeout(timeout, limited.collect()).await {
         Err(_) => {
             return Err(error(
                 408,
-                format!(
-                    "the body did not arrive within {} s",
-                    BODY_TIMEOUT.as_secs()
-                ),
+                format!("the body did not arrive within {} s", timeout.as_secs_f64()),
             ))
         }
         Ok(Err(e)) if e.is::<http_body_util::LengthLimitError>() => {

@@ -269,40 +269,6 @@ proptest! {
         check_all(a, &pa, b, &pb, split)?;
     }
 
-    /// Along motions, with each query's state carried from frame to frame (coherence,
-    /// fronts, backtracking, safe motion): every frame against the reference.
-    #[test]
-    fn coherent_queries_along_motions_equal_the_reference(
-        ia in 0usize..4, ib in 0usize..4,
-        dir in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
-        side in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
-        axis in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
-        spin in -0.05..0.05f64,
-        split in 0u32..6,
-    ) {
-        let t = trees();
-        let (a, b) = (&t[ia], &t[ib]);
-        let frames = motion(a, b, DVec3::from_array(dir), DVec3::from_array(side), DVec3::from_array(axis), spin, 48);
-        let (sa, sb) = (SharedTree::new(a.clone()), SharedTree::new(b.clone()));
-        let mut st: Vec<Pair> = (0..8).map(|_| Pair::new(&sa, &sb)).collect();
-        let safe = TraversalOptions { safe_motion: true };
-        for (pa, pb) in &frames {
-            let r = RefPair::new(a, pa, b, pb);
-            check_proximity(&mut st[0], pa, pb, &r)?;
-            check_contact(&st[1].paper().backtracking(pa, pb, &safe), &r, "backtracking")?;
-            check_contact(&st[2].contact(pa, pb), &r, "contact")?;
-            check_contact(&st[3].paper().distance_traversal(pa, pb, &safe), &r, "distance traversal")?;
-            for (i, tracking) in [(4, false), (5, true)] {
-                let opts = MultipointOptions { tracking, k: 6, split_depth: split, reuse: true, safe_motion: true };
-                check_multipoint(&mut st[i], pa, pb, &r, &opts)?;
-            }
-            for (i, tracking) in [(6, Tracking::Front), (7, Tracking::Traversal)] {
-                let opts = PenetrationOptions { stiffness: 10.0, max_patches: 4, patch_radius: 0.0, safe_motion: true, tracking, linearize: true };
-                check_penetration(&mut st[i], pa, pb, &r, &opts)?;
-            }
-        }
-    }
-
     /// Two balls of any size from 1e-2 to 1e2 at any overlap: volume, deepest overlap and
     /// the lens centroid (the one patch's point) against the reference's integration.
     #[test]
@@ -330,4 +296,104 @@ proptest! {
             prop_assert!(near(st.patches()[0].point, g, 1e-6 * (ra + rb)), "centroid {} vs {} (ra {}, rb {}, d {})", st.patches()[0].point, g, ra, rb, d);
         }
     }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(6))]
+
+    /// Along motions, with each query's state carried from frame to frame (coherence,
+    /// fronts, backtracking, safe motion): every frame against the reference. A few motions
+    /// here; [`coherent_queries_along_many_motions`] runs 48 (CI, `--ignored`).
+    #[test]
+    fn coherent_queries_along_motions_equal_the_reference(
+        ia in 0usize..4, ib in 0usize..4,
+        dir in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+        side in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+        axis in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+        spin in -0.05..0.05f64,
+        split in 0u32..6,
+    ) {
+        coherent_case(ia, ib, dir, side, axis, spin, split)?;
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// [`coherent_queries_along_motions_equal_the_reference`] along 48 motions.
+    #[test]
+    #[ignore = "heavy: 48 motions against the f64 reference (about 20 s); CI runs it with --ignored"]
+    fn coherent_queries_along_many_motions(
+        ia in 0usize..4, ib in 0usize..4,
+        dir in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+        side in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+        axis in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+        spin in -0.05..0.05f64,
+        split in 0u32..6,
+    ) {
+        coherent_case(ia, ib, dir, side, axis, spin, split)?;
+    }
+}
+
+/// One motion of [`coherent_queries_along_motions_equal_the_reference`].
+fn coherent_case(
+    ia: usize,
+    ib: usize,
+    dir: [f64; 3],
+    side: [f64; 3],
+    axis: [f64; 3],
+    spin: f64,
+    split: u32,
+) -> Result<(), TestCaseError> {
+    let t = trees();
+    let (a, b) = (&t[ia], &t[ib]);
+    let frames = motion(
+        a,
+        b,
+        DVec3::from_array(dir),
+        DVec3::from_array(side),
+        DVec3::from_array(axis),
+        spin,
+        48,
+    );
+    let (sa, sb) = (SharedTree::new(a.clone()), SharedTree::new(b.clone()));
+    let mut st: Vec<Pair> = (0..8).map(|_| Pair::new(&sa, &sb)).collect();
+    let safe = TraversalOptions { safe_motion: true };
+    for (pa, pb) in &frames {
+        let r = RefPair::new(a, pa, b, pb);
+        check_proximity(&mut st[0], pa, pb, &r)?;
+        check_contact(
+            &st[1].paper().backtracking(pa, pb, &safe),
+            &r,
+            "backtracking",
+        )?;
+        check_contact(&st[2].contact(pa, pb), &r, "contact")?;
+        check_contact(
+            &st[3].paper().distance_traversal(pa, pb, &safe),
+            &r,
+            "distance traversal",
+        )?;
+        for (i, tracking) in [(4, false), (5, true)] {
+            let opts = MultipointOptions {
+                tracking,
+                k: 6,
+                split_depth: split,
+                reuse: true,
+                safe_motion: true,
+            };
+            check_multipoint(&mut st[i], pa, pb, &r, &opts)?;
+        }
+        for (i, tracking) in [(6, Tracking::Front), (7, Tracking::Traversal)] {
+            let opts = PenetrationOptions {
+                stiffness: 10.0,
+                max_patches: 4,
+                patch_radius: 0.0,
+                safe_motion: true,
+                tracking,
+                linearize: true,
+            };
+            check_penetration(&mut st[i], pa, pb, &r, &opts)?;
+        }
+    }
+    Ok(())
 }

@@ -53,6 +53,11 @@ proptest! {
         }
     }
 
+
+}
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(12))]
+
     /// Backtracking gives the same contact answer as the full traversal (and brute force) on
     /// every frame of a motion, with a valid contact or a valid lower bound; so does the
     /// kinetic-front contact query.
@@ -63,38 +68,11 @@ proptest! {
         spin in -0.04..0.04f64,
         frames in 60usize..160,
     ) {
-        let t = trees();
-        let (a, b) = (&t[ia], &t[ib]);
-        let motion = motion(a, b, dir, side, axis, spin, frames);
-        let mut bt = pair(a, b);
-        let mut full = pair(a, b);
-        let mut front = pair(a, b);
-        let mut contacts = 0;
-        for (f, (pa, pb)) in motion.iter().enumerate() {
-            let q = bt.paper().backtracking(pa, pb, &NO_SKIP);
-            let r = full.paper().distance_traversal(pa, pb, &NO_SKIP);
-            prop_assert_eq!(q.in_contact(), r.in_contact(), "frame {}", f);
-            let t = front.contact(pa, pb);
-            prop_assert_eq!(t.in_contact(), r.in_contact(), "front, frame {}", f);
-            if let Some(c) = t.contact {
-                prop_assert!(brute::leaves_overlap(a, c.leaf_a, pa, b, c.leaf_b, pb));
-            } else {
-                let (bd, _, _) = brute::min_distance(a, pa, b, pb);
-                prop_assert!(t.distance <= bd, "front bound {} above {}", t.distance, bd);
-            }
-            let truth = !brute::overlapping_pairs(a, pa, b, pb).is_empty();
-            prop_assert_eq!(q.in_contact(), truth, "frame {}", f);
-            if let Some(c) = q.contact {
-                contacts += 1;
-                prop_assert!(brute::leaves_overlap(a, c.leaf_a, pa, b, c.leaf_b, pb));
-            } else {
-                let (bd, _, _) = brute::min_distance(a, pa, b, pb);
-                prop_assert!(q.distance <= bd);
-            }
-        }
-        // The motions pass through the other body, so contact happens.
-        prop_assert!(contacts > 0);
+        backtracking_equals_full_traversal_along_motions_case(ia, ib, dir, side, axis, spin, frames)?;
     }
+}
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(12))]
 
     /// Multipoint: every contact is an overlapping leaf pair, at most one per split-depth
     /// pair, and as many as min(k, number of split-depth pairs holding an overlapping leaf
@@ -107,36 +85,143 @@ proptest! {
         k in prop_oneof![Just(1usize), Just(2), Just(3), Just(16), Just(1000)],
         split in 0u32..8,
     ) {
-        let t = trees();
-        let (a, b) = (&t[ia], &t[ib]);
-        let motion = motion(a, b, dir, side, axis, spin, 50);
-        let mut reuse = pair(a, b);
-        let mut fresh = pair(a, b);
-        let mut tracked = pair(a, b);
-        for (f, (pa, pb)) in motion.iter().enumerate() {
-            let pairs = brute::overlapping_pairs(a, pa, b, pb);
-            let regions: BTreeSet<(u32, u32)> = pairs
-                .iter()
-                .map(|&(la, lb)| (ancestor_at(a, la, split), ancestor_at(b, lb, split)))
-                .collect();
-            let want = k.min(regions.len());
-            for (st, reuse_on, tracking) in [(&mut reuse, true, false), (&mut fresh, false, false), (&mut tracked, true, true)] {
-                let opts = MultipointOptions { k, split_depth: split, reuse: reuse_on, safe_motion: false, tracking };
-                let r = st.multipoint(pa, pb, &opts);
-                let contacts = st.contacts();
-                prop_assert_eq!(contacts.len(), want, "frame {} reuse {}", f, reuse_on);
-                prop_assert!(r.reused <= contacts.len());
-                let mut seen = BTreeSet::new();
-                for c in contacts {
-                    prop_assert!(brute::leaves_overlap(a, c.leaf_a, pa, b, c.leaf_b, pb));
-                    let key = (ancestor_at(a, c.leaf_a, split), ancestor_at(b, c.leaf_b, split));
-                    prop_assert!(seen.insert(key), "two contacts below one split pair");
-                }
-                if contacts.is_empty() {
-                    let (bd, _, _) = brute::min_distance(a, pa, b, pb);
-                    prop_assert!(r.distance <= bd.max(0.0));
-                }
+        multipoint_contact_sets_along_motions_case(ia, ib, dir, side, axis, spin, k, split)?;
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// [`multipoint_contact_sets_along_motions`] with 48 cases.
+    #[test]
+    #[ignore = "heavy: 48 motions against brute force (about 4 s); CI runs it with --ignored"]
+    fn multipoint_contact_sets_along_motions_heavy(
+        ia in 0usize..4, ib in 0usize..4,
+        dir in vec3(), side in vec3(), axis in vec3(),
+        spin in -0.04..0.04f64,
+        k in prop_oneof![Just(1usize), Just(2), Just(3), Just(16), Just(1000)],
+        split in 0u32..8,
+    ) {
+        multipoint_contact_sets_along_motions_case(ia, ib, dir, side, axis, spin, k, split)?;
+    }
+}
+
+/// One case of [`multipoint_contact_sets_along_motions`].
+#[allow(clippy::too_many_arguments)]
+fn multipoint_contact_sets_along_motions_case(
+    ia: usize,
+    ib: usize,
+    dir: DVec3,
+    side: DVec3,
+    axis: DVec3,
+    spin: f64,
+    k: usize,
+    split: u32,
+) -> Result<(), TestCaseError> {
+    let t = trees();
+    let (a, b) = (&t[ia], &t[ib]);
+    let motion = motion(a, b, dir, side, axis, spin, 50);
+    let mut reuse = pair(a, b);
+    let mut fresh = pair(a, b);
+    let mut tracked = pair(a, b);
+    for (f, (pa, pb)) in motion.iter().enumerate() {
+        let pairs = brute::overlapping_pairs(a, pa, b, pb);
+        let regions: BTreeSet<(u32, u32)> = pairs
+            .iter()
+            .map(|&(la, lb)| (ancestor_at(a, la, split), ancestor_at(b, lb, split)))
+            .collect();
+        let want = k.min(regions.len());
+        for (st, reuse_on, tracking) in [
+            (&mut reuse, true, false),
+            (&mut fresh, false, false),
+            (&mut tracked, true, true),
+        ] {
+            let opts = MultipointOptions {
+                k,
+                split_depth: split,
+                reuse: reuse_on,
+                safe_motion: false,
+                tracking,
+            };
+            let r = st.multipoint(pa, pb, &opts);
+            let contacts = st.contacts();
+            prop_assert_eq!(contacts.len(), want, "frame {} reuse {}", f, reuse_on);
+            prop_assert!(r.reused <= contacts.len());
+            let mut seen = BTreeSet::new();
+            for c in contacts {
+                prop_assert!(brute::leaves_overlap(a, c.leaf_a, pa, b, c.leaf_b, pb));
+                let key = (
+                    ancestor_at(a, c.leaf_a, split),
+                    ancestor_at(b, c.leaf_b, split),
+                );
+                prop_assert!(seen.insert(key), "two contacts below one split pair");
+            }
+            if contacts.is_empty() {
+                let (bd, _, _) = brute::min_distance(a, pa, b, pb);
+                prop_assert!(r.distance <= bd.max(0.0));
             }
         }
     }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// [`backtracking_equals_full_traversal_along_motions`] with 48 cases.
+    #[test]
+    #[ignore = "heavy: 48 motions against brute force (about 6 s); CI runs it with --ignored"]
+    fn backtracking_equals_full_traversal_along_motions_heavy(
+        ia in 0usize..4, ib in 0usize..4,
+        dir in vec3(), side in vec3(), axis in vec3(),
+        spin in -0.04..0.04f64,
+        frames in 60usize..160,
+    ) {
+        backtracking_equals_full_traversal_along_motions_case(ia, ib, dir, side, axis, spin, frames)?;
+    }
+}
+
+/// One case of [`backtracking_equals_full_traversal_along_motions`].
+#[allow(clippy::too_many_arguments)]
+fn backtracking_equals_full_traversal_along_motions_case(
+    ia: usize,
+    ib: usize,
+    dir: DVec3,
+    side: DVec3,
+    axis: DVec3,
+    spin: f64,
+    frames: usize,
+) -> Result<(), TestCaseError> {
+    let t = trees();
+    let (a, b) = (&t[ia], &t[ib]);
+    let motion = motion(a, b, dir, side, axis, spin, frames);
+    let mut bt = pair(a, b);
+    let mut full = pair(a, b);
+    let mut front = pair(a, b);
+    let mut contacts = 0;
+    for (f, (pa, pb)) in motion.iter().enumerate() {
+        let q = bt.paper().backtracking(pa, pb, &NO_SKIP);
+        let r = full.paper().distance_traversal(pa, pb, &NO_SKIP);
+        prop_assert_eq!(q.in_contact(), r.in_contact(), "frame {}", f);
+        let t = front.contact(pa, pb);
+        prop_assert_eq!(t.in_contact(), r.in_contact(), "front, frame {}", f);
+        if let Some(c) = t.contact {
+            prop_assert!(brute::leaves_overlap(a, c.leaf_a, pa, b, c.leaf_b, pb));
+        } else {
+            let (bd, _, _) = brute::min_distance(a, pa, b, pb);
+            prop_assert!(t.distance <= bd, "front bound {} above {}", t.distance, bd);
+        }
+        let truth = !brute::overlapping_pairs(a, pa, b, pb).is_empty();
+        prop_assert_eq!(q.in_contact(), truth, "frame {}", f);
+        if let Some(c) = q.contact {
+            contacts += 1;
+            prop_assert!(brute::leaves_overlap(a, c.leaf_a, pa, b, c.leaf_b, pb));
+        } else {
+            let (bd, _, _) = brute::min_distance(a, pa, b, pb);
+            prop_assert!(q.distance <= bd);
+        }
+    }
+    // The motions pass through the other body, so contact happens.
+    prop_assert!(contacts > 0);
+    Ok(())
 }

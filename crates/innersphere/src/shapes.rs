@@ -158,8 +158,15 @@ pub fn molar(subdivisions: u32, phase: f64) -> Mesh {
         // Crown: wide on top, with four cusps; root: narrower towards -z.
         let width = if z > 0.0 { 5.0 } else { 5.0 * (1.0 + 0.45 * z) };
         let height = if z > 0.0 { 4.0 } else { 12.0 };
+        // The cusps fade towards the crown's pole, where the azimuth turns ever faster (else
+        // the top would be a pinched point no packing of spheres could follow).
+        let rho2 = x * x + y * y;
         let cusps = if z > 0.2 {
-            1.0 + 0.22 * (z - 0.2) * (2.0 * az).cos().powi(2) * (1.0 - (2.0 * az).sin().abs() * 0.3)
+            1.0 + 0.22
+                * (z - 0.2)
+                * (2.0 * az).cos().powi(2)
+                * (1.0 - (2.0 * az).sin().abs() * 0.3)
+                * (rho2 / (rho2 + 0.05))
         } else {
             1.0
         };
@@ -177,7 +184,7 @@ pub fn tooth_pair(subdivisions: u32) -> (Mesh, Mesh) {
         let mut m = molar(subdivisions, std::f64::consts::FRAC_PI_4);
         for v in &mut m.vertices {
             // Mirror z (cusps down) and lift onto the lower tooth.
-            *v = DVec3::new(v.x, v.y, -v.z + 8.6);
+            *v = DVec3::new(v.x, v.y, -v.z + 8.1);
         }
         m.flip();
         m

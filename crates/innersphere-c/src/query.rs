@@ -8,7 +8,7 @@ use crate::types::{
     ist_pose,
 };
 use crate::{mutable, reference};
-use innersphere::query::TraversalOptions;
+use innersphere::query::{Paper, TraversalOptions};
 use innersphere::{MultipointOptions, Pair, PenetrationOptions, Pose};
 use std::ffi::c_int;
 
@@ -122,13 +122,11 @@ pub unsafe extern "C" fn ist_distance_traversal(
     pose_b: *const ist_pose,
     in_contact: *mut c_int,
 ) -> c_int {
-    status(|| {
-        let (pair, a, b) = unsafe { args(pair, pose_a, pose_b) }?;
-        let out = unsafe { mutable(in_contact, "in_contact") }?;
-        let opts = TraversalOptions::default();
-        *out = pair.paper().distance_traversal(&a, &b, &opts).in_contact() as c_int;
-        Ok(())
-    })
+    unsafe {
+        traversal(pair, pose_a, pose_b, in_contact, |p, a, b, o| {
+            p.distance_traversal(a, b, o)
+        })
+    }
 }
 
 /// The paper's backtracking traversal (from the pair's previous contact; on a new or reset
@@ -143,11 +141,29 @@ pub unsafe extern "C" fn ist_backtracking(
     pose_b: *const ist_pose,
     in_contact: *mut c_int,
 ) -> c_int {
-    status(|| {
+    unsafe {
+        traversal(pair, pose_a, pose_b, in_contact, |p, a, b, o| {
+            p.backtracking(a, b, o)
+        })
+    }
+}
+
+/// A paper traversal `run` on the pair: `*in_contact` = 1 when the packings overlap.
+///
+/// # Safety
+/// Every pointer is NULL or valid.
+unsafe fn traversal(
+    pair: *mut ist_pair,
+    pose_a: *const ist_pose,
+    pose_b: *const ist_pose,
+    in_contact: *mut c_int,
+    run: impl FnOnce(&mut Paper<'_>, &Pose, &Pose, &TraversalOptions) -> innersphere::ContactResult,
+) -> c_int {
+    status(move || {
         let (pair, a, b) = unsafe { args(pair, pose_a, pose_b) }?;
         let out = unsafe { mutable(in_contact, "in_contact") }?;
         let opts = TraversalOptions::default();
-        *out = pair.paper().backtracking(&a, &b, &opts).in_contact() as c_int;
+        *out = run(&mut pair.paper(), &a, &b, &opts).in_contact() as c_int;
         Ok(())
     })
 }

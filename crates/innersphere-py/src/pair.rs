@@ -3,9 +3,10 @@
 use crate::convert::{error, non_negative, pose, pose_or_identity, poses, vec3, PosesA};
 use crate::tree::Tree;
 use innersphere::glam::DVec3;
-use innersphere::query::TraversalOptions;
+use innersphere::query::{Paper, TraversalOptions};
 use innersphere::{
-    Distance, DistanceOptions, MultipointOptions, Patch, Penetration, PenetrationOptions, Pose,
+    ContactResult, Distance, DistanceOptions, MultipointOptions, Patch, Penetration,
+    PenetrationOptions, Pose,
 };
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -229,6 +230,23 @@ impl Pair {
     /// A new Rust pair of the same trees.
     pub(crate) fn fresh(&self) -> innersphere::Pair {
         innersphere::Pair::new(self.a.get().shared.clone(), self.b.get().shared.clone())
+    }
+
+    /// A paper traversal `run` at the poses, the interpreter released: whether the packings
+    /// overlap.
+    fn traversal(
+        &self,
+        py: Python<'_>,
+        pose_b: &Bound<'_, PyAny>,
+        pose_a: Option<&Bound<'_, PyAny>>,
+        run: impl FnOnce(&mut Paper<'_>, &Pose, &Pose, &TraversalOptions) -> ContactResult + Send,
+    ) -> PyResult<bool> {
+        let pb = pose(pose_b, "pose_b")?;
+        let pa = pose_or_identity(pose_a, "pose_a")?;
+        let mut guard = self.lock()?;
+        let inner: &mut innersphere::Pair = &mut guard;
+        let opts = TraversalOptions::default();
+        Ok(py.detach(|| run(&mut inner.paper(), &pa, &pb, &opts).in_contact()))
     }
 
     /// The Rust pair, or a clear error while another thread's query holds it.
@@ -482,17 +500,9 @@ impl Pair {
         pose_b: &Bound<'_, PyAny>,
         pose_a: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<bool> {
-        let pb = pose(pose_b, "pose_b")?;
-        let pa = pose_or_identity(pose_a, "pose_a")?;
-        let mut guard = self.lock()?;
-        let inner: &mut innersphere::Pair = &mut guard;
-        let opts = TraversalOptions::default();
-        Ok(py.detach(|| {
-            inner
-                .paper()
-                .distance_traversal(&pa, &pb, &opts)
-                .in_contact()
-        }))
+        self.traversal(py, pose_b, pose_a, |p, a, b, o| {
+            p.distance_traversal(a, b, o)
+        })
     }
 
     /// The paper's backtracking traversal (from this pair's previous contact; on a new or
@@ -504,12 +514,7 @@ impl Pair {
         pose_b: &Bound<'_, PyAny>,
         pose_a: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<bool> {
-        let pb = pose(pose_b, "pose_b")?;
-        let pa = pose_or_identity(pose_a, "pose_a")?;
-        let mut guard = self.lock()?;
-        let inner: &mut innersphere::Pair = &mut guard;
-        let opts = TraversalOptions::default();
-        Ok(py.detach(|| inner.paper().backtracking(&pa, &pb, &opts).in_contact()))
+        self.traversal(py, pose_b, pose_a, |p, a, b, o| p.backtracking(a, b, o))
     }
 
     /// Forgets all temporal coherence (last contacts, closest pair, proved separation,

@@ -263,11 +263,9 @@ fn answer(kind: Kind, pair: &mut Pair, pb: &Pose) -> Answer {
         }
         Kind::Penetration => {
             let p = pair.penetration(&pa, pb);
-            a.exact[..3].copy_from_slice(&[
-                p.pairs as u64,
-                p.max_depth.to_bits(),
-                p.patch_count as u64,
-            ]);
+            // Not the patch count: a patch is seeded by the first pair met far from the
+            // others, so the grouping depends on the order, as the sums' last bits do.
+            a.exact[..2].copy_from_slice(&[p.pairs as u64, p.max_depth.to_bits()]);
             a.sums[0] = p.volume;
             for (k, v) in [p.normal, p.force, p.torque_a, p.torque_b]
                 .iter()

@@ -11,6 +11,7 @@ pub(crate) mod geometry;
 pub(crate) mod heap;
 pub(crate) mod info;
 pub(crate) mod lanes;
+pub(crate) mod lenses;
 pub(crate) mod nearest;
 pub(crate) mod separation;
 pub(crate) mod simd;

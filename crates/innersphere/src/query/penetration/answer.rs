@@ -1,0 +1,116 @@
+//! What the penetration query answers: volume, force, torques, the contact patches and the
+//! linearised wrench.
+
+use glam::{DMat3, DVec3};
+
+/// A cluster of overlapping leaf pairs (world frame).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Patch {
+    /// Volume-weighted centroid of the pairs' lenses.
+    pub point: DVec3,
+    /// Unit volume-weighted direction from A into B (the direction B is pushed).
+    pub normal: DVec3,
+    /// Largest pair overlap `ra + rb − d` in the patch.
+    pub depth: f64,
+    /// Sum of the pairs' lens volumes.
+    pub volume: f64,
+    /// Number of leaf pairs.
+    pub pairs: u32,
+}
+
+/// Result of [`Pair::penetration`](crate::Pair::penetration). The patches themselves stay in
+/// the pair until its next query: [`Pair::patches`](crate::Pair::patches).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Penetration {
+    /// Volume of the intersection of the two inner-sphere unions: the sum of the lens
+    /// volumes of all overlapping leaf pairs.
+    pub volume: f64,
+    /// Number of overlapping leaf pairs.
+    pub pairs: usize,
+    /// Largest leaf-pair overlap `ra + rb − d`.
+    pub max_depth: f64,
+    /// Contact normal (world): unit `Σ vᵢ·uᵢ`, `uᵢ` the direction from A's sphere centre to
+    /// B's of pair `i` and `vᵢ` its lens volume. Zero without penetration.
+    pub normal: DVec3,
+    /// Force on B (world): `stiffness × volume × normal`. The force on A is its opposite.
+    pub force: DVec3,
+    /// Torque on A about A's centre of mass (world).
+    pub torque_a: DVec3,
+    /// Torque on B about B's centre of mass (world).
+    pub torque_b: DVec3,
+    /// Number of contact patches.
+    pub patch_count: usize,
+    /// Contact area: the summed areas of the discs where the overlapping leaf spheres'
+    /// boundaries meet, which is how fast the volume shrinks per unit of separation
+    /// (`−dV/dd` for a motion along every pair's own direction). Zero unless
+    /// [`PenetrationOptions::linearize`](super::PenetrationOptions::linearize) is set.
+    pub area: f64,
+    /// How the force and B's torque change as B moves: what an implicit integrator needs
+    /// (see [`ContactStiffness`]). Zero unless [`PenetrationOptions::linearize`](super::PenetrationOptions::linearize) is set.
+    pub stiffness: ContactStiffness,
+    /// 0 with penetration; otherwise a proved lower bound on the separation.
+    pub distance: f64,
+    /// Node pairs tested.
+    pub visits: u64,
+    /// True when the safe-motion bound answered without a traversal.
+    pub skipped: bool,
+}
+
+/// The linearised penalty wrench: with `δ` a small translation of B and `θ` a small rotation
+/// of B about its centre of mass (world frame), B's force and torque change by
+/// `−[linear·δ + coupling·θ, couplingᵀ·δ + angular·θ]`. It is the Gauss–Newton part
+/// `k Σ aᵢ JᵢJᵢᵀ`, `aᵢ` the area of pair `i`'s lens disc and `Jᵢ = [uᵢ; rᵢ × uᵢ]`: symmetric
+/// and positive semi-definite (what an implicit integrator needs to stay stable with stiff
+/// contact), leaving out the small terms from the pairs' directions turning.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ContactStiffness {
+    /// Force per translation (force / length).
+    pub linear: DMat3,
+    /// Force per rotation, and (transposed) torque per translation.
+    pub coupling: DMat3,
+    /// Torque per rotation (force · length / radian).
+    pub angular: DMat3,
+}
+
+impl Default for ContactStiffness {
+    /// Zero (no contact). By hand: glam's default matrix is the identity.
+    fn default() -> ContactStiffness {
+        ContactStiffness {
+            linear: DMat3::ZERO,
+            coupling: DMat3::ZERO,
+            angular: DMat3::ZERO,
+        }
+    }
+}
+
+impl ContactStiffness {
+    /// The 6×6 matrix `[[linear, coupling], [couplingᵀ, angular]]`, row-major.
+    pub fn to_matrix6(&self) -> [[f64; 6]; 6] {
+        let mut m = [[0.0; 6]; 6];
+        let (l, c, a) = (
+            self.linear.to_cols_array_2d(),
+            self.coupling.to_cols_array_2d(),
+            self.angular.to_cols_array_2d(),
+        );
+        for i in 0..3 {
+            for j in 0..3 {
+                // Column-major sources: l[j][i] is row i, column j.
+                m[i][j] = l[j][i];
+                m[i][j + 3] = c[j][i];
+                m[i + 3][j] = c[i][j];
+                m[i + 3][j + 3] = a[j][i];
+            }
+        }
+        m
+    }
+
+    /// Rotated into another frame: `R K Rᵀ` block by block.
+    pub(crate) fn rotated(&self, r: DMat3) -> ContactStiffness {
+        let rt = r.transpose();
+        ContactStiffness {
+            linear: r * self.linear * rt,
+            coupling: r * self.coupling * rt,
+            angular: r * self.angular * rt,
+        }
+    }
+}

@@ -1,0 +1,304 @@
+//! The sums over the overlapping leaf pairs (volume, its moments, the linearised wrench's
+//! terms) and the batches that feed them four pairs at a time.
+
+use super::answer::ContactStiffness;
+use super::patches::Patches;
+use crate::query::kernel::geometry::{direction, lens, lens_area};
+use crate::query::kernel::info::Node;
+use crate::query::kernel::lenses::{terms, Pairs4, Terms4, W};
+use crate::query::kernel::simd;
+use crate::query::search::front::Hit;
+use glam::{DMat3, DVec3};
+
+/// `u vᵀ`.
+#[inline]
+fn outer(u: DVec3, v: DVec3) -> DMat3 {
+    DMat3::from_cols(u * v.x, u * v.y, u * v.z)
+}
+
+/// The cross-product matrix `[c]×` (`[c]× v = c × v`).
+fn cross_matrix(c: DVec3) -> DMat3 {
+    DMat3::from_cols(
+        DVec3::new(0.0, c.z, -c.y),
+        DVec3::new(-c.z, 0.0, c.x),
+        DVec3::new(c.y, -c.x, 0.0),
+    )
+}
+
+/// Sums over the overlapping leaf pairs (A's frame); with `L` also the contact area and the
+/// linearised wrench (a type parameter, so that the plain query's loop carries none of it:
+/// a run-time flag measured +15 % at the p99 of deep contact).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Sums<const L: bool> {
+    pub volume: f64,
+    /// Σ v·u.
+    pub vu: DVec3,
+    /// Σ v·(g × u), g the lens centroid.
+    pub vgu: DVec3,
+    pub max_depth: f64,
+    pub pairs: usize,
+    /// Σ a, a the lens disc's area.
+    pub area: f64,
+    /// Σ a·u uᵀ.
+    pub auu: DMat3,
+    /// Σ a·u sᵀ, s = g × u.
+    pub aus: DMat3,
+    /// Σ a·s sᵀ.
+    pub ass: DMat3,
+}
+
+impl<const L: bool> Default for Sums<L> {
+    // By hand: glam's default matrix is the identity, not zero.
+    fn default() -> Sums<L> {
+        Sums {
+            volume: 0.0,
+            vu: DVec3::ZERO,
+            vgu: DVec3::ZERO,
+            max_depth: 0.0,
+            pairs: 0,
+            area: 0.0,
+            auu: DMat3::ZERO,
+            aus: DMat3::ZERO,
+            ass: DMat3::ZERO,
+        }
+    }
+}
+
+impl<const L: bool> Sums<L> {
+    /// Adds one overlapping leaf pair (A's centre and radius, B's transformed centre and
+    /// radius, all f32); returns its (volume, centroid, direction, depth).
+    #[inline]
+    pub(crate) fn add(
+        &mut self,
+        ca: [f32; 3],
+        ra: f32,
+        cb: [f32; 3],
+        rb: f32,
+    ) -> (f64, DVec3, DVec3, f64) {
+        let ca = DVec3::new(ca[0] as f64, ca[1] as f64, ca[2] as f64);
+        let cbd = DVec3::new(cb[0] as f64, cb[1] as f64, cb[2] as f64);
+        let (ra, rb) = (ra as f64, rb as f64);
+        let (u, d) = direction(ca, cbd);
+        let (v, g) = lens(ra, rb, d);
+        let p = ca + u * g;
+        let depth = ra + rb - d;
+        let s = p.cross(u);
+        self.pairs += 1;
+        self.volume += v;
+        self.vu += u * v;
+        self.vgu += s * v;
+        self.max_depth = self.max_depth.max(depth);
+        if L {
+            let a = lens_area(ra, rb, d);
+            self.area += a;
+            let au = u * a;
+            self.auu += outer(au, u);
+            self.aus += outer(au, s);
+            self.ass += outer(s * a, s);
+        }
+        (v, p, u, depth)
+    }
+
+    /// Adds lane `l` of a batch's terms: the same sums as [`Sums::add`] of that pair, bit
+    /// for bit.
+    #[inline(always)]
+    fn add_lane(&mut self, t: &Terms4, l: usize) {
+        let v = t.v[l];
+        let u = DVec3::new(t.u[0][l], t.u[1][l], t.u[2][l]);
+        let s = DVec3::new(t.s[0][l], t.s[1][l], t.s[2][l]);
+        let depth = t.depth[l];
+        self.pairs += 1;
+        self.volume += v;
+        self.vu += u * v;
+        self.vgu += s * v;
+        self.max_depth = self.max_depth.max(depth);
+        if L {
+            let a = t.area[l];
+            self.area += a;
+            let au = u * a;
+            self.auu += outer(au, u);
+            self.aus += outer(au, s);
+            self.ass += outer(s * a, s);
+        }
+    }
+
+    /// Adds a pair of node spheres not refined (the time-critical query ran out of budget)
+    /// as if it were one overlap of volume `v` (its bound) along its centres' direction, so
+    /// that the force of an unfinished query still pushes the right way with about the
+    /// right size. Its area is the node lens's scaled by `v` over the node lens's volume.
+    /// Counts in neither `pairs` nor `max_depth`.
+    #[inline]
+    pub(crate) fn add_coarse(&mut self, ca: [f32; 3], ra: f32, cb: [f32; 3], rb: f32, v: f64) {
+        let ca = DVec3::new(ca[0] as f64, ca[1] as f64, ca[2] as f64);
+        let cbd = DVec3::new(cb[0] as f64, cb[1] as f64, cb[2] as f64);
+        let (ra, rb) = (ra as f64, rb as f64);
+        let (u, d) = direction(ca, cbd);
+        let (lv, g) = lens(ra, rb, d);
+        let p = ca + u * g;
+        let s = p.cross(u);
+        self.volume += v;
+        self.vu += u * v;
+        self.vgu += s * v;
+        if L && lv > 0.0 {
+            let a = lens_area(ra, rb, d) * (v / lv).min(1.0);
+            self.area += a;
+            let au = u * a;
+            self.auu += outer(au, u);
+            self.aus += outer(au, s);
+            self.ass += outer(s * a, s);
+        }
+    }
+
+    /// The [`ContactStiffness`] (A's frame) of penalty stiffness `k`, rotations about
+    /// `com_b` (A's frame).
+    pub(crate) fn stiffness(&self, k: f64, com_b: DVec3) -> ContactStiffness {
+        // Jᵢ = [u; s − C u] with C = [com_b]×: the lever arm from B's centre of mass.
+        let c = cross_matrix(com_b);
+        let ct = c.transpose();
+        let coupling = self.aus - self.auu * ct;
+        let angular = self.ass - self.aus.transpose() * ct - c * self.aus + c * self.auu * ct;
+        ContactStiffness {
+            linear: self.auu * k,
+            coupling: coupling * k,
+            angular: angular * k,
+        }
+    }
+
+    /// (normal, force on B, torque on A, torque on B) in A's frame, torques about `com_a`
+    /// and `com_b` (A's frame). The per-pair forces `s·vᵢ·uᵢ` are scaled so that they sum to
+    /// the force `k·V·n`.
+    pub(crate) fn wrench(
+        &self,
+        k: f64,
+        com_a: DVec3,
+        com_b: DVec3,
+    ) -> (DVec3, DVec3, DVec3, DVec3) {
+        let len = self.vu.length();
+        if len <= 0.0 || self.volume <= 0.0 {
+            return (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+        }
+        let n = self.vu / len;
+        let s = k * self.volume / len;
+        let force = n * (k * self.volume);
+        let torque_b = (self.vgu - com_b.cross(self.vu)) * s;
+        let torque_a = -(self.vgu - com_a.cross(self.vu)) * s;
+        (n, force, torque_a, torque_b)
+    }
+}
+
+/// Overlapping leaf pairs gathered [`W`] at a time: their terms are computed together
+/// (vectorised), then summed and assigned to patches one by one in the order they came, so
+/// that every sum is the one-by-one sum bit for bit.
+#[derive(Default)]
+pub(super) struct LeafBatch {
+    q: Pairs4,
+    n: usize,
+}
+
+impl LeafBatch {
+    /// Queues leaf `na` of A and leaf `nb` of B at `cb` (A's frame); sums the batch when full.
+    #[inline(always)]
+    pub(super) fn push<const L: bool>(
+        &mut self,
+        na: &Node,
+        nb: &Node,
+        cb: [f32; 3],
+        to: &mut Sink<L>,
+    ) {
+        let l = self.n;
+        self.q.ca[0][l] = na.x as f64;
+        self.q.ca[1][l] = na.y as f64;
+        self.q.ca[2][l] = na.z as f64;
+        self.q.ra[l] = na.r as f64;
+        self.q.cb[0][l] = cb[0] as f64;
+        self.q.cb[1][l] = cb[1] as f64;
+        self.q.cb[2][l] = cb[2] as f64;
+        self.q.rb[l] = nb.r as f64;
+        self.n += 1;
+        if self.n == W {
+            self.flush(to);
+        }
+    }
+
+    /// Sums the queued pairs.
+    #[inline(always)]
+    pub(super) fn flush<const L: bool>(&mut self, to: &mut Sink<L>) {
+        if self.n == 0 {
+            return;
+        }
+        let t = terms::<L>(&self.q);
+        for l in 0..self.n {
+            to.sums.add_lane(&t, l);
+        }
+        to.patches.add_batch(&t, self.n);
+        self.n = 0;
+    }
+}
+
+/// Where a [`LeafBatch`] sums to.
+pub(super) struct Sink<'s, const L: bool> {
+    pub sums: &'s mut Sums<L>,
+    pub patches: &'s mut Patches,
+}
+
+/// The inputs of four hits.
+#[inline(always)]
+fn gather(h: [&Hit; W], na: &[Node], nb: &[Node]) -> Pairs4 {
+    let a = h.map(|h| &na[h.a as usize]);
+    let rb = h.map(|h| nb[h.b as usize].r as f64);
+    Pairs4 {
+        ca: [
+            a.map(|n| n.x as f64),
+            a.map(|n| n.y as f64),
+            a.map(|n| n.z as f64),
+        ],
+        ra: a.map(|n| n.r as f64),
+        cb: [
+            h.map(|h| h.c[0] as f64),
+            h.map(|h| h.c[1] as f64),
+            h.map(|h| h.c[2] as f64),
+        ],
+        rb,
+    }
+}
+
+/// Sums the front's overlapping leaf pairs, compiled for AVX2 when the CPU has it (same
+/// results bit for bit).
+pub(super) fn add_hits<const L: bool>(hits: &[Hit], na: &[Node], nb: &[Node], to: &mut Sink<L>) {
+    #[inline(always)]
+    fn run<const L: bool>(hits: &[Hit], na: &[Node], nb: &[Node], to: &mut Sink<L>) {
+        // Whole batches are gathered by value, lane by fixed lane, so that the compiler
+        // builds the vectors in registers (through memory, each batch's loads waited for
+        // its 32 scalar stores).
+        let mut whole = hits.chunks_exact(W);
+        for c in &mut whole {
+            let q = gather([&c[0], &c[1], &c[2], &c[3]], na, nb);
+            let t = terms::<L>(&q);
+            for l in 0..W {
+                to.sums.add_lane(&t, l);
+            }
+            to.patches.add_batch(&t, W);
+        }
+        let rest = whole.remainder();
+        if let Some(first) = rest.first() {
+            let lane = |l: usize| rest.get(l).unwrap_or(first);
+            let q = gather([lane(0), lane(1), lane(2), lane(3)], na, nb);
+            let t = terms::<L>(&q);
+            for l in 0..rest.len() {
+                to.sums.add_lane(&t, l);
+            }
+            to.patches.add_batch(&t, rest.len());
+        }
+    }
+    #[cfg(target_arch = "x86_64")]
+    if simd::avx2() {
+        #[target_feature(enable = "avx2")]
+        fn avx2<const L: bool>(hits: &[Hit], na: &[Node], nb: &[Node], to: &mut Sink<L>) {
+            run(hits, na, nb, to)
+        }
+        // SAFETY: the CPU has AVX2 (checked above).
+        unsafe { avx2(hits, na, nb, to) };
+        return;
+    }
+    run(hits, na, nb, to)
+}

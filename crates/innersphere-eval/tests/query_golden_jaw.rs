@@ -191,21 +191,21 @@ const RECORDED: [(&str, u64, u64); 13] = [
         0xd311b6d223070bd1,
         0x7773e70fa20b8cea,
     ),
-    ("penetration", 0xb831f2dc0833959e, 0x4c159414d85aeb33),
+    ("penetration", 0xcf8df9c3bec215f7, 0x4c159414d85aeb33),
     (
         "penetration traversal",
-        0x39fe732ab99acc51,
+        0x13db5f30565b331e,
         0x3d21625a022a6a99,
     ),
-    ("penetration front", 0xb831f2dc0833959e, 0x4c159414d85aeb33),
+    ("penetration front", 0xcf8df9c3bec215f7, 0x4c159414d85aeb33),
     (
         "penetration budget 8000",
-        0xccf1be038fe83115,
+        0xe02241c84c382653,
         0x6a2947013d11895b,
     ),
     (
         "all kinds on one state",
-        0x444301c2b7ab54ce,
+        0xf57f072c59d6b0d4,
         0x6e76ff9b5ec80e8c,
     ),
 ];

@@ -382,7 +382,9 @@ fn a_budget_too_small_for_the_contact_never_lets_the_tool_sink() {
     assert_eq!(none, 0);
     for budget in [100e-6, 20e-6, 10e-6, 1e-6] {
         let (t, budgeted) = rest(budget);
-        if budget <= 20e-6 {
+        // 1 µs never fits the exact query; 10–20 µs may on a fast machine, where the loop
+        // then rightly runs it: only the rest pose is asserted for those.
+        if budget <= 1e-6 {
             assert!(
                 budgeted > 1000,
                 "budget {budget} s: {budgeted} ticks budgeted"

@@ -1,9 +1,9 @@
 //! Time-critical penetration volume (beyond the paper): the volume found within a budget
 //! of node-pair tests, and a proved upper bound on the rest.
 
-use super::kernel::geometry::lens;
 use super::kernel::heap::{Entry, PairHeap};
 use super::kernel::info::TreeInfo;
+use super::kernel::lenses::lens;
 use super::kernel::{expand_larger, Ctx};
 use super::penetration::{ContactStiffness, Sums};
 use glam::{DMat3, DVec3};

@@ -1,5 +1,5 @@
-//! Small geometry shared by the queries: the f32 relative transform, sphere–sphere lens
-//! volumes and centroids, contacts of leaf pairs.
+//! Small geometry shared by the queries: the f32 relative transform, the pruning slack, the
+//! leaf predicates, contacts of leaf pairs.
 
 use super::info::Node;
 use crate::pose::Pose;
@@ -117,67 +117,6 @@ pub(crate) fn pruning_slack(extent_a: f32, extent_b: f32, rel: &Rel32) -> f32 {
     16.0 * f32::EPSILON * (extent_a + extent_b + rel.translation_len())
 }
 
-/// Volume of the intersection of two balls of radii `ra`, `rb` whose centres are `d` apart
-/// (the spherical lens; the smaller ball when one contains the other; 0 when disjoint).
-pub fn lens_volume(ra: f64, rb: f64, d: f64) -> f64 {
-    lens(ra, rb, d).0
-}
-
-/// Volume of a spherical cap of height `h` of a ball of radius `r`.
-#[inline]
-fn cap_volume(r: f64, h: f64) -> f64 {
-    std::f64::consts::PI * h * h * (3.0 * r - h) / 3.0
-}
-
-/// Distance of a cap's centroid from its ball's centre.
-#[inline]
-fn cap_centroid(r: f64, h: f64) -> f64 {
-    let k = 3.0 * r - h;
-    if k <= 0.0 {
-        0.0
-    } else {
-        3.0 * (2.0 * r - h) * (2.0 * r - h) / (4.0 * k)
-    }
-}
-
-/// Lens volume and the distance of its centroid from A's centre along the centre line.
-#[inline]
-pub(crate) fn lens(ra: f64, rb: f64, d: f64) -> (f64, f64) {
-    if d >= ra + rb {
-        return (0.0, 0.0);
-    }
-    if d <= (ra - rb).abs() {
-        let r = ra.min(rb);
-        let at = if ra <= rb { 0.0 } else { d };
-        return (4.0 / 3.0 * std::f64::consts::PI * r * r * r, at);
-    }
-    // The intersection circle lies at distance x from A's centre.
-    let x = (d * d + ra * ra - rb * rb) / (2.0 * d);
-    let ha = (ra - x).clamp(0.0, 2.0 * ra);
-    let hb = (rb - (d - x)).clamp(0.0, 2.0 * rb);
-    let va = cap_volume(ra, ha);
-    let vb = cap_volume(rb, hb);
-    let v = va + vb;
-    if v <= 0.0 {
-        return (0.0, x);
-    }
-    let ga = cap_centroid(ra, ha);
-    let gb = d - cap_centroid(rb, hb);
-    (v, (va * ga + vb * gb) / v)
-}
-
-/// Area of the disc where the boundaries of two overlapping spheres meet (radii `ra`, `rb`,
-/// centres `d` apart): minus the derivative of [`lens`]'s volume with respect to `d`. Zero
-/// when they do not overlap or one holds the other (moving it changes nothing then).
-#[inline]
-pub(crate) fn lens_area(ra: f64, rb: f64, d: f64) -> f64 {
-    if d >= ra + rb || d <= (ra - rb).abs() {
-        return 0.0;
-    }
-    let x = (d * d + ra * ra - rb * rb) / (2.0 * d);
-    (std::f64::consts::PI * (ra * ra - x * x)).max(0.0)
-}
-
 /// One contact between a leaf sphere of A and a leaf sphere of B.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Contact {
@@ -259,7 +198,6 @@ pub(crate) fn sphere_distance(ax: f32, ay: f32, az: f32, ar: f32, b: [f32; 3], b
 mod tests {
     use super::*;
     use proptest::prelude::*;
-    use std::f64::consts::PI;
 
     proptest! {
         /// The four-lane transform gives bit for bit the per-point one.
@@ -279,62 +217,5 @@ mod tests {
                 prop_assert_eq!([ox[l].to_bits(), oy[l].to_bits(), oz[l].to_bits()], want.map(f32::to_bits));
             }
         }
-    }
-
-    #[test]
-    fn lens_limits_and_symmetry() {
-        assert_eq!(lens_volume(1.0, 1.0, 2.0), 0.0);
-        assert!((lens_volume(1.0, 0.5, 0.2) - 4.0 / 3.0 * PI * 0.125).abs() < 1e-12);
-        assert!((lens_volume(1.0, 1.0, 1e-9) - 4.0 / 3.0 * PI).abs() < 1e-6);
-        for &(ra, rb, d) in &[(1.0, 0.7, 1.2), (0.3, 0.9, 0.8), (1.0, 1.0, 1.0)] {
-            let v1 = lens_volume(ra, rb, d);
-            let v2 = lens_volume(rb, ra, d);
-            assert!((v1 - v2).abs() < 1e-12);
-            // The classic closed form.
-            let f = PI
-                * (ra + rb - d).powi(2)
-                * (d * d + 2.0 * d * (ra + rb) - 3.0 * (ra - rb).powi(2))
-                / (12.0 * d);
-            assert!((v1 - f).abs() < 1e-12, "{v1} vs {f}");
-            // Centroid between the two centres, mirrored when swapped.
-            let (_, g1) = lens(ra, rb, d);
-            let (_, g2) = lens(rb, ra, d);
-            assert!((g1 + g2 - d).abs() < 1e-12);
-        }
-        // Equal radii: the centroid is half-way.
-        assert!((lens(1.0, 1.0, 1.3).1 - 0.65).abs() < 1e-12);
-    }
-
-    #[test]
-    fn lens_by_monte_carlo() {
-        let (ra, rb, d) = (1.0f64, 0.6f64, 1.1f64);
-        let mut state = 12345u64;
-        let mut rnd = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 11) as f64) / ((1u64 << 53) as f64)
-        };
-        let n = 400_000;
-        let (mut hits, mut gx) = (0usize, 0.0);
-        for _ in 0..n {
-            let p = DVec3::new(
-                rnd() * 2.0 - 1.0 + 0.5,
-                rnd() * 2.0 - 1.0,
-                rnd() * 2.0 - 1.0,
-            );
-            if p.length() < ra && (p - DVec3::new(d, 0.0, 0.0)).length() < rb {
-                hits += 1;
-                gx += p.x;
-            }
-        }
-        let vol = 8.0 * hits as f64 / n as f64;
-        let (v, g) = lens(ra, rb, d);
-        assert!((vol - v).abs() < 0.02 * v + 1e-3, "{vol} vs {v}");
-        assert!(
-            (gx / hits as f64 - g).abs() < 0.01,
-            "{} vs {g}",
-            gx / hits as f64
-        );
     }
 }

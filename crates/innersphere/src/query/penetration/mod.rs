@@ -146,6 +146,7 @@ fn penetration_sums<const L: bool>(
         }
         batch.flush(&mut to);
     }
+    sums.settle();
     let com_a = ia.center_of_mass;
     let com_b = ctx.rel.transform_point(ib.center_of_mass);
     let (n, f, ta, tb) = sums.wrench(opts.stiffness, com_a, com_b);

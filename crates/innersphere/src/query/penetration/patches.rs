@@ -38,6 +38,61 @@ struct PatchSums {
     pairs: u32,
 }
 
+/// A patch's sums per batch lane: lane `l` sums the pairs that came in lane `l` of their
+/// batch, so that a batch adds all its pairs of one patch with a few vector operations
+/// (and a pair waits only for the pair four before it); added up at the end.
+#[derive(Debug, Clone, Copy)]
+struct PatchLanes {
+    vol: [f64; W],
+    vg: [[f64; W]; 3],
+    vu: [[f64; W]; 3],
+    depth: [f64; W],
+    pairs: [u32; W],
+}
+
+impl Default for PatchLanes {
+    fn default() -> PatchLanes {
+        PatchLanes {
+            vol: [0.0; W],
+            vg: [[0.0; W]; 3],
+            vu: [[0.0; W]; 3],
+            depth: [0.0; W],
+            pairs: [0; W],
+        }
+    }
+}
+
+impl PatchLanes {
+    /// Adds the lanes of `t` where `on`.
+    #[inline(always)]
+    fn add(&mut self, t: &Terms4, on: [bool; W]) {
+        for (l, &on) in on.iter().enumerate() {
+            let v = if on { t.v[l] } else { 0.0 };
+            self.vol[l] += v;
+            for k in 0..3 {
+                self.vg[k][l] += t.p[k][l] * v;
+                self.vu[k][l] += t.u[k][l] * v;
+            }
+            let depth = if on { t.depth[l] } else { 0.0 };
+            self.depth[l] = self.depth[l].max(depth);
+            self.pairs[l] += on as u32;
+        }
+    }
+
+    /// The lanes added up in order.
+    fn total(&self) -> PatchSums {
+        let mut s = PatchSums::default();
+        for l in 0..W {
+            s.vol += self.vol[l];
+            s.vg += DVec3::new(self.vg[0][l], self.vg[1][l], self.vg[2][l]);
+            s.vu += DVec3::new(self.vu[0][l], self.vu[1][l], self.vu[2][l]);
+            s.depth = s.depth.max(self.depth[l]);
+            s.pairs += self.pairs[l];
+        }
+        s
+    }
+}
+
 /// The patches of one query being summed (A's frame). A batch's pairs look for their
 /// nearest seed together (a lane per pair, the seeds in order, so each lane finds the first
 /// nearest like a scan would); then they join or open patches one by one, in order.
@@ -46,12 +101,7 @@ pub(crate) struct Patches {
     sx: Vec<f64>,
     sy: Vec<f64>,
     sz: Vec<f64>,
-    sums: Vec<PatchSums>,
-    /// The patch the last pair joined (`usize::MAX`: none) and its sums, which are summed
-    /// here and written back when another patch is joined: consecutive pairs mostly join the
-    /// same patch, and summing in memory made every pair wait for the last one's stores.
-    cur: usize,
-    open: PatchSums,
+    sums: Vec<PatchLanes>,
     max: usize,
     r2: f64,
 }
@@ -63,8 +113,6 @@ impl Patches {
             sy: Vec::with_capacity(RESERVED_PATCHES),
             sz: Vec::with_capacity(RESERVED_PATCHES),
             sums: Vec::with_capacity(RESERVED_PATCHES),
-            cur: usize::MAX,
-            open: PatchSums::default(),
             max: 0,
             r2: 0.0,
         }
@@ -77,7 +125,6 @@ impl Patches {
         self.sy.clear();
         self.sz.clear();
         self.sums.clear();
-        self.cur = usize::MAX;
         self.max = max;
         self.r2 = radius * radius;
     }
@@ -91,24 +138,32 @@ impl Patches {
         if self.max == 0 {
             return;
         }
-        let [px, py, pz] = t.p;
-        let mut best = [usize::MAX; W];
-        let mut bd = [f64::INFINITY; W];
-        let seeds = self.sums.len();
-        for j in 0..seeds {
-            let (x, y, z) = (self.sx[j], self.sy[j], self.sz[j]);
+        let (best, bd) = self.nearest(t.p);
+        let full = self.sums.len() >= self.max;
+        let opens = (0..n).any(|l| best[l] == usize::MAX || (bd[l] > self.r2 && !full));
+        if opens {
+            return self.add_opening(t, n, best, bd);
+        }
+        // Patch by patch, the lanes that join it.
+        let mut left: [bool; W] = std::array::from_fn(|l| l < n);
+        while let Some(first) = left.iter().position(|&x| x) {
+            let k = best[first];
+            let on: [bool; W] = std::array::from_fn(|l| left[l] && best[l] == k);
+            self.sums[k].add(t, on);
             for l in 0..W {
-                let (dx, dy, dz) = (x - px[l], y - py[l], z - pz[l]);
-                let dd = dx * dx + dy * dy + dz * dz;
-                let nearer = dd < bd[l];
-                bd[l] = if nearer { dd } else { bd[l] };
-                best[l] = if nearer { j } else { best[l] };
+                left[l] &= !on[l];
             }
         }
+    }
+
+    /// [`add_batch`](Self::add_batch) of a batch where a pair opens a patch: pair by pair,
+    /// each later pair also looking at the seeds opened before it.
+    #[cold]
+    fn add_opening(&mut self, t: &Terms4, n: usize, best: [usize; W], bd: [f64; W]) {
+        let seeds = self.sums.len();
         for l in 0..n {
-            let p = DVec3::new(px[l], py[l], pz[l]);
+            let p = DVec3::new(t.p[0][l], t.p[1][l], t.p[2][l]);
             let (mut best, mut bd) = (best[l], bd[l]);
-            // Seeds opened by this batch's earlier pairs.
             for j in seeds..self.sums.len() {
                 let (dx, dy, dz) = (self.sx[j] - p.x, self.sy[j] - p.y, self.sz[j] - p.z);
                 let dd = dx * dx + dy * dy + dz * dz;
@@ -119,22 +174,52 @@ impl Patches {
             if best == usize::MAX || (bd > self.r2 && self.sums.len() < self.max) {
                 best = self.open_at(p);
             }
-            if best != self.cur {
-                if let Some(s) = self.sums.get_mut(self.cur) {
-                    *s = self.open;
-                }
-                self.open = self.sums[best];
-                self.cur = best;
-            }
-            let (v, depth) = (t.v[l], t.depth[l]);
-            let u = DVec3::new(t.u[0][l], t.u[1][l], t.u[2][l]);
-            let pa = &mut self.open;
-            pa.vol += v;
-            pa.vg += p * v;
-            pa.vu += u * v;
-            pa.depth = pa.depth.max(depth);
-            pa.pairs += 1;
+            self.sums[best].add(t, std::array::from_fn(|i| i == l));
         }
+    }
+
+    /// For each lane of a batch's centroids, the first nearest seed and its squared
+    /// distance (`usize::MAX`, ∞ when none is at a finite distance). Two scans, over the
+    /// even and the odd seeds, run side by side and then merge (the smaller distance, on a
+    /// tie the smaller index): a single scan waited for each comparison before the next.
+    #[inline(always)]
+    fn nearest(&self, p: [[f64; W]; 3]) -> ([usize; W], [f64; W]) {
+        /// One step of a scan: seed `j` at `s`.
+        #[inline(always)]
+        fn step(b: &mut [usize; W], d: &mut [f64; W], p: &[[f64; W]; 3], s: [f64; 3], j: usize) {
+            for l in 0..W {
+                let (dx, dy, dz) = (s[0] - p[0][l], s[1] - p[1][l], s[2] - p[2][l]);
+                let dd = dx * dx + dy * dy + dz * dz;
+                let nearer = dd < d[l];
+                d[l] = if nearer { dd } else { d[l] };
+                b[l] = if nearer { j } else { b[l] };
+            }
+        }
+        let n = self.sums.len();
+        let (sx, sy, sz) = (&self.sx[..n], &self.sy[..n], &self.sz[..n]);
+        let (mut b0, mut d0) = ([usize::MAX; W], [f64::INFINITY; W]);
+        let (mut b1, mut d1) = ([usize::MAX; W], [f64::INFINITY; W]);
+        let mut j = 0;
+        while j + 1 < n {
+            step(&mut b0, &mut d0, &p, [sx[j], sy[j], sz[j]], j);
+            step(
+                &mut b1,
+                &mut d1,
+                &p,
+                [sx[j + 1], sy[j + 1], sz[j + 1]],
+                j + 1,
+            );
+            j += 2;
+        }
+        if j < n {
+            step(&mut b0, &mut d0, &p, [sx[j], sy[j], sz[j]], j);
+        }
+        for l in 0..W {
+            let take = d1[l] < d0[l] || (d1[l] == d0[l] && b1[l] < b0[l]);
+            d0[l] = if take { d1[l] } else { d0[l] };
+            b0[l] = if take { b1[l] } else { b0[l] };
+        }
+        (b0, d0)
     }
 
     /// Opens a patch seeded at `p`; returns its index.
@@ -143,19 +228,16 @@ impl Patches {
         self.sx.push(p.x);
         self.sy.push(p.y);
         self.sz.push(p.z);
-        self.sums.push(PatchSums::default());
+        self.sums.push(PatchLanes::default());
         self.sums.len() - 1
     }
 
     /// The finished patches in the world frame (A at `pose_a`).
-    pub(crate) fn finish(&mut self, pose_a: &Pose, out: &mut Vec<Patch>) {
-        if let Some(s) = self.sums.get_mut(self.cur) {
-            *s = self.open;
-        }
-        self.cur = usize::MAX;
+    pub(crate) fn finish(&self, pose_a: &Pose, out: &mut Vec<Patch>) {
         out.clear();
-        for (i, pa) in self.sums.iter().enumerate() {
+        for (i, lanes) in self.sums.iter().enumerate() {
             let seed = DVec3::new(self.sx[i], self.sy[i], self.sz[i]);
+            let pa = lanes.total();
             out.push(Patch {
                 point: pose_a.transform_point(if pa.vol > 0.0 { pa.vg / pa.vol } else { seed }),
                 normal: pose_a.transform_vector(pa.vu.normalize_or_zero()),
@@ -174,11 +256,11 @@ mod tests {
 
     /// The patches of the plain rule: a scan over the seeds in order for the first nearest.
     fn reference(pairs: &[(f64, DVec3, DVec3, f64)], max: usize, r: f64) -> Vec<Patch> {
-        let mut seeds: Vec<(DVec3, PatchSums)> = vec![];
+        let mut seeds: Vec<(DVec3, [PatchSums; W])> = vec![];
         if max == 0 {
             return vec![];
         }
-        for &(v, p, u, depth) in pairs {
+        for (i, &(v, p, u, depth)) in pairs.iter().enumerate() {
             let mut best = usize::MAX;
             let mut bd = f64::INFINITY;
             for (i, (s, _)) in seeds.iter().enumerate() {
@@ -189,10 +271,10 @@ mod tests {
                 }
             }
             if best == usize::MAX || (bd > r * r && seeds.len() < max) {
-                seeds.push((p, PatchSums::default()));
+                seeds.push((p, [PatchSums::default(); W]));
                 best = seeds.len() - 1;
             }
-            let pa = &mut seeds[best].1;
+            let pa = &mut seeds[best].1[i % W];
             pa.vol += v;
             pa.vg += p * v;
             pa.vu += u * v;
@@ -201,6 +283,18 @@ mod tests {
         }
         seeds
             .iter()
+            .map(|(s, lanes)| {
+                // The lanes added in order.
+                let mut pa = lanes[0];
+                for l in &lanes[1..] {
+                    pa.vol += l.vol;
+                    pa.vg += l.vg;
+                    pa.vu += l.vu;
+                    pa.depth = pa.depth.max(l.depth);
+                    pa.pairs += l.pairs;
+                }
+                (s, pa)
+            })
             .map(|(s, pa)| Patch {
                 point: if pa.vol > 0.0 { pa.vg / pa.vol } else { *s },
                 normal: pa.vu.normalize_or_zero(),

@@ -3,12 +3,17 @@
 
 use super::answer::ContactStiffness;
 use super::patches::Patches;
-use crate::query::kernel::geometry::{direction, lens, lens_area};
 use crate::query::kernel::info::Node;
-use crate::query::kernel::lenses::{terms, Pairs4, Terms4, W};
+use crate::query::kernel::lenses::{pair, terms, PairTerms, Pairs4, Terms4, W};
 use crate::query::kernel::simd;
 use crate::query::search::front::Hit;
 use glam::{DMat3, DVec3};
+
+/// A point's f32 coordinates as f64.
+#[inline(always)]
+fn f64s(c: [f32; 3]) -> [f64; 3] {
+    c.map(|x| x as f64)
+}
 
 /// `u vᵀ`.
 #[inline]
@@ -45,6 +50,45 @@ pub(crate) struct Sums<const L: bool> {
     pub aus: DMat3,
     /// Σ a·s sᵀ.
     pub ass: DMat3,
+    /// The batches' sums, lane by lane, not yet in the fields above (see [`Sums::settle`]).
+    lanes: LaneSums,
+}
+
+/// Per batch lane, the sums of the pairs that came in that lane: a batch adds its four
+/// pairs with a few vector operations, where adding them one by one to the same sums took
+/// a dozen scalar ones per pair.
+#[derive(Debug, Clone, Copy)]
+struct LaneSums {
+    volume: [f64; W],
+    vu: [[f64; W]; 3],
+    vgu: [[f64; W]; 3],
+    max_depth: [f64; W],
+    area: [f64; W],
+    /// `auu`, `aus`, `ass` entry by entry (column-major).
+    auu: [[f64; W]; 9],
+    aus: [[f64; W]; 9],
+    ass: [[f64; W]; 9],
+}
+
+impl Default for LaneSums {
+    fn default() -> LaneSums {
+        LaneSums {
+            volume: [0.0; W],
+            vu: [[0.0; W]; 3],
+            vgu: [[0.0; W]; 3],
+            max_depth: [0.0; W],
+            area: [0.0; W],
+            auu: [[0.0; W]; 9],
+            aus: [[0.0; W]; 9],
+            ass: [[0.0; W]; 9],
+        }
+    }
+}
+
+/// The lanes of `x` added up in order.
+#[inline(always)]
+fn total(x: [f64; W]) -> f64 {
+    x[1..].iter().fold(x[0], |s, v| s + v)
 }
 
 impl<const L: bool> Default for Sums<L> {
@@ -60,65 +104,90 @@ impl<const L: bool> Default for Sums<L> {
             auu: DMat3::ZERO,
             aus: DMat3::ZERO,
             ass: DMat3::ZERO,
+            lanes: LaneSums::default(),
         }
     }
 }
 
 impl<const L: bool> Sums<L> {
     /// Adds one overlapping leaf pair (A's centre and radius, B's transformed centre and
-    /// radius, all f32); returns its (volume, centroid, direction, depth).
+    /// radius, all f32).
     #[inline]
-    pub(crate) fn add(
-        &mut self,
-        ca: [f32; 3],
-        ra: f32,
-        cb: [f32; 3],
-        rb: f32,
-    ) -> (f64, DVec3, DVec3, f64) {
-        let ca = DVec3::new(ca[0] as f64, ca[1] as f64, ca[2] as f64);
-        let cbd = DVec3::new(cb[0] as f64, cb[1] as f64, cb[2] as f64);
-        let (ra, rb) = (ra as f64, rb as f64);
-        let (u, d) = direction(ca, cbd);
-        let (v, g) = lens(ra, rb, d);
-        let p = ca + u * g;
-        let depth = ra + rb - d;
-        let s = p.cross(u);
-        self.pairs += 1;
-        self.volume += v;
-        self.vu += u * v;
-        self.vgu += s * v;
-        self.max_depth = self.max_depth.max(depth);
-        if L {
-            let a = lens_area(ra, rb, d);
-            self.area += a;
-            let au = u * a;
-            self.auu += outer(au, u);
-            self.aus += outer(au, s);
-            self.ass += outer(s * a, s);
-        }
-        (v, p, u, depth)
+    pub(crate) fn add(&mut self, ca: [f32; 3], ra: f32, cb: [f32; 3], rb: f32) {
+        let t = pair::<L>(f64s(ca), ra as f64, f64s(cb), rb as f64);
+        self.add_terms(&t);
     }
 
-    /// Adds lane `l` of a batch's terms: the same sums as [`Sums::add`] of that pair, bit
-    /// for bit.
+    /// Adds a pair's terms.
     #[inline(always)]
-    fn add_lane(&mut self, t: &Terms4, l: usize) {
-        let v = t.v[l];
-        let u = DVec3::new(t.u[0][l], t.u[1][l], t.u[2][l]);
-        let s = DVec3::new(t.s[0][l], t.s[1][l], t.s[2][l]);
-        let depth = t.depth[l];
+    fn add_terms(&mut self, t: &PairTerms) {
+        let (v, u, s) = (t.v, DVec3::from_array(t.u), DVec3::from_array(t.s));
         self.pairs += 1;
         self.volume += v;
         self.vu += u * v;
         self.vgu += s * v;
-        self.max_depth = self.max_depth.max(depth);
+        self.max_depth = self.max_depth.max(t.depth);
         if L {
-            let a = t.area[l];
-            self.area += a;
-            let au = u * a;
-            self.auu += outer(au, u);
-            self.aus += outer(au, s);
-            self.ass += outer(s * a, s);
+            self.add_area(t.area, u, s);
+        }
+    }
+
+    /// Adds a disc of area `a` with direction `u` and moment arm `s`.
+    #[inline(always)]
+    fn add_area(&mut self, a: f64, u: DVec3, s: DVec3) {
+        self.area += a;
+        let au = u * a;
+        self.auu += outer(au, u);
+        self.aus += outer(au, s);
+        self.ass += outer(s * a, s);
+    }
+
+    /// Adds the first `n` lanes of a batch's terms to the lane sums.
+    #[inline(always)]
+    fn add_batch(&mut self, t: &Terms4, n: usize) {
+        self.pairs += n;
+        let s = &mut self.lanes;
+        for l in 0..W {
+            // Lanes past `n` hold stale values: they add zeros.
+            let on = l < n;
+            let v = if on { t.v[l] } else { 0.0 };
+            let depth = if on { t.depth[l] } else { 0.0 };
+            s.volume[l] += v;
+            for k in 0..3 {
+                s.vu[k][l] += t.u[k][l] * v;
+                s.vgu[k][l] += t.s[k][l] * v;
+            }
+            s.max_depth[l] = s.max_depth[l].max(depth);
+            if L {
+                let a = if on { t.area[l] } else { 0.0 };
+                s.area[l] += a;
+                for c in 0..3 {
+                    for r in 0..3 {
+                        let au = t.u[r][l] * a;
+                        s.auu[3 * c + r][l] += au * t.u[c][l];
+                        s.aus[3 * c + r][l] += au * t.s[c][l];
+                        s.ass[3 * c + r][l] += t.s[r][l] * a * t.s[c][l];
+                    }
+                }
+            }
+        }
+    }
+
+    /// Adds the lane sums of the batches to the sums (lane by lane, in order) and empties
+    /// them: call before reading the sums.
+    pub(crate) fn settle(&mut self) {
+        let s = std::mem::take(&mut self.lanes);
+        let v3 = |x: [[f64; W]; 3]| DVec3::new(total(x[0]), total(x[1]), total(x[2]));
+        let m3 = |x: [[f64; W]; 9]| DMat3::from_cols_array(&x.map(total));
+        self.volume += total(s.volume);
+        self.vu += v3(s.vu);
+        self.vgu += v3(s.vgu);
+        self.max_depth = s.max_depth.iter().fold(self.max_depth, |m, &d| m.max(d));
+        if L {
+            self.area += total(s.area);
+            self.auu += m3(s.auu);
+            self.aus += m3(s.aus);
+            self.ass += m3(s.ass);
         }
     }
 
@@ -129,23 +198,13 @@ impl<const L: bool> Sums<L> {
     /// Counts in neither `pairs` nor `max_depth`.
     #[inline]
     pub(crate) fn add_coarse(&mut self, ca: [f32; 3], ra: f32, cb: [f32; 3], rb: f32, v: f64) {
-        let ca = DVec3::new(ca[0] as f64, ca[1] as f64, ca[2] as f64);
-        let cbd = DVec3::new(cb[0] as f64, cb[1] as f64, cb[2] as f64);
-        let (ra, rb) = (ra as f64, rb as f64);
-        let (u, d) = direction(ca, cbd);
-        let (lv, g) = lens(ra, rb, d);
-        let p = ca + u * g;
-        let s = p.cross(u);
+        let t = pair::<L>(f64s(ca), ra as f64, f64s(cb), rb as f64);
+        let (u, s) = (DVec3::from_array(t.u), DVec3::from_array(t.s));
         self.volume += v;
         self.vu += u * v;
         self.vgu += s * v;
-        if L && lv > 0.0 {
-            let a = lens_area(ra, rb, d) * (v / lv).min(1.0);
-            self.area += a;
-            let au = u * a;
-            self.auu += outer(au, u);
-            self.aus += outer(au, s);
-            self.ass += outer(s * a, s);
+        if L && t.v > 0.0 {
+            self.add_area(t.area * (v / t.v).min(1.0), u, s);
         }
     }
 
@@ -227,9 +286,7 @@ impl LeafBatch {
             return;
         }
         let t = terms::<L>(&self.q);
-        for l in 0..self.n {
-            to.sums.add_lane(&t, l);
-        }
+        to.sums.add_batch(&t, self.n);
         to.patches.add_batch(&t, self.n);
         self.n = 0;
     }
@@ -272,21 +329,17 @@ pub(super) fn add_hits<const L: bool>(hits: &[Hit], na: &[Node], nb: &[Node], to
         // its 32 scalar stores).
         let mut whole = hits.chunks_exact(W);
         for c in &mut whole {
-            let q = gather([&c[0], &c[1], &c[2], &c[3]], na, nb);
+            let q = gather(std::array::from_fn(|l| &c[l]), na, nb);
             let t = terms::<L>(&q);
-            for l in 0..W {
-                to.sums.add_lane(&t, l);
-            }
+            to.sums.add_batch(&t, W);
             to.patches.add_batch(&t, W);
         }
         let rest = whole.remainder();
         if let Some(first) = rest.first() {
             let lane = |l: usize| rest.get(l).unwrap_or(first);
-            let q = gather([lane(0), lane(1), lane(2), lane(3)], na, nb);
+            let q = gather(std::array::from_fn(lane), na, nb);
             let t = terms::<L>(&q);
-            for l in 0..rest.len() {
-                to.sums.add_lane(&t, l);
-            }
+            to.sums.add_batch(&t, rest.len());
             to.patches.add_batch(&t, rest.len());
         }
     }

@@ -132,4 +132,55 @@ proptest! {
             prop_assert!((qf - r.force).length() <= 1e-8 * r.force.length() + 1e-15);
         }
     }
+
+    /// The floor: the overlapping leaves are the brute-force set, and their sum alone is the
+    /// query's answer (pairs, depth and patch count exact, sums to rounding); an index that is
+    /// no leaf is refused.
+    #[test]
+    fn the_floor_sums_the_brute_force_leaves_to_the_query_answer(
+        ia in 0usize..4, ib in 0usize..4,
+        qa in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+        qb in [-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64],
+        off in vec3(),
+        linearize in any::<bool>(),
+    ) {
+        let t = trees();
+        let (a, b) = (&t[ia], &t[ib]);
+        let scale = (a.r[0] + b.r[0]) as f64;
+        let (pa, pb) = pair_poses(a, b, pose([1.0, 2.0, -0.5], qa), quat(qb[0], qb[1], qb[2], qb[3]), off * 0.9 * scale);
+        let mut pair = pair(a, b);
+        let mut leaves = vec![[7, 7]];
+        pair.overlapping_leaves(&pa, &pb, &mut leaves);
+        let mut sorted: Vec<(u32, u32)> = leaves.iter().map(|&[i, j]| (i, j)).collect();
+        sorted.sort_unstable();
+        prop_assert_eq!(sorted, brute::overlapping_pairs(a, &pa, b, &pb));
+        let opts = PenetrationOptions { linearize, safe_motion: false, ..Default::default() };
+        let p = pair.penetration_with(&pa, &pb, &opts);
+        let q = pair.penetration_of_leaves(&pa, &pb, &leaves, &opts).unwrap();
+        prop_assert_eq!(q.pairs, p.pairs);
+        prop_assert_eq!(q.max_depth, p.max_depth);
+        prop_assert_eq!(q.patch_count, p.patch_count);
+        prop_assert_eq!(q.visits, leaves.len() as u64);
+        prop_assert!(close(q.volume, p.volume, 1e-12, 1e-15), "{} vs {}", q.volume, p.volume);
+        prop_assert!(close(q.area, p.area, 1e-12, 1e-15));
+        let f = p.force.length();
+        prop_assert!((q.force - p.force).length() <= 1e-12 * f + 1e-15);
+        prop_assert!((q.torque_b - p.torque_b).length() <= 1e-9 * f * scale + 1e-12);
+        // Pairs that do not overlap add nothing.
+        let n = (a.len() as u32 - 1, b.len() as u32 - 1);
+        let leaf_a = (0..=n.0).filter(|&i| a.is_leaf(i as usize));
+        let apart: Vec<[u32; 2]> = leaf_a
+            .flat_map(|i| (0..=n.1).filter(|&j| b.is_leaf(j as usize)).map(move |j| [i, j]))
+            .filter(|&[i, j]| !brute::leaves_overlap(a, i, &pa, b, j, &pb))
+            .take(5)
+            .collect();
+        let r = pair.penetration_of_leaves(&pa, &pb, &[apart.clone(), leaves.clone(), apart].concat(), &opts).unwrap();
+        prop_assert_eq!(r.pairs, p.pairs);
+        prop_assert!(close(r.volume, p.volume, 1e-12, 1e-15));
+        for bad in [[u32::MAX, 0], [0, u32::MAX], [n.0 + 1, 0]] {
+            let mut l = leaves.clone();
+            l.push(bad);
+            prop_assert!(pair.penetration_of_leaves(&pa, &pb, &l, &opts).is_err());
+        }
+    }
 }

@@ -11,7 +11,7 @@ use std::time::Instant;
 /// Arguments of `ist motion`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// What the motion does: chew, open-close or grind; or press, a smooth 6 s haptic device
+    /// What the motion does: chew, open-close, grind or contact (random contact); or press, a smooth 6 s haptic device
     /// trajectory (3 mm open → 1 mm past the bite, hold, ±0.8 mm sideways while pressing,
     /// release; --seconds, --seed and the labels do not apply).
     #[arg(long, default_value = "chew", value_parser = parse_scenario)]

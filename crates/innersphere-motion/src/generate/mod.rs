@@ -38,7 +38,7 @@ use glam::{DQuat, DVec3};
 use innersphere::Pose;
 use innersphere::{Error, Mesh, Result};
 use kinematics::Kin;
-use scenario::{plan_chew, plan_grind, plan_open_close};
+use scenario::{plan_chew, plan_contact, plan_grind, plan_open_close};
 use std::f64::consts::TAU;
 use trajectory::{lateral, sinusoids};
 
@@ -261,6 +261,7 @@ pub fn generate_with(
         Scenario::Chew => plan_chew(&mut rng, seconds, k, touch, bite_clearance),
         Scenario::OpenClose => plan_open_close(&mut rng, seconds, k, touch, bite_clearance),
         Scenario::Grind => plan_grind(&mut rng, seconds, k, touch, bite_clearance),
+        Scenario::Contact => plan_contact(&mut rng, seconds, k, touch, bite_clearance),
     };
     let mut planner = Planner {
         est: &mut est,

@@ -17,18 +17,30 @@ pub enum Scenario {
     /// an occasional press into overlap (the first right after the first contact) and an
     /// occasional lift-off. Starts slightly open.
     Grind,
+    /// Random contact: a random walk of positions (lateral up to 3.5 mm either side,
+    /// protrusive up to 3 mm) in light contact, with presses at random places up to
+    /// 0.25 mm past the bite and short lift-offs, in random order and at random speeds; the
+    /// first press right after the first contact. Starts slightly open.
+    Contact,
 }
 
 impl Scenario {
     /// All scenarios.
-    pub const ALL: [Scenario; 3] = [Scenario::Chew, Scenario::OpenClose, Scenario::Grind];
+    pub const ALL: [Scenario; 4] = [
+        Scenario::Chew,
+        Scenario::OpenClose,
+        Scenario::Grind,
+        Scenario::Contact,
+    ];
 
-    /// `chew`, `open-close` or `grind` (what [`FromStr`](std::str::FromStr) reads).
+    /// `chew`, `open-close`, `grind` or `contact` (what [`FromStr`](std::str::FromStr)
+    /// reads; also `random-contact`).
     pub fn name(self) -> &'static str {
         match self {
             Scenario::Chew => "chew",
             Scenario::OpenClose => "open-close",
             Scenario::Grind => "grind",
+            Scenario::Contact => "contact",
         }
     }
 }
@@ -46,8 +58,9 @@ impl std::str::FromStr for Scenario {
             "chew" => Ok(Scenario::Chew),
             "open-close" | "openclose" => Ok(Scenario::OpenClose),
             "grind" => Ok(Scenario::Grind),
+            "contact" | "random-contact" => Ok(Scenario::Contact),
             _ => Err(Error::InvalidOption(format!(
-                "unknown scenario \"{s}\" (expected chew, open-close or grind)"
+                "unknown scenario \"{s}\" (expected chew, open-close, grind or contact)"
             ))),
         }
     }
@@ -275,6 +288,65 @@ pub(super) fn plan_grind(rng: &mut Rng, seconds: f64, k: f64, touch: f64, c_bite
             }
         }
         step += 1;
+    }
+    p.keys
+}
+
+/// The keyframes of [`Scenario::Contact`].
+pub(super) fn plan_contact(
+    rng: &mut Rng,
+    seconds: f64,
+    k: f64,
+    touch: f64,
+    c_bite: f64,
+) -> Vec<Key> {
+    let mut p = Plan {
+        keys: Vec::new(),
+        t: 0.0,
+    };
+    p.at(0.0, 0.0, 0.0, Depth::Open(rng.range(1.0, 2.5) * k));
+    p.hold(rng.range(0.05, 0.12));
+    let (lat, pro) = (rng.range(-0.5, 0.5) * k, rng.range(0.0, 0.5) * k);
+    p.at(
+        rng.range(0.2, 0.3),
+        lat,
+        pro,
+        Depth::Contact(light(rng, touch)),
+    );
+    let mut press = true;
+    while p.t < seconds + 0.5 {
+        let u = rng.unit();
+        if press || u < 0.25 {
+            // Press where the jaw is, or near the bite.
+            let Key { lat, pro, .. } = p.last();
+            let near = rng.range(0.0, 1.0);
+            let (lat, pro) = (lat * near, pro * near);
+            let deep = Depth::Contact(c_bite - rng.range(0.5, 2.5) * touch);
+            p.at(rng.range(0.08, 0.18), lat, pro, deep);
+            p.hold(rng.range(0.03, 0.12));
+            p.at(
+                rng.range(0.08, 0.14),
+                lat,
+                pro,
+                Depth::Contact(light(rng, touch)),
+            );
+            press = false;
+        } else if u < 0.4 {
+            let Key { lat, pro, .. } = p.last();
+            let open = Depth::Open(rng.range(0.3, 1.5) * k);
+            p.at(rng.range(0.08, 0.14), lat, pro, open);
+            p.hold(rng.range(0.03, 0.10));
+            p.at(
+                rng.range(0.10, 0.16),
+                lat,
+                pro,
+                Depth::Contact(light(rng, touch)),
+            );
+        } else {
+            let (lat, pro) = (rng.range(-3.5, 3.5) * k, rng.range(0.0, 3.0) * k);
+            let c = Depth::Contact(light(rng, touch));
+            p.at(rng.range(0.15, 0.45), lat, pro, c);
+        }
     }
     p.keys
 }

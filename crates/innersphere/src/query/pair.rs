@@ -16,6 +16,7 @@ use super::penetration::{self, Patch, Penetration, PenetrationOptions, Penetrati
 use super::search::block_front::BlockFront;
 use super::search::descent::Descent;
 use super::search::front::Front;
+use crate::error::Result;
 use crate::pose::Pose;
 use crate::tree::SphereTree;
 use std::sync::Arc;
@@ -112,9 +113,10 @@ impl Pair {
     ///   below the roots and a refinement pushes at most `f_A · f_B` pairs (16 on blocks);
     ///   ancestor chains `d + 1`;
     /// * the kinetic front ([`Pair::contact`] on fan-outs over 4, [`Pair::penetration`] with
-    ///   the front, [`Pair::multipoint`] with tracking) for `(l_A + l_B) / 3` node pairs,
-    ///   within 2¹³ ..= 2¹⁷ (its rebuild floor): along the jaw chew and grind it held at most
-    ///   ≈ 0.2 × (l_A + l_B) pairs (0.1 and 0.3 mm voxels);
+    ///   the front, [`Pair::multipoint`] with tracking) for `l_A + l_B` node pairs, within
+    ///   2¹³ ..= 2¹⁹ (its rebuild floor): along the jaw chew and grind it held at most
+    ///   ≈ 0.2 × (l_A + l_B) pairs (0.1 and 0.3 mm voxels), pressed 1 mm past the bite
+    ///   ≈ 0.96 × (l_A + l_B) (0.1 mm);
     /// * the block front of [`Pair::contact`] (fan-outs ≤ 4) for `(l_A + l_B) / 16` entries,
     ///   within 2¹¹ ..= 2¹⁶ (the jaw used at most ≈ 6,700);
     /// * the priority queue of best-first [`Pair::distance_with`] and of
@@ -123,7 +125,7 @@ impl Pair {
     /// * [`Pair::multipoint`] for `k` up to 1024 contacts and [`Pair::penetration`] for up
     ///   to 64 patches.
     ///
-    /// On the jaw arches at a 0.3 mm voxel (300k nodes, 200k leaves) that is 9.5 MiB (their
+    /// On the jaw arches at a 0.3 mm voxel (300k nodes, 200k leaves) that is 16 MiB (their
     /// two [`TreeInfo`]s: 26 MiB), reserved but not written: pages no query reaches need not
     /// become resident; on small trees the floors make it ≈ 5 MiB. What may still grow,
     /// once, to a high-water mark that is then kept: a front or queue in a deep overlap
@@ -144,7 +146,7 @@ impl Pair {
         let single = depth * fa.max(fb) + 16;
         let block_stack = if blocks { depth * 16 + 16 } else { 0 };
         let leaves = ia.leaves + ib.leaves;
-        let front = (leaves / 3).clamp(1 << 13, 1 << 17);
+        let front = leaves.clamp(1 << 13, 1 << 19);
         let block_front = if blocks {
             (leaves / 16).clamp(1 << 11, 1 << 16)
         } else {
@@ -309,6 +311,57 @@ impl Pair {
     /// kinds leave them as they are.
     pub fn patches(&self) -> &[Patch] {
         &self.penetration.patches
+    }
+
+    /// The overlapping leaf pairs at the world poses (A's leaf, B's leaf; node indices, as
+    /// [`Distance::leaf_a`] and [`Distance::leaf_b`]), in the order of one depth-first
+    /// traversal, into `out` (emptied first): the pairs whose lenses [`Pair::penetration`]
+    /// sums. Allocates as `out` grows; not for the real-time path.
+    pub fn overlapping_leaves(&mut self, pose_a: &Pose, pose_b: &Pose, out: &mut Vec<[u32; 2]>) {
+        let ctx = ctx(&self.a.info, &self.b.info, pose_a, pose_b);
+        if far(&self.a.info, &self.b.info, &ctx.rel).is_some() {
+            out.clear();
+            return;
+        }
+        penetration::overlapping_leaves(&ctx, &mut self.descent, out);
+    }
+
+    /// [`Pair::penetration_with`]'s answer summed over the leaf pairs `leaves` alone (node
+    /// indices, A's then B's), with no search: given [`Pair::overlapping_leaves`], the
+    /// query's output-sensitive floor, the work no search can avoid. Pairs that do not
+    /// overlap at the poses add nothing, a pair given twice counts twice; the sums run in
+    /// the order given, so the last bits may differ from the query's (which sums in its
+    /// own order). `distance` is 0 and `visits` the number of pairs given; the patches are
+    /// [`Pair::patches`]. Errors when an index is no leaf of its tree.
+    pub fn penetration_of_leaves(
+        &mut self,
+        pose_a: &Pose,
+        pose_b: &Pose,
+        leaves: &[[u32; 2]],
+        opts: &PenetrationOptions,
+    ) -> Result<Penetration> {
+        let ctx = ctx(&self.a.info, &self.b.info, pose_a, pose_b);
+        if let Some(f) = far(&self.a.info, &self.b.info, &ctx.rel) {
+            for (k, &[i, j]) in leaves.iter().enumerate() {
+                penetration::check_leaves(ctx.a, ctx.b, k, i, j)?;
+            }
+            let mut p = penetration::separated(&mut self.penetration, f.separation);
+            p.visits = leaves.len() as u64;
+            return Ok(p);
+        }
+        let s = &mut self.penetration;
+        let mut hits = std::mem::take(&mut s.floor);
+        let p = penetration::penetration_of_leaves(
+            &ctx,
+            &self.a.info,
+            &self.b.info,
+            leaves,
+            &mut hits,
+            s,
+            opts,
+        );
+        s.floor = hits;
+        p
     }
 
     /// Time-critical penetration volume: the volume found within `budget` node-pair tests

@@ -4,11 +4,13 @@
 //! leaf pairs is exactly the volume of the intersection of the two sphere unions.
 
 mod answer;
+mod floor;
 mod options;
 mod patches;
 mod sums;
 
 pub use answer::{ContactStiffness, Patch, Penetration};
+pub(crate) use floor::{check as check_leaves, overlapping_leaves, penetration_of_leaves};
 pub use options::{PenetrationOptions, Tracking, AUTO_FRONT_NODES, MAX_STIFFNESS};
 pub(crate) use patches::PenetrationScratch;
 pub(crate) use sums::Sums;
@@ -57,13 +59,7 @@ fn penetration_sums<const L: bool>(
     s: &mut PenetrationScratch,
     opts: &PenetrationOptions,
 ) -> Penetration {
-    let pose_a = &ctx.pose_a;
-    let radius = if opts.patch_radius > 0.0 {
-        opts.patch_radius
-    } else {
-        0.125 * (ctx.a[0].r.min(ctx.b[0].r) as f64)
-    };
-    s.acc.begin(opts.max_patches, radius);
+    begin_patches(ctx, s, opts);
     let mut visits = 0u64;
     let mut min_sep = f32::INFINITY;
     let mut sums = Sums::<L>::default();
@@ -86,75 +82,22 @@ fn penetration_sums<const L: bool>(
         skipped = true;
         min_sep = d as f32;
     } else {
-        let c0 = ctx.xf(0);
-        let (ov, lbr) = ctx.test(0, 0, c0);
-        visits += 1;
         let (na, nb) = (ctx.a, ctx.b);
-        let mut batch = LeafBatch::default();
         if use_front {
             visits = front.update(ctx, ib);
             add_hits(&front.hits, na, nb, &mut to);
             if front.hits.is_empty() {
                 min_sep = front.margin().max(0.0) as f32;
             }
-        } else if !ov {
-            min_sep = lbr;
-        } else if na[0].is_leaf() && nb[0].is_leaf() {
-            batch.push(&na[0], &nb[0], c0, &mut to);
-        } else if blocked(ctx) {
-            // Fan-outs ≤ 4: blocked steps (4×4 child pairs at a time).
-            let stack = &mut desc.tstack;
-            stack.clear();
-            stack.push(TItem::new(ctx, 0, 0, c0, 0));
+        } else {
+            let mut batch = LeafBatch::default();
             let mut leaf = |i: u32, j: u32, cb: [f32; 3]| {
                 batch.push(&na[i as usize], &nb[j as usize], cb, &mut to);
             };
-            overlap_pairs_dispatch(ctx, stack, &mut min_sep, &mut visits, &mut leaf);
-        } else {
-            desc.stack.clear();
-            desc.stack.push(Item {
-                a: 0,
-                b: 0,
-                c: c0,
-                depth: 0,
-            });
-            let stack = &mut desc.stack;
-            while let Some(e) = stack.pop() {
-                let visit = |i: u32, j: u32, cb: [f32; 3], d2: f32, sr: f32, leafs: bool| {
-                    visits += 1;
-                    if d2 < sr * sr {
-                        if leafs {
-                            batch.push(&na[i as usize], &nb[j as usize], cb, &mut to);
-                        } else {
-                            ctx.prefetch(i, j);
-                            stack.push(Item {
-                                a: i,
-                                b: j,
-                                c: cb,
-                                depth: 0,
-                            });
-                        }
-                    } else if d2 < (sr + min_sep) * (sr + min_sep) {
-                        let lb = d2.sqrt() - sr;
-                        if lb < min_sep {
-                            min_sep = lb;
-                        }
-                    }
-                };
-                expand_larger(ctx, e.a, e.b, e.c, visit);
-            }
+            traverse(ctx, desc, &mut min_sep, &mut visits, &mut leaf);
+            batch.flush(&mut to);
         }
-        batch.flush(&mut to);
     }
-    sums.settle();
-    let com_a = ia.center_of_mass;
-    let com_b = ctx.rel.transform_point(ib.center_of_mass);
-    let (n, f, ta, tb) = sums.wrench(opts.stiffness, com_a, com_b);
-    let stiffness = sums
-        .stiffness(opts.stiffness, com_b)
-        .rotated(DMat3::from_quat(pose_a.rotation));
-    let rot = |v: DVec3| pose_a.transform_vector(v);
-    s.acc.finish(pose_a, &mut s.patches);
     let distance = if sums.pairs > 0 {
         if !skipped {
             *sep = None;
@@ -167,6 +110,104 @@ fn penetration_sums<const L: bool>(
         }
         d
     };
+    let mut p = answer(ctx, ia, ib, &mut sums, s, opts, distance);
+    p.visits = visits;
+    p.skipped = skipped;
+    p
+}
+
+/// Empties the patches' sums for a query with `opts`.
+fn begin_patches(ctx: &Ctx, s: &mut PenetrationScratch, opts: &PenetrationOptions) {
+    let radius = if opts.patch_radius > 0.0 {
+        opts.patch_radius
+    } else {
+        0.125 * (ctx.a[0].r.min(ctx.b[0].r) as f64)
+    };
+    s.acc.begin(opts.max_patches, radius);
+}
+
+/// Every overlapping leaf pair at `ctx`'s poses, to `leaf` (A's leaf, B's leaf, B's centre
+/// in A's frame), depth first from the roots (larger sphere refined first; blocked steps on
+/// fan-outs ≤ 4). `min_sep` ends as a lower bound on the separation when there is none;
+/// `visits` counts the node pairs tested.
+fn traverse(
+    ctx: &Ctx,
+    desc: &mut Descent,
+    min_sep: &mut f32,
+    visits: &mut u64,
+    leaf: &mut impl FnMut(u32, u32, [f32; 3]),
+) {
+    let c0 = ctx.xf(0);
+    let (ov, lbr) = ctx.test(0, 0, c0);
+    *visits += 1;
+    let (na, nb) = (ctx.a, ctx.b);
+    if !ov {
+        *min_sep = lbr;
+    } else if na[0].is_leaf() && nb[0].is_leaf() {
+        leaf(0, 0, c0);
+    } else if blocked(ctx) {
+        // Fan-outs ≤ 4: blocked steps (4×4 child pairs at a time).
+        let stack = &mut desc.tstack;
+        stack.clear();
+        stack.push(TItem::new(ctx, 0, 0, c0, 0));
+        overlap_pairs_dispatch(ctx, stack, min_sep, visits, leaf);
+    } else {
+        desc.stack.clear();
+        desc.stack.push(Item {
+            a: 0,
+            b: 0,
+            c: c0,
+            depth: 0,
+        });
+        let stack = &mut desc.stack;
+        while let Some(e) = stack.pop() {
+            let visit = |i: u32, j: u32, cb: [f32; 3], d2: f32, sr: f32, leafs: bool| {
+                *visits += 1;
+                if d2 < sr * sr {
+                    if leafs {
+                        leaf(i, j, cb);
+                    } else {
+                        ctx.prefetch(i, j);
+                        stack.push(Item {
+                            a: i,
+                            b: j,
+                            c: cb,
+                            depth: 0,
+                        });
+                    }
+                } else if d2 < (sr + *min_sep) * (sr + *min_sep) {
+                    let lb = d2.sqrt() - sr;
+                    if lb < *min_sep {
+                        *min_sep = lb;
+                    }
+                }
+            };
+            expand_larger(ctx, e.a, e.b, e.c, visit);
+        }
+    }
+}
+
+/// The answer from the settled-to-be `sums` (A's frame) and the patches being summed in `s`:
+/// the wrench, the stiffness and the patches in the world frame; `visits` 0, not skipped.
+fn answer<const L: bool>(
+    ctx: &Ctx,
+    ia: &TreeInfo,
+    ib: &TreeInfo,
+    sums: &mut Sums<L>,
+    s: &mut PenetrationScratch,
+    opts: &PenetrationOptions,
+    distance: f64,
+) -> Penetration {
+    let pose_a = &ctx.pose_a;
+    sums.settle();
+    let com_a = ia.center_of_mass;
+    let com_b = ctx.rel.transform_point(ib.center_of_mass);
+    let (n, f, ta, tb) = sums.wrench(opts.stiffness, com_a, com_b);
+    let stiffness = sums
+        .stiffness(opts.stiffness, com_b)
+        .rotated(DMat3::from_quat(pose_a.rotation));
+    let rot = |v: DVec3| pose_a.transform_vector(v);
+    s.acc.finish(pose_a, &mut s.patches);
     Penetration {
         volume: sums.volume,
         pairs: sums.pairs,
@@ -179,8 +220,8 @@ fn penetration_sums<const L: bool>(
         area: sums.area,
         stiffness,
         distance,
-        visits,
-        skipped,
+        visits: 0,
+        skipped: false,
     }
 }
 

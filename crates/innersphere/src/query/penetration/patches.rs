@@ -4,6 +4,7 @@
 use super::answer::Patch;
 use crate::pose::Pose;
 use crate::query::kernel::lenses::{Terms4, W};
+use crate::query::search::front::Hit;
 use glam::DVec3;
 
 /// Patches reserved per pair: `max_patches` up to this allocates nothing.
@@ -16,6 +17,8 @@ pub(crate) struct PenetrationScratch {
     pub patches: Vec<Patch>,
     /// Running sums of the patches.
     pub acc: Patches,
+    /// The overlapping pairs of [`penetration_of_leaves`](super::penetration_of_leaves).
+    pub floor: Vec<Hit>,
 }
 
 impl PenetrationScratch {
@@ -24,6 +27,7 @@ impl PenetrationScratch {
         PenetrationScratch {
             patches: Vec::with_capacity(RESERVED_PATCHES),
             acc: Patches::new(),
+            floor: Vec::new(),
         }
     }
 }

@@ -14,18 +14,23 @@
 //!
 //! The front is rebuilt from the roots on the first frame, after a jump (a motion bound above
 //! a quarter of the smaller root radius) and when it has grown to 8 times its size after the
-//! last rebuild and past 2¹⁷ pairs (it refines where contact was and never coarsens). A
-//! rebuild is a full traversal (≈ 20k tests on the jaw pair, the worst frame of the tracked
-//! queries); fine pairs far from contact have large margins and cost nothing per frame, so
-//! the floor lets a front grow to a few MB rather than rebuild in the middle of a contact
-//! (with a floor of 2¹⁴ the jaw chew rebuilt as contact began: worst penetration frame
-//! 578 → 342–374 µs in that phase, p99 unchanged).
+//! last rebuild and past 2¹⁹ pairs (it refines where contact was and never coarsens). A
+//! rebuild is a full traversal (≈ 20k tests on the jaw pair in light contact, 155k pressed
+//! 1 mm past the bite: the worst frame of the tracked queries); fine pairs far from contact
+//! have large margins and cost nothing per frame, so the floor lets a front grow to several
+//! MB rather than rebuild in the middle of a contact. Measured on the jaw pair (0.1 mm
+//! voxel): with a floor of 2¹⁴ the chew rebuilt as contact began (worst penetration frame
+//! 578 → 342–374 µs in that phase); with 2¹⁷ the 1 mm press rebuilt at 131k pairs (a
+//! 2.9–3.7 ms frame) to a front that grew back to the same 285k pairs.
 
 use crate::pose::Pose;
 use crate::query::kernel::buckets::{Buckets, Sep};
 use crate::query::kernel::info::TreeInfo;
 use crate::query::kernel::separation::motion_bound;
 use crate::query::kernel::{expand_larger, Ctx, Item};
+
+/// The front size below which growth alone never rebuilds it (see the module doc).
+const REBUILD_FLOOR: usize = 1 << 19;
 
 /// How far ahead the re-test loops prefetch the nodes of the pairs they will test (the pairs
 /// lie scattered over both trees, so every test would otherwise wait for two cache misses).
@@ -44,7 +49,8 @@ pub(crate) struct Hit {
 }
 
 impl Hit {
-    fn new(a: u32, b: u32, c: [f32; 3]) -> Hit {
+    /// Leaf `a` of A and leaf `b` of B, B's centre at `c` (A's frame).
+    pub(crate) fn new(a: u32, b: u32, c: [f32; 3]) -> Hit {
         Hit {
             a,
             b,
@@ -62,7 +68,7 @@ impl Hit {
 /// whole front, on a rebuild or a jump), 32 per hit. Reserved by [`Front::with_capacity`];
 /// beyond that the buffers grow (geometrically, once, keeping their high-water mark), which
 /// only a deep overlap needs: the front is rebuilt when it passes max(8 × its size after the
-/// last rebuild, 2¹⁷) pairs, and a rebuild's front is the frontier of one overlap traversal.
+/// last rebuild, 2¹⁹) pairs, and a rebuild's front is the frontier of one overlap traversal.
 #[derive(Debug)]
 pub(crate) struct Front {
     /// Separated pairs by expiry.
@@ -124,7 +130,7 @@ impl Front {
         let size = self.queue.len + self.hits.len();
         let small = ctx.a[0].r.min(ctx.b[0].r) as f64;
         let rebuild =
-            delta.is_nan() || delta > 0.25 * small || size > (8 * self.built).max(1 << 17);
+            delta.is_nan() || delta > 0.25 * small || size > (8 * self.built).max(REBUILD_FLOOR);
         let slack2 = 2.0 * ctx.slack as f64;
         let mut tests = 0;
         if rebuild {

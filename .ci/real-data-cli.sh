@@ -36,6 +36,26 @@ grep -E '"(spheres|seconds|coverage)"' "$OUT/mandible.json"
   echo "FAILED: ist check on the mandible"; cat "$OUT/check.json"; exit 1; }
 echo "ok: mandible arch"
 
+# The contact map of the jaw pair at the scanned bite, per tooth (the scans overlap by ≈ 0.3 mm
+# at the molars: contacts on both sides).
+J="$DATA/jaw"
+"$IST" occlusion-map "$J/ofj_p26_maxilla_teeth.stl.gz" "$J/ofj_p26_mandible_teeth.stl.gz" \
+  --out-a "$OUT/map_a.ply" --out-b "$OUT/map_b.ply" \
+  --teeth-a "$J/ofj_p26_teeth_axes_maxilla.json" --teeth-b "$J/ofj_p26_teeth_axes_mandible.json" \
+  --json > "$OUT/map.json"
+python3 - "$OUT/map.json" <<'PY' || { echo "FAILED: ist occlusion-map on the jaws"; cat "$OUT/map.json"; exit 1; }
+import json, sys
+m = json.load(open(sys.argv[1]))
+for k, molars in (("a", (3, 14)), ("b", (19, 30))):
+    teeth = {t["tooth"]: t for t in m[k]["teeth"]}
+    assert len(teeth) >= 14, teeth.keys()
+    for n in molars:
+        assert teeth[n]["spots"] >= 1 and teeth[n]["area_within_0_1"] > 1, teeth[n]
+print("contact map:", {k: m[k]["vertices_within_0_1"] for k in ("a", "b")}, "vertices within 0.1 mm,", round(m["seconds_map"], 2), "s")
+PY
+[ -s "$OUT/map_a.ply" ] && [ -s "$OUT/map_b.ply" ] || { echo "FAILED: the contact map PLYs"; exit 1; }
+echo "ok: occlusion map of the jaw pair"
+
 for f in "$DATA"/bad/*.stl; do
   name=$(basename "$f")
   set +e

@@ -9,6 +9,7 @@
 //! poses with a NaN or an infinity are refused; long work (builds, batch queries) runs with
 //! the interpreter released.
 
+mod contact_map;
 mod convert;
 mod haptic;
 mod motion;
@@ -29,5 +30,6 @@ fn _innersphere(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<haptic::Haptic>()?;
     m.add_class::<haptic::Tick>()?;
     m.add_function(wrap_pyfunction!(motion::load_motion, m)?)?;
+    m.add_function(wrap_pyfunction!(contact_map::contact_map, m)?)?;
     Ok(())
 }

@@ -85,11 +85,13 @@ fn weld(vertices: &[DVec3], faces: &[[u32; 3]]) -> Mesh {
     }
 }
 
-/// A mesh from `(vertices (n, 3) float, faces (m, 3) int)` arrays.
+/// A mesh from `(vertices (n, 3) float, faces (m, 3) int)` arrays, welded ([`weld`]) when
+/// `welded`, else with the vertices as given.
 fn mesh_from_arrays(
     py: Python<'_>,
     vertices: &Bound<'_, PyAny>,
     faces: &Bound<'_, PyAny>,
+    welded: bool,
 ) -> PyResult<Mesh> {
     let v = float_array(vertices, "vertices", "an (n, 3) array of floats")?;
     let v = v.as_array();
@@ -141,7 +143,44 @@ fn mesh_from_arrays(
         }
         tris.push(tri);
     }
-    Ok(weld(&verts, &tris))
+    if welded {
+        Ok(weld(&verts, &tris))
+    } else {
+        Ok(Mesh {
+            vertices: verts,
+            triangles: tris,
+        })
+    }
+}
+
+/// A mesh given as a file path (loaded, welded by the loader), a `(vertices, faces)` pair or
+/// an object with `.vertices` and `.faces` (a `trimesh.Trimesh`; welded when `welded`);
+/// `what` names the argument in errors.
+pub(crate) fn mesh_like(
+    py: Python<'_>,
+    obj: &Bound<'_, PyAny>,
+    what: &str,
+    welded: bool,
+) -> PyResult<Mesh> {
+    if is_path(obj)? {
+        let path = convert::path(obj)?;
+        py.detach(|| Mesh::load(&path)).map_err(error)
+    } else if obj.hasattr("vertices")? && obj.hasattr("faces")? {
+        mesh_from_arrays(
+            py,
+            &obj.getattr("vertices")?,
+            &obj.getattr("faces")?,
+            welded,
+        )
+    } else if (obj.is_instance_of::<PyTuple>() || obj.is_instance_of::<PyList>()) && obj.len()? == 2
+    {
+        mesh_from_arrays(py, &obj.get_item(0)?, &obj.get_item(1)?, welded)
+    } else {
+        let ty = obj.get_type().name()?.to_string();
+        Err(PyValueError::new_err(format!(
+            "{what}: expected a mesh file path, a (vertices, faces) pair or an object with .vertices and .faces (a trimesh.Trimesh), got a {ty}"
+        )))
+    }
 }
 
 /// Build progress on standard error: the stage and its percentage.
@@ -238,26 +277,7 @@ impl Tree {
         progress: bool,
         preset: Option<&str>,
     ) -> PyResult<Tree> {
-        let mesh = if is_path(path_or_mesh)? {
-            let path = convert::path(path_or_mesh)?;
-            py.detach(|| Mesh::load(&path)).map_err(error)?
-        } else if path_or_mesh.hasattr("vertices")? && path_or_mesh.hasattr("faces")? {
-            mesh_from_arrays(
-                py,
-                &path_or_mesh.getattr("vertices")?,
-                &path_or_mesh.getattr("faces")?,
-            )?
-        } else if (path_or_mesh.is_instance_of::<PyTuple>()
-            || path_or_mesh.is_instance_of::<PyList>())
-            && path_or_mesh.len()? == 2
-        {
-            mesh_from_arrays(py, &path_or_mesh.get_item(0)?, &path_or_mesh.get_item(1)?)?
-        } else {
-            let ty = path_or_mesh.get_type().name()?.to_string();
-            return Err(PyValueError::new_err(format!(
-                "path_or_mesh: expected a mesh file path, a (vertices, faces) pair or an object with .vertices and .faces (a trimesh.Trimesh), got a {ty}"
-            )));
-        };
+        let mesh = mesh_like(py, path_or_mesh, "path_or_mesh", true)?;
         let mut opts = match preset {
             Some(name) => {
                 let p: Preset = name.parse().map_err(error)?;

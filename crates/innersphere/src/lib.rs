@@ -50,6 +50,7 @@
 #![deny(missing_docs)]
 
 pub mod build;
+pub mod contact_map;
 pub mod error;
 pub mod exact;
 pub mod field;

@@ -1,5 +1,6 @@
 //! The library's modules import one way, down a ladder: pose ← error ← output, progress ←
-//! mesh ← shapes ← tree ← field ← packing ← hierarchy ← build, exact ← query ← haptic
+//! mesh ← shapes ← tree ← field ← packing ← hierarchy ← build, exact ← query, contact_map ←
+//! haptic
 //! (`tree` is the finished tree's type and file, below the pipeline stages that make it). Reads
 //! every `crate::…` path in the sources (outside their `#[cfg(test)]` modules, which may
 //! build fixtures from a higher layer) and fails on an import from a layer above, or through
@@ -20,6 +21,7 @@ fn layer(module: &str) -> Option<u32> {
         "packing" => 7,
         "hierarchy" => 8,
         "build" | "exact" => 9,
+        "contact_map" => 10,
         "query" => 10,
         "haptic" => 11,
         _ => return None,

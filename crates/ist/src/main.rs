@@ -13,6 +13,7 @@ mod haptic;
 mod inspect;
 mod motion;
 mod occlude;
+mod occlusion_map;
 mod print;
 mod progress;
 mod query;
@@ -55,6 +56,9 @@ enum Command {
     Haptic(haptic::Args),
     /// Close body B onto body A under a constant force until it rests: the bite.
     Occlude(occlude::Args),
+    /// Both arches coloured by their exact signed gap to each other (PLY), with the contacts
+    /// per tooth.
+    OcclusionMap(occlusion_map::Args),
     /// A live 3D view in the browser: move B, watch contacts, forces, the inner spheres.
     View(view::Args),
 }
@@ -80,6 +84,7 @@ fn main() {
         Command::Query(a) => query::run(a),
         Command::Haptic(a) => haptic::run(a),
         Command::Occlude(a) => occlude::run(a),
+        Command::OcclusionMap(a) => occlusion_map::run(a),
         Command::View(a) => view::run(a),
     };
     match result {

@@ -932,3 +932,149 @@ fn haptic_and_occlude_run_on_generated_bodies_and_refuse_bad_input() {
         .all(|x| x.as_f64().unwrap().is_finite()));
     assert!(v["steps"].as_u64().unwrap() > 0);
 }
+
+/// The vertices and `gap`s of a contact-map PLY written by `ist occlusion-map`.
+fn read_gap_ply(path: &Path) -> Vec<(DVec3, f64, [u8; 3])> {
+    let bytes = std::fs::read(path).unwrap();
+    let end = b"end_header\n";
+    let h = bytes.windows(end.len()).position(|w| w == end).unwrap() + end.len();
+    let header = String::from_utf8_lossy(&bytes[..h]);
+    assert!(header.contains("property float gap"), "{header}");
+    let n: usize = header
+        .lines()
+        .find_map(|l| l.strip_prefix("element vertex "))
+        .unwrap()
+        .parse()
+        .unwrap();
+    let f = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap()) as f64;
+    (0..n)
+        .map(|i| {
+            let o = h + 19 * i;
+            let rgb = [bytes[o + 16], bytes[o + 17], bytes[o + 18]];
+            (DVec3::new(f(o), f(o + 4), f(o + 8)), f(o + 12), rgb)
+        })
+        .collect()
+}
+
+#[test]
+fn occlusion_map_writes_the_signed_gaps_of_both_meshes() {
+    use innersphere::mesh::closest::point_triangle_distance_sq;
+    let dir = TempDir::new("cli", "occlusion-map");
+    let (box_stl, ball) = (dir.path("box.stl"), dir.path("ball.obj"));
+    write_box_stl(&box_stl);
+    let ball_mesh = shapes::icosphere(3);
+    write_obj(&ball_mesh, &ball);
+    let teeth = dir.path("teeth.json");
+    std::fs::write(&teeth, r#"{"30": {"c": [0, 0, 0]}}"#).unwrap();
+    let (pa, pb) = (dir.path("a.ply"), dir.path("b.ply"));
+    // The ball (radius 1) centred 1.2 along x: it overlaps the box's face x = 1 by 0.8.
+    let c = DVec3::new(1.2, 0.0, 0.0);
+    let r = ist_json(
+        &[
+            "occlusion-map",
+            s(&box_stl),
+            s(&ball),
+            "--pose",
+            "1.2 0 0 1 0 0 0",
+            "--out-a",
+            s(&pa),
+            "--out-b",
+            s(&pb),
+            "--teeth-b",
+            s(&teeth),
+            "--json",
+        ],
+        0,
+    );
+    let box_mesh = shapes::cuboid(HALF);
+    let ball_at: Vec<[DVec3; 3]> = (0..ball_mesh.triangles.len())
+        .map(|t| ball_mesh.triangle(t).map(|v| v + c))
+        .collect();
+    let box_tris: Vec<[DVec3; 3]> = (0..box_mesh.triangles.len())
+        .map(|t| box_mesh.triangle(t))
+        .collect();
+    let brute = |p: DVec3, tris: &[[DVec3; 3]]| {
+        tris.iter()
+            .map(|t| point_triangle_distance_sq(p, t[0], t[1], t[2]))
+            .fold(f64::INFINITY, f64::min)
+            .sqrt()
+    };
+    let inside_box = |p: DVec3| (p.abs() - HALF).max_element() < -1e-3;
+    let outside_box = |p: DVec3| (p.abs() - HALF).max_element() > 1e-3;
+    for (ply, tris, inside, outside) in [
+        (
+            &pa,
+            &ball_at,
+            &(|p: DVec3| (p - c).length() < 0.98) as &dyn Fn(DVec3) -> bool,
+            &(|p: DVec3| (p - c).length() > 1.001) as &dyn Fn(DVec3) -> bool,
+        ),
+        (
+            &pb,
+            &box_tris,
+            &inside_box as &dyn Fn(DVec3) -> bool,
+            &outside_box as &dyn Fn(DVec3) -> bool,
+        ),
+    ] {
+        let v = read_gap_ply(ply);
+        assert!(v.len() >= 8);
+        let (mut n_in, mut n_out) = (0, 0);
+        for (p, g, rgb) in v {
+            // f32 in the file: 1e-4 of the exact f64 gap.
+            assert!(
+                (g.abs() - brute(p, tris)).abs() <= 1e-4,
+                "{p}: {g} vs {}",
+                brute(p, tris)
+            );
+            if inside(p) {
+                assert!(g < 0.0, "{p}: {g}");
+                n_in += 1;
+            } else if outside(p) {
+                assert!(g > 0.0, "{p}: {g}");
+                n_out += 1;
+            }
+            assert_eq!(rgb, innersphere::contact_map::gap_colour(g as f32 as f64));
+        }
+        assert!(n_in > 0 && n_out > 0, "{}", ply.display());
+    }
+    assert!(r["a"]["min_gap"].as_f64().unwrap() < 0.0, "{r}");
+    assert!(r["b"]["vertices_inside"].as_u64().unwrap() > 0, "{r}");
+    let t = &r["b"]["teeth"][0];
+    assert_eq!(t["tooth"], 30);
+    assert!(
+        t["spots"].as_u64().unwrap() >= 1 && t["area_within_0_1"].as_f64().unwrap() > 0.0,
+        "{r}"
+    );
+    assert!(r["a"]["teeth"].is_null());
+    // Units in --help; bad input is a clear error.
+    let help = stdout(&ist(&["occlusion-map", "--help"]));
+    assert!(help.contains("mm") && help.contains("negative"), "{help}");
+    for bad in [
+        vec![
+            "occlusion-map",
+            s(&box_stl),
+            s(&ball),
+            "--out-a",
+            s(&box_stl),
+        ],
+        vec!["occlusion-map", s(&box_stl), s(&ball), "--pose", "1 2 3"],
+        vec![
+            "occlusion-map",
+            s(&box_stl),
+            s(&ball),
+            "--pose",
+            "nan 0 0 1 0 0 0",
+        ],
+        vec![
+            "occlusion-map",
+            s(&box_stl),
+            s(&ball),
+            "--teeth-a",
+            s(&box_stl),
+        ],
+        vec!["occlusion-map", s(&box_stl), s(&dir.path("none.stl"))],
+    ] {
+        let out = ist(&bad);
+        assert_eq!(code(&out), 2, "{bad:?}: {}", stdout(&out));
+        assert!(stderr(&out).starts_with("error: "), "{bad:?}");
+    }
+}

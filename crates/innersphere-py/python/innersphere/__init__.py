@@ -7,7 +7,8 @@ and ask it with the pose of body B (and optionally A): ``distance``, ``contact``
 ``multipoint``, ``penetration``, and the batch forms ``distance_many``, ``contact_many`` and
 ``penetration_many`` that loop in Rust. A pose is a 4×4 homogeneous matrix or 7 numbers
 ``(tx, ty, tz, qw, qx, qy, qz)``. ``load_motion`` reads a motion file, ``Haptic`` runs the
-6-DOF haptic loop.
+6-DOF haptic loop, ``contact_map`` gives every vertex of two meshes its signed gap to the
+other.
 
 The numbers are the Rust library's own: a query on a new (or reset) pair answers what
 ``ist query`` prints, ``distance_many`` over a motion what ``ist replay`` prints.
@@ -34,6 +35,7 @@ from ._innersphere import (
     Tick,
     Tree,
     __version__,
+    contact_map,
     load_motion,
 )
 
@@ -45,5 +47,6 @@ __all__ = [
     "Tick",
     "Tree",
     "__version__",
+    "contact_map",
     "load_motion",
 ]

@@ -15,6 +15,7 @@ __all__ = [
     "Tick",
     "Tree",
     "__version__",
+    "contact_map",
     "load_motion",
 ]
 
@@ -367,3 +368,16 @@ def load_motion(path: _PathLike) -> Tuple[_FloatArray, _FloatArray]:
     """Reads a motion file (CSV ``t,tx,ty,tz,qw,qx,qy,qz``, optionally .gz): returns the
     times (N,) and the poses (N, 7) of B in A's frame, as ``ist replay --motion`` reads
     them. Raises OSError when unreadable, ValueError (with the line) when invalid."""
+
+def contact_map(
+    a: _MeshLike,
+    b: _MeshLike,
+    pose_b: Optional[_PoseLike] = None,
+    pose_a: Optional[_PoseLike] = None,
+) -> Tuple[_FloatArray, _FloatArray]:
+    """The contact map of meshes ``a`` and ``b`` (each a file path, a ``(vertices, faces)``
+    pair or a ``trimesh.Trimesh``) at ``pose_b`` (and ``pose_a``, default the identity): per
+    vertex of each, its exact distance to the other's surface, negative inside the other
+    (``ist occlusion-map``'s ``gap``). Arrays keep their vertex order; a file's vertices are
+    the loader's (welded). Raises OSError for unreadable files, ValueError for bad meshes or
+    poses."""

@@ -22,11 +22,13 @@
 //!   decides.
 //! * [`penetration`] / [`penetration_depth`]: the largest distance to the other surface of a
 //!   vertex of one body inside the other (both ways).
+//! * [`vertex_gaps`]: the signed distance of every vertex of one body to the other's
+//!   surface (negative inside), what a contact map colours.
 //! * [`brute_force_distance`] / [`brute_force_intersects`]: O(n·m) references for tests.
 //!
 //! The files: `mesh` ([`ExactMesh`]), `scratch` ([`ExactScratch`]), `frame` (B's frame in
 //! A's), `overlap` (the traversal of overlapping node pairs), `bnb` (the branch and bound),
-//! `containment`, `distance`, `intersects`, `penetration`, `bound` (node shapes) and
+//! `containment`, `distance`, `gaps`, `intersects`, `penetration`, `bound` (node shapes) and
 //! [`tri_tri`] (triangle pairs).
 //!
 //! No input panics: meshes are validated by [`ExactMesh::new`], degenerate triangles are
@@ -43,6 +45,7 @@ mod bound;
 mod containment;
 mod distance;
 mod frame;
+mod gaps;
 mod intersects;
 mod mesh;
 mod overlap;
@@ -51,6 +54,7 @@ mod scratch;
 pub mod tri_tri;
 
 pub use distance::{brute_force_distance, distance, ExactDistance};
+pub use gaps::vertex_gaps;
 pub use intersects::{brute_force_intersects, intersects};
 pub use mesh::ExactMesh;
 pub use penetration::{penetration, penetration_depth, Body, ExactPenetration};

@@ -3,7 +3,8 @@
 // What it shows: body A fixed at the identity, body B at the pose the server's 1 kHz loop
 // reports (`pose_b`), and over them the loop's answers: the closest points (a line), the
 // contact patches (discs), force and torque (arrows), the loop's timing (numbers and a
-// chart), optionally the inner spheres of one body at one level of its tree.
+// chart), optionally the inner spheres of one body at one level of its tree, and in
+// contact-map mode both surfaces coloured by their gap to the other body.
 //
 // How B moves: a TransformControls gizmo on a proxy object stands for B's *target* pose
 // (`target_b`); dragging it, Shift-dragging on the canvas, or typing a pose POSTs
@@ -13,7 +14,8 @@
 // The HTTP API (JSON unless said; poses are [tx, ty, tz, qw, qx, qy, qz], p' = R(q)·p + t,
 // B's pose in A's frame; points, normals, force, torque in A's frame = the world here):
 //   GET  /api/info, /api/state, /api/events (SSE of the state), /api/spheres (binary),
-//   GET  /api/mesh (binary), POST /api/pose, /api/mode, /api/motion.
+//   GET  /api/mesh (binary), POST /api/pose, /api/mode, /api/motion;
+//   contact map: GET /api/contact-map, /api/contact-map/bands (binary), POST /api/contact-map.
 //
 // For the end-to-end test the page exposes `window.__ist` (see `ist` below).
 
@@ -172,6 +174,18 @@ const ist = {
   setPose: (p7) => {
     setProxyFromPose(p7);
     return sendPose(p7);
+  },
+  /** Contact-map mode: whether it is available and on, the server's latest map (`seq`,
+   *  `status`, `rate_hz`, `compute_ms`), the map the meshes show (`shownSeq`, its `pose`,
+   *  vertices per band `counts.a` / `counts.b`), colour updates applied and the last one's
+   *  time to write the colours (`paint_ms`), which bodies are shown (`shown`), the per-tooth
+   *  list shown, and whether the meshes' materials use vertex colours. */
+  contactMap: {
+    available: false, on: false, status: null, seq: 0, shownSeq: 0, pose: null, counts: null,
+    updates: 0, paint_ms: null, teeth: null, rate_hz: 0, compute_ms: null, shown: 'both',
+    vertexColors: () => ['a', 'b'].map((n) => !!(bodies[n].material && bodies[n].material.vertexColors)),
+    legendRows: () => document.querySelectorAll('#cm-legend tr').length,
+    overlayShown: () => !$('cm-overlay').hidden,
   },
   /** What the overlays show now (visible patch discs, arrows, closest-point line). */
   overlays: () => ({
@@ -609,6 +623,14 @@ function showContact(s) {
   if (wsum > 0) placeArrow(forceArrow, 'force', s.force, centroid.divideScalar(wsum), true);
   else placeArrow(forceArrow, 'force', s.force, centreB);
   placeArrow(torqueArrow, 'torque', s.torque, centreB);
+  if (ist.contactMap.shown !== 'both') hideContactOverlays();
+}
+
+/** With one body shown alone (contact map), its surface is the picture: no overlays. */
+function hideContactOverlays() {
+  distLine.visible = dotA.visible = dotB.visible = false;
+  forceArrow.visible = torqueArrow.visible = false;
+  for (const d of discs) d.visible = false;
 }
 
 /** Everything else in a state: loop numbers, chart, mode, motion, haptic ghost. */
@@ -664,6 +686,7 @@ function applyState(s) {
     }
   }
   showLoop(s);
+  syncContactMap(s.contact_map);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -905,6 +928,250 @@ async function updateSpheres() {
 }
 
 // ---------------------------------------------------------------------------------------
+// Contact map: both surfaces coloured per vertex by their signed gap to the other body
+// ---------------------------------------------------------------------------------------
+//
+// The server's worker maps B's pose whenever it changes (the library's exact gaps, capped
+// at 0.5 mm) and publishes one band index per vertex (/api/contact-map/bands: u32 seq,
+// u32 Va, u32 Vb, u32 bands, 7×f64 B's pose of the map, then Va + Vb bytes, in the order
+// of /api/mesh's vertices). While the mode is on the page asks for the map after the one it
+// shows (`?after=seq`: the server answers when there is a newer one, so that a map reaches
+// the meshes one request after it is made) and writes it into the meshes' `color`
+// attributes through the palette of /api/info's legend (the colour scale of
+// `ist occlusion-map`'s PLY files).
+
+const BANDS_HEADER = 72;
+
+const contactMap = {
+  palette: null, // Uint8Array, 3 bytes (linear RGB) per band
+  shownSeq: 0, // the map the meshes show
+  polling: false, // the loop of ?after= requests runs
+  teethSeq: 0, // the map the per-tooth list shows
+  teethAt: -Infinity,
+  teethFetching: false,
+  asked: null, // { on, at }: what this page last asked for (the state may lag it)
+};
+
+/** The legend's sRGB colours as the linear RGB bytes vertex colours are read as. */
+function paletteOf(legend) {
+  const p = new Uint8Array(legend.length * 3);
+  const c = new THREE.Color();
+  legend.forEach((b, k) => {
+    c.setRGB(b.rgb[0] / 255, b.rgb[1] / 255, b.rgb[2] / 255, THREE.SRGBColorSpace);
+    p[3 * k] = Math.round(c.r * 255);
+    p[3 * k + 1] = Math.round(c.g * 255);
+    p[3 * k + 2] = Math.round(c.b * 255);
+  });
+  return p;
+}
+
+const rgbCss = (rgb) => `rgb(${rgb[0]}, ${rgb[1]}, ${rgb[2]})`;
+
+function setupContactMap(info) {
+  const cm = info.contact_map;
+  ist.contactMap.available = !!(cm && cm.available);
+  if (!ist.contactMap.available) return;
+  contactMap.palette = paletteOf(cm.legend);
+  $('contact-map-panel').hidden = false;
+  const rows = cm.legend.map((b) => `<tr><td><span class="swatch" style="background:${rgbCss(b.rgb)}"></span></td><td>${b.name}</td></tr>`);
+  $('cm-legend').innerHTML = rows.join('');
+  $('cm-show').addEventListener('change', () => { showBodies($('cm-show').value); $('cm-show').blur(); });
+  $('contact-map').addEventListener('change', async () => {
+    const on = $('contact-map').checked;
+    contactMap.asked = { on, at: performance.now() };
+    showContactMapMode(on);
+    try {
+      await api('/api/contact-map', { on });
+    } catch (err) {
+      showError(err);
+      contactMap.asked = null;
+    }
+  });
+}
+
+/** Whether the mode is on: what this page just asked for (for a second), else the state's. */
+function contactMapOn(st) {
+  const a = contactMap.asked;
+  if (a && performance.now() - a.at < 1000) return a.on;
+  return !!(st && st.on);
+}
+
+/** `both` bodies, or `a` / `b` alone: the surfaces that touch face each other, so that one
+ *  is seen only with the other hidden. Alone, the camera turns to the body's side that faces
+ *  the other (from a little in front: -y in the jaw data's frame, as in frameBodies), and
+ *  the contact overlays (patches, arrows, closest points) are hidden. */
+function showBodies(which) {
+  $('cm-show').value = which;
+  bodyA.visible = which !== 'b';
+  bodyB.visible = which !== 'a';
+  ist.contactMap.shown = which;
+  if (which === 'both') return;
+  hideContactOverlays();
+  bodyB.updateMatrixWorld();
+  const boxOf = (n) => (n === 'a' ? bodies.a.box.clone() : bodies.b.box.clone().applyMatrix4(bodyB.matrixWorld));
+  const box = boxOf(which);
+  const centre = box.getCenter(new THREE.Vector3());
+  const toOther = boxOf(which === 'a' ? 'b' : 'a').getCenter(new THREE.Vector3()).sub(centre);
+  if (toOther.lengthSq() < 1e-12) toOther.set(0, 0, which === 'a' ? -1 : 1);
+  const dir = toOther.normalize().add(new THREE.Vector3(0, -0.35, 0)).normalize();
+  const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-3);
+  const fov = THREE.MathUtils.degToRad(camera.fov);
+  const hfov = 2 * Math.atan(Math.tan(fov / 2) * freeWidth() / window.innerHeight);
+  const dist = radius / Math.sin(Math.min(fov, hfov) / 2) * 1.05;
+  camera.position.copy(centre).addScaledVector(dir, dist);
+  camera.near = dist / 100;
+  camera.far = dist * 100;
+  camera.updateProjectionMatrix();
+  orbit.target.copy(centre);
+  orbit.update();
+}
+
+/** Switches the meshes between their plain colours and the vertex colours of the map. */
+function showContactMapMode(on) {
+  ist.contactMap.on = on;
+  $('contact-map').checked = on;
+  if ($('cm-overlay').hidden === on) {
+    $('cm-overlay').hidden = !on;
+    onResize(); // the legend takes the view's left edge
+  }
+  $('cm-show').disabled = !on;
+  if (!on && ist.contactMap.shown !== 'both') showBodies('both');
+  for (const name of ['a', 'b']) {
+    const b = bodies[name];
+    if (!b.mesh) continue;
+    const geo = b.mesh.geometry;
+    if (on && !geo.getAttribute('color')) {
+      // Far (the last band) until the first map arrives.
+      const n = geo.getAttribute('position').count;
+      const col = new Uint8Array(n * 3);
+      const p = contactMap.palette, far = p.length - 3;
+      for (let i = 0; i < n; i++) { col[3 * i] = p[far]; col[3 * i + 1] = p[far + 1]; col[3 * i + 2] = p[far + 2]; }
+      geo.setAttribute('color', new THREE.BufferAttribute(col, 3, true));
+    }
+    if (b.material.vertexColors !== on) {
+      b.material.vertexColors = on;
+      b.material.color.set(on ? 0xffffff : b.color);
+      b.material.needsUpdate = true;
+    }
+  }
+}
+
+/** Writes one body's band indices into its mesh's colours; returns the count per band. */
+function paintBands(name, bands) {
+  const geo = bodies[name].mesh.geometry;
+  const attr = geo.getAttribute('color');
+  if (!attr || attr.count !== bands.length) {
+    throw new Error(`contact map of ${name.toUpperCase()}: ${bands.length} vertices, its mesh has ${attr ? attr.count : '?'}`);
+  }
+  const col = attr.array, p = contactMap.palette;
+  const last = p.length / 3 - 1;
+  const counts = new Array(last + 1).fill(0);
+  for (let i = 0; i < bands.length; i++) {
+    const b = Math.min(bands[i], last);
+    counts[b]++;
+    const k = 3 * b, j = 3 * i;
+    col[j] = p[k]; col[j + 1] = p[k + 1]; col[j + 2] = p[k + 2];
+  }
+  attr.needsUpdate = true;
+  return counts;
+}
+
+/** Shows one answer of /api/contact-map/bands (unless the meshes show that map already). */
+function showBands(buf) {
+  const dv = new DataView(buf);
+  const seq = dv.getUint32(0, true), na = dv.getUint32(4, true), nb = dv.getUint32(8, true);
+  if (buf.byteLength !== BANDS_HEADER + na + nb) throw new Error('bad contact map data');
+  if (seq === contactMap.shownSeq) return;
+  const pose = [0, 1, 2, 3, 4, 5, 6].map((k) => dv.getFloat64(16 + 8 * k, true));
+  const bands = new Uint8Array(buf, BANDS_HEADER);
+  const t0 = performance.now();
+  const counts = { a: paintBands('a', bands.subarray(0, na)), b: paintBands('b', bands.subarray(na)) };
+  const paint_ms = performance.now() - t0;
+  contactMap.shownSeq = seq;
+  Object.assign(ist.contactMap, { shownSeq: seq, pose, counts, paint_ms, updates: ist.contactMap.updates + 1 });
+}
+
+const pause = (ms) => new Promise((r) => setTimeout(r, ms));
+
+/** While the mode is on: ask for the map after the one shown, show it, ask again. */
+async function pollBands() {
+  if (contactMap.polling) return;
+  contactMap.polling = true;
+  try {
+    while (ist.contactMap.on) {
+      let buf = null;
+      try {
+        buf = await apiBinary(`/api/contact-map/bands?after=${contactMap.shownSeq}`);
+        if (buf && ist.contactMap.on) showBands(buf);
+      } catch (err) {
+        showError(err);
+        await pause(1000);
+      }
+      if (!buf) await pause(200); // no map yet
+    }
+  } finally {
+    contactMap.polling = false;
+  }
+}
+
+/** A gap for the per-tooth list: mm with 3 decimals, "> 0.5" beyond the colour scale (the
+ *  server's gaps stop at the cap, just above its end). */
+function gapText(g, cap, top) {
+  if (g === null || g === undefined) return '—';
+  return g >= cap ? `> ${top}` : g.toFixed(3);
+}
+
+function showTeeth(m) {
+  const legend = ist.info.contact_map.legend;
+  const top = legend[legend.length - 2].below; // the scale's end (0.5 mm)
+  const table = (title, rows) => {
+    if (!rows) return '';
+    const body = rows.map((t) => {
+      const sw = t.band === null ? '' : `<span class="swatch" style="background:${rgbCss(legend[t.band].rgb)}"></span> `;
+      return `<tr><td>${t.tooth}</td><td>${sw}${gapText(t.min_gap, m.cap, top)}</td><td>${t.area_within_0_1.toFixed(1)}</td><td>${t.area_within_0_2.toFixed(1)}</td><td>${t.spots}</td></tr>`;
+    });
+    return `<h3>${title}</h3><table><tr><th>tooth</th><th>min gap</th><th>≤0.1 mm²</th><th>≤0.2 mm²</th><th>spots</th></tr>${body.join('')}</table>`;
+  };
+  $('cm-teeth').innerHTML = table('A (fixed)', m.teeth.a) + table('B (moved)', m.teeth.b);
+  $('cm-teeth').hidden = false;
+  ist.contactMap.teeth = { seq: m.seq, a: m.teeth.a, b: m.teeth.b };
+}
+
+async function fetchTeeth() {
+  contactMap.teethFetching = true;
+  contactMap.teethAt = performance.now();
+  try {
+    const m = await api('/api/contact-map');
+    if (m.seq > 0 && ist.contactMap.on) { showTeeth(m); contactMap.teethSeq = m.seq; }
+  } catch (err) {
+    showError(err);
+  } finally {
+    contactMap.teethFetching = false;
+  }
+}
+
+/** The state's `contact_map`: mode, status line, and a newer map to fetch. */
+function syncContactMap(st) {
+  if (!st || !ist.contactMap.available) return;
+  const on = contactMapOn(st);
+  if (on !== ist.contactMap.on && loaded) showContactMapMode(on);
+  Object.assign(ist.contactMap, { status: st.status, seq: st.seq, rate_hz: st.rate_hz, compute_ms: st.compute_ms });
+  const status = $('cm-status');
+  if (!on) status.textContent = 'off';
+  else if (st.status === 'failed') status.textContent = `failed: ${st.error}`;
+  else if (st.status !== 'ready') status.textContent = 'preparing the meshes…';
+  else status.textContent = `${num(st.rate_hz, 3)} maps/s, ${num(st.compute_ms, 3)} ms a map`;
+  status.title = st.error || `gaps ${num(st.gaps_ms, 3)} ms; meshes prepared in ${num(st.prepare_s, 3)} s`;
+  if (!on || !loaded) return;
+  pollBands();
+  if (st.seq === 0) return;
+  // The per-tooth list: a few times a second at most (the server makes it on request).
+  const teeth = ist.info.contact_map.teeth;
+  if ((teeth.a || teeth.b) && st.seq !== contactMap.teethSeq && !contactMap.teethFetching
+    && performance.now() - contactMap.teethAt > 300) fetchTeeth();
+}
+
+// ---------------------------------------------------------------------------------------
 // Shift-drag: move B's target in the camera's view plane (no gizmo needed)
 // ---------------------------------------------------------------------------------------
 
@@ -961,22 +1228,34 @@ function setupShiftDrag() {
 let loaded = false; // meshes (or stand-in spheres) of both bodies are in the scene
 let framed = false; // the camera has been framed on the bodies (needs B's first pose)
 
-/** Width of the window the panel leaves free on the left (the whole width when the
- *  window is too narrow for that to help). */
-function freeWidth() {
+/** Widths the panel (right, P) and the contact map's legend (left, L, while shown) take
+ *  from the view: 0 where the window is too narrow for leaving them free to help (the
+ *  legend's where less than 600 px would be left). */
+function sideWidths() {
   const W = window.innerWidth;
   const P = $('panel').getBoundingClientRect().width + 16;
-  return W > 2.5 * P ? W - P : W;
+  const o = $('cm-overlay');
+  const L = o && !o.hidden ? o.getBoundingClientRect().width + 16 : 0;
+  if (L > 0 && W - P - L >= 600) return { P, L };
+  return W > 2.5 * P ? { P, L: 0 } : { P: 0, L: 0 };
 }
 
-/** Sizes the canvas to the window and centres the view on the part the panel leaves free:
- *  the projection is that of a window wider by the panel's width, of which the canvas
- *  shows the right-hand part (PerspectiveCamera.setViewOffset). */
+/** Width of the window the panel (and the legend) leave free. */
+function freeWidth() {
+  const { P, L } = sideWidths();
+  return window.innerWidth - P - L;
+}
+
+/** Sizes the canvas to the window and centres the view on the part the panel (and the
+ *  legend) leave free: the projection is that of a window wider by the difference of their
+ *  widths, of which the canvas shows the part that puts its centre in the middle of the
+ *  free part (PerspectiveCamera.setViewOffset). */
 function onResize() {
   const W = window.innerWidth, H = window.innerHeight;
-  const P = W - freeWidth();
+  const { P, L } = sideWidths();
+  const d = P - L;
   renderer.setSize(W, H);
-  if (P > 0) camera.setViewOffset(W + P, H, P, 0, W, H); // also sets the aspect
+  if (d !== 0) camera.setViewOffset(W + Math.abs(d), H, Math.max(d, 0), 0, W, H); // also sets the aspect
   else { camera.clearViewOffset(); camera.aspect = W / H; }
   camera.updateProjectionMatrix();
 }
@@ -1006,6 +1285,7 @@ async function main() {
     return;
   }
   setupPanel(ist.info);
+  setupContactMap(ist.info);
   setupShiftDrag();
   connect();
   try {
@@ -1017,6 +1297,12 @@ async function main() {
   if (ist.state) setProxyFromPose(ist.state.target_b);
   loaded = true;
   if ($('show-spheres').checked) updateSpheres();
+  // The meshes are there now: the contact map's colours (the mode may have been turned on,
+  // here or by --contact-map, while they loaded).
+  if (ist.contactMap.available) {
+    showContactMapMode(contactMapOn(ist.state && ist.state.contact_map));
+    if (ist.state) syncContactMap(ist.state.contact_map);
+  }
 }
 
 main();

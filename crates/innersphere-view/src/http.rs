@@ -10,6 +10,7 @@
 // A handler's error is the response it answers with, made once per request.
 #![allow(clippy::result_large_err)]
 
+use crate::contact::{self, ContactMaps};
 use crate::sim::{self, Control, LoopIo, LoopState, Mode};
 use crate::{assets, encode, Scene};
 use bytes::Bytes;
@@ -43,6 +44,8 @@ pub const WRITE_TIMEOUT: Duration = Duration::from_secs(10);
 pub const MAX_CONNECTIONS: usize = 512;
 /// Server-sent-event streams open at once.
 const MAX_STREAMS: usize = 16;
+/// Longest wait of `GET /api/contact-map/bands?after=SEQ` for a newer map.
+const MAP_WAIT: Duration = Duration::from_secs(2);
 
 /// Settings of [`serve`].
 #[derive(Debug, Clone, Copy)]
@@ -60,6 +63,8 @@ pub struct ServeOptions {
     pub header_timeout: Duration,
     /// Time a client has for a request's body ([`BODY_TIMEOUT`] by default).
     pub body_timeout: Duration,
+    /// Start with the contact map on (both meshes needed).
+    pub contact_map: bool,
 }
 
 impl Default for ServeOptions {
@@ -71,6 +76,7 @@ impl Default for ServeOptions {
             max_connections: MAX_CONNECTIONS,
             header_timeout: HEADER_TIMEOUT,
             body_timeout: BODY_TIMEOUT,
+            contact_map: false,
         }
     }
 }
@@ -85,6 +91,8 @@ struct App {
     state: Mutex<triple_buffer::Output<LoopState>>,
     streams: AtomicUsize,
     stop: Arc<AtomicBool>,
+    /// The contact map's shared state, where both meshes are given.
+    maps: Option<Arc<ContactMaps>>,
 }
 
 type Body = BoxBody<Bytes, Infallible>;
@@ -120,6 +128,16 @@ fn binary(bytes: Vec<u8>) -> Resp {
     no_store(respond(200, "application/octet-stream", bytes))
 }
 
+/// Shared bytes (a published contact map), answered without a copy.
+fn binary_shared(bytes: Bytes) -> Resp {
+    let mut r = Response::new(Full::new(bytes).boxed());
+    r.headers_mut().insert(
+        CONTENT_TYPE,
+        HeaderValue::from_static("application/octet-stream"),
+    );
+    no_store(r)
+}
+
 /// Serves `scene` until the process ends: starts the loop thread and the server, calls
 /// `listening` with the address once the socket is bound, then blocks.
 pub fn serve(
@@ -135,6 +153,10 @@ pub fn serve(
     }
     if opts.header_timeout.is_zero() || opts.body_timeout.is_zero() {
         return Err("the header and body timeouts must be above zero".into());
+    }
+    let meshes = scene.mesh_a.is_some() && scene.mesh_b.is_some();
+    if opts.contact_map && !meshes {
+        return Err("the contact map needs both meshes (--mesh-a and --mesh-b)".into());
     }
     if opts.max_connections == 0 {
         return Err("the server must take at least one connection".into());
@@ -201,7 +223,28 @@ pub fn serve(
         state: Mutex::new(state_out),
         streams: AtomicUsize::new(0),
         stop,
+        maps: meshes.then(|| Arc::new(ContactMaps::new(opts.contact_map))),
     });
+    if let Some(maps) = &app.maps {
+        // The contact map's worker: B's pose from the HTTP side's end of the state buffer
+        // (the loop never waits for it), the meshes borrowed from the scene.
+        let (app, maps) = (app.clone(), maps.clone());
+        std::thread::Builder::new()
+            .name("ist-view-contact-map".into())
+            .spawn(move || {
+                let s = &app.scene;
+                if let (Some(mesh_a), Some(mesh_b)) = (&s.mesh_a, &s.mesh_b) {
+                    let src = contact::Source {
+                        mesh_a,
+                        mesh_b,
+                        teeth_a: s.teeth_a.as_ref(),
+                        teeth_b: s.teeth_b.as_ref(),
+                    };
+                    contact::run(src, &maps, || latest(&app).pose_b, &app.stop);
+                }
+            })
+            .map_err(|e| format!("cannot start the contact map's thread: {e}"))?;
+    }
     listening(addr);
     let result = runtime.block_on(accept(listener, app.clone()));
     app.stop.store(true, Ordering::Relaxed);
@@ -267,6 +310,17 @@ async fn handle(app: Arc<App>, req: Request<Incoming>) -> Resp {
     if get && path == "/api/events" {
         return events(&app);
     }
+    // A page that shows map `after` asks for the next one: wait for it here (a task, no
+    // thread), at most MAP_WAIT, then answer the latest.
+    if get && path == "/api/contact-map/bands" {
+        if let (Some(maps), Some(after)) = (&app.maps, param(&query, "after")) {
+            let Ok(after) = after.parse::<u32>() else {
+                return error(400, "after must be a map's seq (a whole number ≥ 0)");
+            };
+            let mut seq = maps.subscribe();
+            let _ = tokio::time::timeout(MAP_WAIT, seq.wait_for(|s| *s != after)).await;
+        }
+    }
     let body = if method == Method::POST && path.starts_with("/api/") {
         match read_body(req, app.opts.body_timeout).await {
             Ok(v) => Some(v),
@@ -297,11 +351,17 @@ fn route(
         (true, _, "/api/state") => json_response(200, &state_json(app)),
         (true, _, "/api/spheres") => spheres(app, query),
         (true, _, "/api/mesh") => mesh(app, query),
+        (true, _, "/api/contact-map") => contact_map(app),
+        (true, _, "/api/contact-map/bands") => contact_bands(app),
         (_, &Method::POST, "/api/pose") => pose(app, body.as_ref().unwrap_or(&Value::Null)),
         (_, &Method::POST, "/api/mode") => mode(app, body.as_ref().unwrap_or(&Value::Null)),
         (_, &Method::POST, "/api/motion") => motion(app, body.as_ref().unwrap_or(&Value::Null)),
+        (_, &Method::POST, "/api/contact-map") => {
+            contact_switch(app, body.as_ref().unwrap_or(&Value::Null))
+        }
         (_, _, "/" | "/index.html" | "/api/info" | "/api/state" | "/api/spheres" | "/api/mesh")
-        | (_, _, "/api/pose" | "/api/mode" | "/api/motion" | "/api/events") => {
+        | (_, _, "/api/pose" | "/api/mode" | "/api/motion" | "/api/events")
+        | (_, _, "/api/contact-map" | "/api/contact-map/bands") => {
             error(405, format!("{method} is not allowed on {path}"))
         }
         (_, _, p) => error(404, format!("nothing at {p}")),
@@ -353,7 +413,12 @@ fn motion_seconds(app: &App) -> Option<f64> {
 }
 
 fn state_json(app: &App) -> Value {
-    encode::state(&latest(app), motion_seconds(app))
+    let mut v = encode::state(&latest(app), motion_seconds(app));
+    v["contact_map"] = app
+        .maps
+        .as_ref()
+        .map_or(Value::Null, |m| encode::contact_map(&m.snapshot(), false));
+    v
 }
 
 fn info(app: &App) -> Value {
@@ -381,6 +446,12 @@ fn info(app: &App) -> Value {
         "rate_hz": app.opts.rate,
         "modes": modes,
         "stiffness": app.opts.stiffness,
+        "contact_map": {
+            "available": app.maps.is_some(),
+            "cap": contact::CAP,
+            "legend": encode::contact_legend(),
+            "teeth": {"a": s.teeth_a.is_some(), "b": s.teeth_b.is_some()},
+        },
     })
 }
 
@@ -556,6 +627,55 @@ fn motion(app: &App, v: &Value) -> Resp {
         200,
         &json!({"playing": c.playing, "t": t.unwrap_or(latest(app).motion_t), "seconds": len}),
     )
+}
+
+/// The contact map's shared state, or the 409 of a scene without both meshes.
+fn maps(app: &App) -> Result<&ContactMaps, Resp> {
+    app.maps.as_deref().ok_or_else(|| {
+        error(
+            409,
+            "the contact map needs both meshes (start ist view with --mesh-a and --mesh-b)",
+        )
+    })
+}
+
+/// `GET /api/contact-map`: the mode, the latest map's pose, timings and per-tooth summaries.
+fn contact_map(app: &App) -> Resp {
+    match maps(app) {
+        Ok(m) => json_response(200, &encode::contact_map(&m.snapshot(), true)),
+        Err(r) => r,
+    }
+}
+
+/// `GET /api/contact-map/bands[?after=SEQ]`: the latest map, one band index per vertex
+/// (binary); with `after`, once there is a map other than SEQ or 2 s have passed.
+fn contact_bands(app: &App) -> Resp {
+    let m = match maps(app) {
+        Ok(m) => m,
+        Err(r) => return r,
+    };
+    match m.snapshot().frame {
+        Some(f) => binary_shared(f.bands.clone()),
+        None => error(
+            404,
+            "no contact map yet (turn it on: POST /api/contact-map {\"on\": true})",
+        ),
+    }
+}
+
+/// `POST /api/contact-map {"on": bool}`: turns the mode on or off.
+fn contact_switch(app: &App, v: &Value) -> Resp {
+    let m = match maps(app) {
+        Ok(m) => m,
+        Err(r) => return r,
+    };
+    match v.get("on") {
+        Some(Value::Bool(on)) => {
+            m.set_on(*on);
+            json_response(200, &encode::contact_map(&m.snapshot(), false))
+        }
+        _ => error(400, "expected {\"on\": true | false}"),
+    }
 }
 
 /// Server-sent events: the state about 30 times a second, as a stream of its own.

@@ -1,21 +1,26 @@
 //! `ist view`: a local web server with a live 3D view of two bodies. A 1 kHz loop thread runs
 //! the library's queries (and, in haptic mode, its haptic loop) on body B's target pose and
 //! hands its state to the HTTP side through a lock-free triple buffer; the page (three.js,
-//! vendored and embedded) draws it at screen rate. The server holds no collision logic of
-//! its own: every answer comes from [`innersphere::Pair`] and
-//! [`innersphere::haptic::MultirateLoop`]. `docs/VIEWER.md` describes the page and the API.
+//! vendored and embedded) draws it at screen rate. In contact-map mode a worker thread of
+//! its own colours both meshes by their gap to each other as B moves. The server holds no
+//! collision logic of its own: every answer comes from [`innersphere::Pair`],
+//! [`innersphere::haptic::MultirateLoop`] and [`innersphere::contact_map`].
+//! `docs/VIEWER.md` describes the page and the API.
 
 mod assets;
+mod contact;
 mod encode;
 mod http;
 mod sim;
 
+pub use contact::CAP as CONTACT_MAP_CAP;
 pub use http::{
     serve, ServeOptions, BODY_TIMEOUT, HEADER_TIMEOUT, MAX_BODY, MAX_CONNECTIONS, MAX_HEADER,
     WRITE_TIMEOUT,
 };
 pub use sim::{LoopState, Mode};
 
+use innersphere::contact_map::Teeth;
 use innersphere::{BuildOptions, Mesh, Resolution, SharedTree, SphereTree};
 use innersphere_motion::Motion;
 
@@ -32,6 +37,10 @@ pub struct Scene {
     pub mesh_b: Option<Mesh>,
     /// A motion of B in A's frame to play.
     pub motion: Option<Motion>,
+    /// A's teeth (its mesh's frame), for the contact map's per-tooth list.
+    pub teeth_a: Option<Teeth>,
+    /// B's teeth (its mesh's own frame).
+    pub teeth_b: Option<Teeth>,
 }
 
 impl Scene {
@@ -58,6 +67,8 @@ impl Scene {
             mesh_a: Some(upper),
             mesh_b: Some(lower),
             motion: Some(motion),
+            teeth_a: None,
+            teeth_b: None,
         })
     }
 }

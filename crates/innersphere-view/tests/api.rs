@@ -1,6 +1,7 @@
 //! The HTTP API against the library, on the built-in scene: `POST /api/pose` answers what a
-//! fresh pair answers (the same as `ist query`), the state streams, the loop runs, and bad
-//! requests get a 4xx with a message, never a panic or a file outside the embedded ones.
+//! fresh pair answers (the same as `ist query`), the state streams, the loop runs, the
+//! contact map is the library's, and bad requests get a 4xx with a message, never a panic or
+//! a file outside the embedded ones.
 
 use innersphere::{DistanceOptions, Pair, PenetrationOptions, Pose};
 use innersphere_view::{serve, Scene, ServeOptions};
@@ -219,4 +220,136 @@ fn bad_requests_get_a_4xx_with_a_message() {
     assert_eq!(request("POST", "/api/pose", &big).0, 413);
     // Still serving.
     assert_eq!(json("GET", "/api/state", "").0, 200);
+}
+
+/// The band index the page gets for a gap: the colour scale's own (`gap_colour`), as an
+/// index into `LEGEND`, or the far band after it.
+fn band_of(gap: f64) -> u8 {
+    use innersphere::contact_map::{gap_colour, LEGEND};
+    let c = gap_colour(gap);
+    LEGEND.iter().position(|l| l.2 == c).unwrap_or(LEGEND.len()) as u8
+}
+
+#[test]
+fn the_contact_map_is_the_library_s_at_the_map_s_pose() {
+    use innersphere::contact_map::ContactMap;
+    use innersphere::exact::ExactMesh;
+    let s = server();
+    let (code, info) = json("GET", "/api/info", "");
+    assert_eq!(code, 200);
+    assert_eq!(info["contact_map"]["available"], true);
+    assert_eq!(info["contact_map"]["legend"].as_array().unwrap().len(), 7);
+    let (code, v) = json("POST", "/api/contact-map", r#"{"on": true}"#);
+    assert_eq!((code, &v["on"]), (200, &Value::Bool(true)), "{v}");
+    // A map arrives (the demo's meshes are prepared first).
+    let end = std::time::Instant::now() + Duration::from_secs(60);
+    let map = loop {
+        let (_, m) = json("GET", "/api/contact-map", "");
+        if m["status"] == "ready" && m["seq"].as_u64().unwrap() > 0 {
+            break m;
+        }
+        assert!(std::time::Instant::now() < end, "no map: {m}");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert!(
+        map["pose_b"].as_array().is_some_and(|p| p.len() == 7),
+        "{map}"
+    );
+    // The bands: one per vertex of each mesh, in the mesh's order, the colour scale of the
+    // library's gaps at the pose the answer names.
+    let (code, bands) = request("GET", "/api/contact-map/bands", "");
+    assert_eq!(code, 200);
+    let u = |k: usize| u32::from_le_bytes(bands[4 * k..4 * k + 4].try_into().unwrap()) as usize;
+    let (ma, mb) = (
+        s.scene.mesh_a.as_ref().unwrap(),
+        s.scene.mesh_b.as_ref().unwrap(),
+    );
+    assert_eq!(
+        (u(1), u(2), u(3)),
+        (ma.vertices.len(), mb.vertices.len(), 7)
+    );
+    assert_eq!(bands.len(), 72 + u(1) + u(2));
+    let mut p7 = [0.0; 7];
+    for (k, x) in p7.iter_mut().enumerate() {
+        *x = f64::from_le_bytes(bands[16 + 8 * k..24 + 8 * k].try_into().unwrap());
+    }
+    let pose = Pose::from_array(p7).unwrap();
+    let (ea, eb) = (ExactMesh::new(ma).unwrap(), ExactMesh::new(mb).unwrap());
+    let exact = ContactMap::new(&ea, &Pose::IDENTITY, &eb, &pose, f64::INFINITY).unwrap();
+    let want: Vec<u8> = exact
+        .gaps_a
+        .iter()
+        .chain(&exact.gaps_b)
+        .map(|&g| band_of(g))
+        .collect();
+    assert_eq!(&bands[72..], &want[..], "at {pose}");
+    // The state says so too; `after` waits for a map other than the one named.
+    let (_, st) = json("GET", "/api/state", "");
+    assert_eq!(st["contact_map"]["on"], true);
+    let seq = u(0);
+    let t0 = std::time::Instant::now();
+    let (code, again) = request(
+        "GET",
+        &format!("/api/contact-map/bands?after={}", seq + 1_000_000),
+        "",
+    );
+    assert_eq!(code, 200);
+    assert!(
+        t0.elapsed() < Duration::from_secs(1),
+        "a newer map than asked for is answered at once"
+    );
+    assert!(again.len() == bands.len());
+    assert_eq!(json("GET", "/api/contact-map/bands?after=x", "").0, 400);
+    assert_eq!(json("POST", "/api/contact-map", r#"{"on": "yes"}"#).0, 400);
+    assert_eq!(json("POST", "/api/contact-map", r#"{"on": false}"#).0, 200);
+}
+
+#[test]
+fn a_scene_without_meshes_has_no_contact_map() {
+    let mut scene = server().scene.clone();
+    scene.mesh_b = None;
+    let (tx, rx) = std::sync::mpsc::channel();
+    let s = scene.clone();
+    std::thread::spawn(move || {
+        let opts = ServeOptions {
+            port: 0,
+            ..Default::default()
+        };
+        serve(s, opts, move |addr| tx.send(addr).unwrap()).unwrap();
+    });
+    let addr = rx.recv_timeout(Duration::from_secs(30)).unwrap();
+    let get = |path: &str, body: Option<&str>| {
+        let mut s = TcpStream::connect(addr).unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+        let (m, b) = body.map_or(("GET", ""), |b| ("POST", b));
+        write!(
+            s,
+            "{m} {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\nContent-Length: {}\r\n\r\n{b}",
+            b.len()
+        )
+        .unwrap();
+        let mut out = String::new();
+        s.read_to_string(&mut out).unwrap();
+        out
+    };
+    assert!(get("/api/info", None).contains("\"available\":false"));
+    for (p, b) in [
+        ("/api/contact-map", None),
+        ("/api/contact-map/bands", None),
+        ("/api/contact-map", Some(r#"{"on": true}"#)),
+    ] {
+        let r = get(p, b);
+        assert!(r.starts_with("HTTP/1.1 409"), "{p}: {r}");
+        assert!(r.contains("needs both meshes"), "{r}");
+    }
+    assert!(get("/api/state", None).contains("\"contact_map\":null"));
+    // Starting in the mode is refused without both meshes.
+    let opts = ServeOptions {
+        port: 0,
+        contact_map: true,
+        ..Default::default()
+    };
+    assert!(serve(scene, opts, |_| {})
+        .unwrap_err()
+        .contains("needs both meshes"));
 }

@@ -1,6 +1,7 @@
 //! `ist view`: the live 3D view in the browser (the innersphere-view crate's server).
 
 use anyhow::Context;
+use innersphere::contact_map::Teeth;
 use innersphere::SharedTree;
 use innersphere_eval::motion::Motion;
 use innersphere_view::{serve, Scene, ServeOptions};
@@ -34,11 +35,32 @@ pub struct Args {
     /// The built-in scene instead of files: the generated tooth pair with a chewing motion.
     #[arg(long)]
     demo: bool,
+    /// Start in contact-map mode: both meshes coloured by their gap to each other (needs
+    /// both meshes; the page's "contact map" checkbox turns it on and off).
+    #[arg(long)]
+    contact_map: bool,
+    /// Teeth of A for the contact map's per-tooth list: a teeth-axes JSON (`{"3": {"c":
+    /// [x, y, z], ...}, ...}`, A's mesh frame); each vertex belongs to the nearest crown
+    /// centre within 10 mm.
+    #[arg(long)]
+    teeth_a: Option<PathBuf>,
+    /// Teeth of B (B's mesh frame).
+    #[arg(long)]
+    teeth_b: Option<PathBuf>,
 }
 
 /// Runs the subcommand; returns the process exit code (it serves until interrupted).
 pub fn run(args: Args) -> anyhow::Result<i32> {
-    let scene = if args.demo {
+    let teeth = |p: &Option<PathBuf>, flag: &str| -> anyhow::Result<Option<Teeth>> {
+        p.as_deref()
+            .map(|p| Teeth::load(p).with_context(|| format!("loading {flag}")))
+            .transpose()
+    };
+    let (teeth_a, teeth_b) = (
+        teeth(&args.teeth_a, "--teeth-a")?,
+        teeth(&args.teeth_b, "--teeth-b")?,
+    );
+    let mut scene = if args.demo {
         if args.a.is_some() || args.b.is_some() {
             anyhow::bail!("--demo takes no tree files");
         }
@@ -62,11 +84,22 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 .as_ref()
                 .map(|p| Motion::load(p).context("loading --motion"))
                 .transpose()?,
+            teeth_a: None,
+            teeth_b: None,
         }
     };
+    let meshes = scene.mesh_a.is_some() && scene.mesh_b.is_some();
+    if !meshes && (args.contact_map || teeth_a.is_some() || teeth_b.is_some()) {
+        anyhow::bail!(
+            "--contact-map, --teeth-a and --teeth-b need both meshes (--mesh-a and --mesh-b)"
+        );
+    }
+    scene.teeth_a = teeth_a;
+    scene.teeth_b = teeth_b;
     let opts = ServeOptions {
         port: args.port,
         stiffness: args.stiffness,
+        contact_map: args.contact_map,
         ..ServeOptions::default()
     };
     let open = args.open;

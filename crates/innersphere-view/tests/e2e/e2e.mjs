@@ -22,7 +22,14 @@
 //   8. motion (if the demo has one): #play advances the motion time, #timeline scrubs;
 //   9. haptic mode (if offered): the tool stops short of the device pose, a device force,
 //      the ghost and the device-force arrow drawn, the collision thread's rate shown;
-//      screenshot haptic.png.
+//      screenshot haptic.png;
+//  10. contact map (if offered): the panel's checkbox turns it on: vertex colours on both
+//      meshes, the legend (7 bands); apart every vertex is far (grey); in contact the
+//      contact bands appear on both and the colours change again when B moves deeper; the
+//      per-tooth list (run.sh's demo teeth); the binary API's size; B alone shows its
+//      surface in the contact colours (screenshot contact-map.png); while B is dragged
+//      (poses at 60 Hz) maps come at ≥ 10 Hz and the page's colours follow to the last
+//      pose; off again: the plain colours.
 
 import { chromium } from 'playwright-core';
 import fs from 'node:fs';
@@ -43,6 +50,7 @@ function check(name, ok, detail = '') {
   return !!ok;
 }
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+const num3 = (x) => (typeof x === 'number' ? x.toPrecision(3) : String(x));
 
 /** Polls `fn` (async, returns truthy when done) until it is truthy or `ms` pass. */
 async function until(fn, ms, every = 100) {
@@ -372,6 +380,128 @@ try {
       rates ? `servo ${rates.servo.toFixed(0)} Hz, collision ${rates.collision.toFixed(0)} Hz, page "${rates.shown}"` : 'no');
     await page.screenshot({ path: path.join(outDir, 'haptic.png') });
     await page.selectOption('#mode', 'free');
+  }
+
+  // 10. Contact map.
+  const cmInfo = info.body && info.body.contact_map;
+  if (cmInfo && cmInfo.available && contactPose) {
+    const cm = () => page.evaluate(() => {
+      const c = window.__ist.contactMap;
+      return { ...c, vertexColors: c.vertexColors(), legendRows: c.legendRows(), overlayShown: c.overlayShown() };
+    });
+    const close7 = (p, q) => p && q && p.every((x, k) => Math.abs(x - q[k]) < 1e-9);
+    /** The page's map once it shows B at `pose` (and a newer map than `after`). */
+    const shownAt = (pose, after = 0) => until(async () => {
+      const c = await cm();
+      return c.shownSeq > after && close7(c.pose, pose) ? c : null;
+    }, 20000);
+    const sum = (a) => a.reduce((x, y) => x + y, 0);
+    const panel = await page.evaluate(() => ({
+      hidden: document.getElementById('contact-map-panel').hidden,
+      checked: document.getElementById('contact-map').checked,
+    }));
+    const st0 = (await getJson('/api/state')).body.contact_map;
+    check('contact map offered: panel shown, off at the start', !panel.hidden && !panel.checked && st0 && st0.on === false,
+      `panel ${JSON.stringify(panel)}, state ${JSON.stringify(st0)}`);
+    await page.evaluate((p) => window.__ist.setPose(p), apartPose);
+    await page.check('#contact-map');
+    const far = cmInfo.legend.length - 1;
+    const apart = await shownAt(apartPose);
+    check('contact map on: a map arrives, both meshes in vertex colours, legend shown',
+      apart && apart.vertexColors.every(Boolean) && apart.legendRows === cmInfo.legend.length && apart.overlayShown,
+      apart ? `map ${apart.shownSeq} (${apart.status}, ${num3(apart.compute_ms)} ms), ${apart.legendRows} legend rows, vertex colours ${apart.vertexColors}` : JSON.stringify(await cm()));
+    check('apart: every vertex far (light grey)', apart && apart.counts.a[far] === sum(apart.counts.a) && apart.counts.b[far] === sum(apart.counts.b),
+      apart ? `A ${JSON.stringify(apart.counts.a)}, B ${JSON.stringify(apart.counts.b)}` : 'no map');
+    const cp = contactPose.split(' ').map(Number);
+    await page.evaluate((p) => window.__ist.setPose(p), cp);
+    const touch = await shownAt(cp, apart ? apart.shownSeq : 0);
+    const inContact = (c) => c[0] + c[1] + c[2];
+    check('B in contact: the colours change, contact bands (< 0.1 mm) on both',
+      touch && inContact(touch.counts.a) > 0 && inContact(touch.counts.b) > 0,
+      touch ? `map ${touch.shownSeq}: A ${JSON.stringify(touch.counts.a)}, B ${JSON.stringify(touch.counts.b)}` : JSON.stringify(await cm()));
+    const deeper = cp.slice();
+    deeper[2] += 0.25;
+    await page.evaluate((p) => window.__ist.setPose(p), deeper);
+    const deep = await shownAt(deeper, touch ? touch.shownSeq : 0);
+    check('B deeper: newer map, more of both inside the other (purple)',
+      touch && deep && deep.counts.a[0] > touch.counts.a[0] && deep.counts.b[0] > touch.counts.b[0],
+      deep ? `map ${deep.shownSeq}: inside A ${touch && touch.counts.a[0]} → ${deep.counts.a[0]}, B ${touch && touch.counts.b[0]} → ${deep.counts.b[0]}` : 'no map');
+    // The per-tooth list (run.sh gives the demo one molar per body).
+    if (cmInfo.teeth.a && cmInfo.teeth.b) {
+      const teeth = await until(async () => {
+        const c = await cm();
+        return c.teeth && deep && c.teeth.seq >= deep.shownSeq ? c.teeth : null;
+      }, 5000);
+      const rows = await page.evaluate(() => document.querySelectorAll('#cm-teeth td').length);
+      check('per-tooth list: tooth 3 of A and 30 of B in contact, shown',
+        teeth && teeth.a[0].tooth === 3 && teeth.b[0].tooth === 30 && teeth.a[0].min_gap < 0 && teeth.b[0].min_gap < 0
+        && teeth.a[0].area_within_0_1 > 0 && rows === 10,
+        teeth ? `A ${JSON.stringify(teeth.a[0])}; B ${JSON.stringify(teeth.b[0])}; ${rows} cells` : 'no list');
+    }
+    const meshA = new DataView(await (await fetch(`${base}/api/mesh?body=a`)).arrayBuffer());
+    const meshB = new DataView(await (await fetch(`${base}/api/mesh?body=b`)).arrayBuffer());
+    const bands = await (await fetch(`${base}/api/contact-map/bands`)).arrayBuffer();
+    const bv = new DataView(bands);
+    check('GET /api/contact-map/bands: one byte per vertex of each mesh', bands.byteLength === 72 + meshA.getUint32(0, true) + meshB.getUint32(0, true)
+      && bv.getUint32(4, true) === meshA.getUint32(0, true) && bv.getUint32(8, true) === meshB.getUint32(0, true),
+    `${bands.byteLength} bytes for ${meshA.getUint32(0, true)} + ${meshB.getUint32(0, true)} vertices`);
+    // B alone: the camera turns to its surface that faces A, drawn in the map's colours
+    // (pixels of the contact bands' red and purple hues in the picture).
+    await page.mouse.move(5, 5);
+    await page.selectOption('#cm-show', 'b');
+    await sleep(500);
+    const pic = await page.locator('#view').screenshot();
+    fs.writeFileSync(path.join(outDir, 'contact-map.png'), pic);
+    const hot = await page.evaluate(async (b64) => {
+      const img = new Image();
+      img.src = `data:image/png;base64,${b64}`;
+      await img.decode();
+      const c = document.createElement('canvas');
+      c.width = img.width; c.height = img.height;
+      const g = c.getContext('2d');
+      g.drawImage(img, 0, 0);
+      const d = g.getImageData(0, 0, c.width, c.height).data;
+      let n = 0;
+      for (let i = 0; i < d.length; i += 4) if (d[i] > 90 && d[i] > 2 * d[i + 1] + 20) n++;
+      return n;
+    }, pic.toString('base64'));
+    const alone = await page.evaluate(() => window.__ist.contactMap.shown);
+    check('B alone: its surface facing A shows the contact colours (red/purple pixels)', alone === 'b' && hot > 200,
+      `${hot} red or purple pixels`);
+    await page.selectOption('#cm-show', 'both');
+    // Dragging: B's pose changes at 60 Hz for 2 s, posted as a page posts a gizmo drag
+    // (from here: this headless page, drawing in software, runs its tasks only between
+    // frames of ~45 ms and would post and fetch at a few hertz).
+    const u0 = (await cm()).updates;
+    const s0 = (await getJson('/api/state')).body.contact_map.seq;
+    const tDrag = Date.now();
+    let rate = 0;
+    let last = null;
+    for (let i = 0; Date.now() - tDrag < 2000; i++) {
+      last = cp.slice();
+      last[0] = 0.4 * Math.sin(i / 10);
+      last[2] += 0.1 * Math.cos(i / 7);
+      await postJson('/api/pose', { pose_b: last });
+      await sleep(16);
+      if (i % 20 === 19) rate = Math.max(rate, (await getJson('/api/state')).body.contact_map.rate_hz);
+    }
+    const secs = (Date.now() - tDrag) / 1000;
+    const maps = (await getJson('/api/state')).body.contact_map.seq - s0;
+    const updates = (await cm()).updates - u0;
+    const caught = await shownAt(last);
+    check('dragging B (poses at 60 Hz): ≥ 10 maps/s; the page\'s colours follow, to the last pose',
+      maps / secs >= 10 && updates > 0 && caught,
+      `${(maps / secs).toFixed(1)} maps/s (state rate ${rate} Hz), ${(updates / secs).toFixed(1)} colour updates/s on the page, `
+      + `last map ${caught ? caught.shownSeq : 'not'} shown (${caught ? num3(caught.paint_ms) : '?'} ms to paint)`);
+    await page.uncheck('#contact-map');
+    const off = await until(async () => {
+      const c = await cm();
+      const s = (await getJson('/api/state')).body.contact_map;
+      return !c.on && !c.overlayShown && c.vertexColors.every((v) => !v) && s.on === false ? c : null;
+    }, 3000);
+    check('contact map off: the plain colours back, legend hidden, server off', off, off ? `vertex colours ${off.vertexColors}` : JSON.stringify(await cm()));
+  } else {
+    console.log('     (no contact map in /api/info: contact-map checks skipped)');
   }
 
   check('no script errors on the page', pageErrors.length === 0, pageErrors.join(' | '));

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# End-to-end test of the `ist view` page: starts `ist view --demo` on a free port, drives
-# the page with a headless Chromium (software WebGL) through playwright-core, and stops
-# the server on exit.
+# End-to-end test of the `ist view` page: starts `ist view --demo` (with a tooth per body for
+# the contact map's list) on a free port, drives the page with a headless Chromium
+# (software WebGL) through playwright-core, and stops the server on exit.
 #
 #   cargo build --release -p ist                  # the caller builds the binary
 #   bash crates/innersphere-view/tests/e2e/run.sh [OUTDIR]
@@ -32,7 +32,9 @@ OUTDIR="$(cd "$OUTDIR" && pwd)"
 
 # The server: --port 0 picks a free port; it prints its URL on stdout.
 LOG="$OUTDIR/server.log"
-"$IST" view --demo --port 0 >"$LOG" 2>&1 &
+# The demo's teeth (one molar each, crown centres of the generated pair) give the contact
+# map's per-tooth list something to show.
+"$IST" view --demo --port 0 --teeth-a "$HERE/demo_teeth_a.json" --teeth-b "$HERE/demo_teeth_b.json" >"$LOG" 2>&1 &
 SERVER=$!
 cleanup() {
   if kill -0 "$SERVER" 2>/dev/null; then

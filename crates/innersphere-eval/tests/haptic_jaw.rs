@@ -10,7 +10,8 @@ use innersphere_testkit::data as common;
 
 use innersphere::glam::DQuat;
 use innersphere::haptic::{
-    occlude, CollisionOptions, DeviceClass, HapticOptions, OcclusionOptions,
+    occlude, occlude_free, CollisionOptions, DeviceClass, FreeOcclusionOptions, HapticOptions,
+    OcclusionOptions,
 };
 use innersphere::{BuildOptions, Mesh, Pair, Pose, SharedTree, SphereTree};
 use innersphere_eval::haptic::{crown_centres, run, temporomandibular_joints, Session};
@@ -214,5 +215,68 @@ fn occlusion_finds_the_scanned_bite_from_open_starts() {
             .fold(0.0, f64::max);
         eprintln!("open {open} side {side} yaw {yaw} roll {roll}: {} steps, {secs:.2} s, landmarks within {worst:.3} mm", o.steps);
         assert!(worst <= 0.5, "landmark {worst} mm from the scanned bite");
+    }
+}
+
+/// A free segment (no joints) from 8 random open starts (1–4 mm open along the pair's "up",
+/// ±1.5 mm sideways and forwards, ±3° yaw, ±2° roll and pitch about the crowns' centre, drawn
+/// from a seed): `occlude_free` chooses a pose with every crown centre of the mandible within
+/// 0.5 mm of the scanned bite, each in at most 10 s.
+#[test]
+#[ignore = "real data: run with --ignored"]
+fn free_occlusion_finds_the_scanned_bite_from_random_open_starts() {
+    let _serial = serial();
+    let j = jaw();
+    let (up, left, ant) = (j.frame.up, j.frame.left, j.frame.anterior);
+    let crowns: Vec<_> = crown_centres(&common::data("jaw/ofj_p26_teeth_axes_mandible.json"))
+        .unwrap()
+        .into_iter()
+        .map(|(_, c)| c)
+        .collect();
+    let centre = crowns.iter().sum::<innersphere::glam::DVec3>() / crowns.len() as f64;
+    // xorshift64: the starts are drawn, not picked.
+    let mut state = 0x5eed_0005_u64;
+    let mut draw = |lo: f64, hi: f64| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
+    };
+    let opts = FreeOcclusionOptions {
+        closing: OcclusionOptions {
+            axis: up,
+            contact_stiffness: 1000.0,
+            max_seconds: 20.0,
+            ..Default::default()
+        },
+        lateral: left,
+        ..Default::default()
+    };
+    for _ in 0..8 {
+        let open = draw(1.0, 4.0);
+        let t = -up * open + left * draw(-1.5, 1.5) + ant * draw(-1.5, 1.5);
+        let q = DQuat::from_axis_angle(up, draw(-3.0, 3.0).to_radians())
+            * DQuat::from_axis_angle(ant, draw(-2.0, 2.0).to_radians())
+            * DQuat::from_axis_angle(left, draw(-2.0, 2.0).to_radians());
+        let from = Pose::new(t + centre - q * centre, q).unwrap();
+        let t0 = std::time::Instant::now();
+        let f = occlude_free(&j.a, &j.b, &Pose::IDENTITY, &from, &opts).unwrap();
+        let secs = t0.elapsed().as_secs_f64();
+        let worst = crowns
+            .iter()
+            .map(|p| (f.pose.transform_point(*p) - *p).length())
+            .fold(0.0, f64::max);
+        eprintln!(
+            "open {open:.2}: {} candidates, chosen reached from {} of {} starts, {secs:.2} s, crowns within {worst:.3} mm",
+            f.candidates.len(),
+            f.candidates[0].starts,
+            opts.starts
+        );
+        assert!(f.converged);
+        assert!(secs <= 10.0, "{secs} s");
+        assert!(
+            worst <= 0.5,
+            "a crown centre {worst} mm from the scanned bite"
+        );
     }
 }

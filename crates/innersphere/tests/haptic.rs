@@ -13,7 +13,8 @@ mod haptic_util;
 use glam::{DQuat, DVec3};
 use haptic_util::{build, on_slab, options, serial, slab_and_block};
 use innersphere::haptic::{
-    occlude, DeviceClass, HapticLoop, HapticOptions, OcclusionOptions, RigidBody,
+    occlude, occlude_free, DeviceClass, FreeOcclusionOptions, HapticLoop, HapticOptions, Joints,
+    OcclusionOptions, RigidBody,
 };
 use innersphere::{shapes, Pair, Pose, SphereTree};
 use proptest::prelude::*;
@@ -321,6 +322,88 @@ fn occlusion_of_a_peg_in_a_ring_ends_in_the_same_seat() {
         assert!(
             e.transform_point(DVec3::ZERO).truncate().length() < 0.01,
             "{e:?}"
+        );
+    }
+}
+
+/// A free peg closed from starts spread around its start: every start seats it centred and
+/// upright in the ring, the candidates account for every start, the same seed gives the same
+/// answer, and bad options are refused.
+#[test]
+fn free_occlusion_from_many_starts_seats_the_peg() {
+    let _serial = serial();
+    let a = build(&shapes::torus(2.0, 1.0, 96, 48), 64);
+    let b = build(&shapes::ellipsoid(DVec3::new(1.4, 1.4, 3.0), 5), 48);
+    let opts = FreeOcclusionOptions {
+        closing: OcclusionOptions {
+            axis: DVec3::Z,
+            force: 5.0,
+            contact_stiffness: 20.0,
+            ..Default::default()
+        },
+        lateral: DVec3::X,
+        starts: 8,
+        spread: 0.4,
+        spread_angle: 0.05,
+        ..Default::default()
+    };
+    let from = Pose::from_translation(DVec3::new(0.2, -0.1, -5.0));
+    let f = occlude_free(&a, &b, &Pose::IDENTITY, &from, &opts).unwrap();
+    assert!(f.converged && f.converged_starts == 8, "{f:?}");
+    assert_eq!(f.candidates.iter().map(|c| c.starts).sum::<usize>(), 8);
+    assert_eq!(f.pose, f.candidates[0].pose);
+    for c in &f.candidates {
+        // The turn about its own axis is a symmetry of the peg: its axis is what must agree.
+        for p in [DVec3::new(0.0, 0.0, 3.0), DVec3::new(0.0, 0.0, -3.0)] {
+            let q = c.pose.transform_point(p);
+            assert!(q.truncate().length() < 0.01, "{c:?}");
+        }
+        assert!(
+            c.contacts > 0 && c.lateral_side > 0 && c.other_side > 0,
+            "{c:?}"
+        );
+        assert!(
+            c.contact_area > 0.0 && c.volume > 0.0 && c.lateral_stiffness > 0.0,
+            "{c:?}"
+        );
+    }
+    assert_eq!(
+        f,
+        occlude_free(&a, &b, &Pose::IDENTITY, &from, &opts).unwrap()
+    );
+    let joints = Joints {
+        points: [DVec3::ZERO; 2],
+        anchors: [DVec3::ZERO; 2],
+        stiffness: 1.0,
+    };
+    for bad in [
+        FreeOcclusionOptions {
+            closing: OcclusionOptions {
+                joints: Some(joints),
+                ..opts.closing
+            },
+            ..opts
+        },
+        FreeOcclusionOptions { starts: 0, ..opts },
+        FreeOcclusionOptions {
+            spread: f64::NAN,
+            ..opts
+        },
+        FreeOcclusionOptions {
+            lateral: DVec3::Z,
+            ..opts
+        },
+        FreeOcclusionOptions {
+            closing: OcclusionOptions {
+                force: -1.0,
+                ..opts.closing
+            },
+            ..opts
+        },
+    ] {
+        assert!(
+            occlude_free(&a, &b, &Pose::IDENTITY, &from, &bad).is_err(),
+            "{bad:?}"
         );
     }
 }

@@ -3,8 +3,8 @@
 
 use anyhow::Context;
 use innersphere::glam::DVec3;
-use innersphere::haptic::{occlude, OcclusionOptions};
-use innersphere::{Pair, Pose, SphereTree};
+use innersphere::haptic::{occlude, occlude_free, FreeOcclusionOptions, OcclusionOptions};
+use innersphere::{Pair, Pose, SharedTree, SphereTree};
 use innersphere_eval::haptic::{crown_centres, temporomandibular_joints};
 use innersphere_eval::motion::AnatomicalFrame;
 use serde_json::json;
@@ -28,9 +28,11 @@ pub struct Args {
     /// Closing force (N).
     #[arg(long, default_value_t = 5.0)]
     force: f64,
-    /// Contact stiffness: penalty force per penetration volume (N/mm³).
-    #[arg(long, default_value_t = 10.0)]
-    contact_stiffness: f64,
+    /// Contact stiffness: penalty force per penetration volume (N/mm³). Default 10 with the
+    /// joints, 1000 with --free (stiff, so that the free segment's cusps do not sink into
+    /// each other and slide over).
+    #[arg(long)]
+    contact_stiffness: Option<f64>,
     /// Give up after this much simulated time (s).
     #[arg(long, default_value_t = 30.0)]
     max_seconds: f64,
@@ -48,9 +50,22 @@ pub struct Args {
     /// their places in the reference pose.
     #[arg(long, default_value_t = 20.0)]
     joint_stiffness: f64,
-    /// B is a free body: no joints (a mandible then slides sideways along its cusps).
+    /// B is a free segment (no joints): closed from --starts places around the start
+    /// (within --spread mm sideways and forwards and 2 × --spread degrees of yaw), the rest
+    /// poses ranked, the best bilateral one chosen (docs/OCCLUSION.md); the JSON lists the
+    /// candidates.
     #[arg(long)]
     free: bool,
+    /// With --free: closings in all.
+    #[arg(long, default_value_t = 120)]
+    starts: usize,
+    /// With --free: how far the starts spread sideways and forwards (mm; yaw: twice this in
+    /// degrees).
+    #[arg(long, default_value_t = 2.5)]
+    spread: f64,
+    /// With --free: the seed of the spread.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
     /// Print JSON.
     #[arg(long)]
     json: bool,
@@ -84,15 +99,56 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let opts = OcclusionOptions {
         axis,
         force: args.force,
-        contact_stiffness: args.contact_stiffness,
+        contact_stiffness: args
+            .contact_stiffness
+            .unwrap_or(if args.free { 1000.0 } else { 10.0 }),
         max_seconds: args.max_seconds,
         joints: (!args.free)
             .then(|| temporomandibular_joints(&frame, &reference, args.joint_stiffness)),
         ..OcclusionOptions::default()
     };
     let t0 = std::time::Instant::now();
-    let mut pair = Pair::new(a, b);
-    let o = occlude(&mut pair, &Pose::IDENTITY, &from, &opts)?;
+    let (a, b) = (SharedTree::new(a), SharedTree::new(b));
+    let mut candidates = serde_json::Value::Null;
+    let o = if args.free {
+        let fo = FreeOcclusionOptions {
+            closing: opts,
+            lateral: frame.left,
+            starts: args.starts,
+            spread: args.spread,
+            spread_angle: (2.0 * args.spread).to_radians(),
+            seed: args.seed,
+            ..FreeOcclusionOptions::default()
+        };
+        let f = occlude_free(&a, &b, &Pose::IDENTITY, &from, &fo)?;
+        candidates = json!(f
+            .candidates
+            .iter()
+            .map(|c| json!({
+                "pose": c.pose.to_array(),
+                "starts": c.starts,
+                "converged": c.converged,
+                "contacts": c.contacts,
+                "contacts_left": c.lateral_side,
+                "contacts_right": c.other_side,
+                "contact_area": c.contact_area,
+                "volume": c.volume,
+                "lateral_stiffness": c.lateral_stiffness,
+                "landmark_error_max": landmarks
+                    .iter()
+                    .map(|(_, p)| (c.pose.transform_point(*p) - reference.transform_point(*p)).length())
+                    .fold(0.0, f64::max),
+            }))
+            .collect::<Vec<_>>());
+        // The chosen pose's own rest, for its contact figures.
+        let mut pair = Pair::new(&a, &b);
+        let mut o = occlude(&mut pair, &Pose::IDENTITY, &f.pose, &opts)?;
+        o.converged = f.converged;
+        o
+    } else {
+        let mut pair = Pair::new(&a, &b);
+        occlude(&mut pair, &Pose::IDENTITY, &from, &opts)?
+    };
     let wall = t0.elapsed().as_secs_f64();
     let errors: Vec<(String, f64)> = landmarks
         .iter()
@@ -122,6 +178,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             "joints": opts.joints.map(|j| json!({"points": j.points.map(|p| p.to_array()), "anchors": j.anchors.map(|p| p.to_array()), "stiffness": j.stiffness})),
             "landmark_error_max": worst,
             "landmark_errors": errors.iter().map(|(n, d)| json!({"landmark": n, "error": d})).collect::<Vec<_>>(),
+            "candidates": candidates,
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {

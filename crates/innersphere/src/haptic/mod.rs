@@ -16,6 +16,7 @@ mod blend;
 pub mod body;
 mod contact;
 pub mod device;
+pub mod free_occlusion;
 mod mat6;
 pub mod model;
 pub mod multirate;
@@ -27,6 +28,7 @@ mod step;
 
 pub use body::{BodyState, RigidBody, TOOTH_DENSITY};
 pub use device::{Coupling, DeviceClass, DeviceLimits};
+pub use free_occlusion::{occlude_free, Candidate, FreeOcclusion, FreeOcclusionOptions};
 pub use model::ContactModel;
 pub use multirate::{CollisionOptions, CollisionStats, MultirateLoop};
 pub use occlusion::{occlude, Joints, Occlusion, OcclusionOptions};

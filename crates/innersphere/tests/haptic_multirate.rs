@@ -191,7 +191,9 @@ fn the_servo_never_waits_for_a_stuck_collision_thread() {
         ticks += 1;
     }
     assert!(ticks > 1000, "{ticks} ticks in 0.25 s");
-    assert!(worst < 5e-3, "a servo tick took {worst} s");
+    // A shared lock would hold a tick for the query's 0.3 s; a loaded machine may preempt a
+    // tick for milliseconds (5.4 ms seen with builds running beside it).
+    assert!(worst < 0.1, "a servo tick took {worst} s");
     // The collision thread was stuck in its delay all along.
     assert_eq!(hl.collision_queries(), 0);
     let stats = hl.finish();

@@ -2,6 +2,7 @@
 //! 0.2 mm, and the contact spots.
 
 use super::teeth::Teeth;
+use crate::mesh::union_find::UnionFind;
 use crate::mesh::Mesh;
 
 /// The gap (mm) within which a vertex is in contact for [`RegionSummary::spots`].
@@ -44,24 +45,13 @@ pub fn summarise(mesh: &Mesh, gaps: &[f64], teeth: &Teeth, region: &[u32]) -> Ve
         }
     }
     // Spots: union-find over the edges whose ends are both in contact and on one tooth.
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    fn find(parent: &mut [u32], mut v: u32) -> u32 {
-        while parent[v as usize] != v {
-            let g = parent[parent[v as usize] as usize];
-            parent[v as usize] = g;
-            v = g;
-        }
-        v
-    }
+    let mut sets = UnionFind::new(n);
     let contact = |v: usize| gaps[v] <= SPOT_GAP;
     for t in &mesh.triangles {
         for k in 0..3 {
             let (u, v) = (t[k] as usize, t[(k + 1) % 3] as usize);
             if u < n && v < n && contact(u) && contact(v) && region[u] == region[v] {
-                let (ru, rv) = (find(&mut parent, u as u32), find(&mut parent, v as u32));
-                if ru != rv {
-                    parent[ru.max(rv) as usize] = ru.min(rv);
-                }
+                sets.union(u as u32, v as u32);
             }
         }
     }
@@ -90,7 +80,7 @@ pub fn summarise(mesh: &Mesh, gaps: &[f64], teeth: &Teeth, region: &[u32]) -> Ve
         if g <= 0.2 {
             s.area_within_0_2 += area[v];
         }
-        if contact(v) && find(&mut parent, v as u32) == v as u32 {
+        if contact(v) && sets.find(v as u32) == v as u32 {
             s.spots += 1;
         }
     }

@@ -2,6 +2,7 @@
 //! colours (an arch by its clearance to the opposing one).
 
 use super::mesh::ExactMesh;
+use crate::mesh::union_find::UnionFind;
 use crate::pose::Pose;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -55,23 +56,12 @@ pub fn vertex_gaps(
         .collect();
     // Groups of vertices on one side of B's surface (union-find over the safe edges).
     let n = pts.len();
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    fn find(parent: &mut [u32], mut v: u32) -> u32 {
-        while parent[v as usize] != v {
-            let g = parent[parent[v as usize] as usize];
-            parent[v as usize] = g;
-            v = g;
-        }
-        v
-    }
+    let mut sets = UnionFind::new(n);
     for u in 0..n {
         for &v in a.neighbours(u as u32) {
             let v = v as usize;
             if v > u && (pts[u] - pts[v]).length() < gaps[u] + gaps[v] {
-                let (ru, rv) = (find(&mut parent, u as u32), find(&mut parent, v as u32));
-                if ru != rv {
-                    parent[ru.max(rv) as usize] = ru.min(rv);
-                }
+                sets.union(u as u32, v as u32);
             }
         }
     }
@@ -79,7 +69,7 @@ pub fn vertex_gaps(
     let mut far: Vec<u32> = vec![u32::MAX; n];
     let mut roots = Vec::new();
     for v in 0..n {
-        let r = find(&mut parent, v as u32) as usize;
+        let r = sets.find(v as u32) as usize;
         if far[r] == u32::MAX {
             roots.push(r);
             far[r] = v as u32;
@@ -100,7 +90,7 @@ pub fn vertex_gaps(
         inside[r] = i;
     }
     let side: Vec<bool> = (0..n)
-        .map(|v| inside[find(&mut parent, v as u32) as usize])
+        .map(|v| inside[sets.find(v as u32) as usize])
         .collect();
     // Inside: the exact distance, negative (also beyond the cap).
     gaps.par_iter_mut().enumerate().for_each(|(v, g)| {

@@ -3,6 +3,7 @@
 
 use super::bound;
 use crate::mesh::bvh::TriangleBvh;
+use crate::mesh::union_find::UnionFind;
 use crate::mesh::winding::FastWinding;
 use crate::mesh::Mesh;
 use glam::DVec3;
@@ -42,23 +43,12 @@ impl ExactMesh {
         let (shapes, normals) = bound::shapes(winding.bvh());
         let n = mesh.vertices.len();
         // Union-find over vertices.
-        let mut parent: Vec<u32> = (0..n as u32).collect();
-        fn find(parent: &mut [u32], mut v: u32) -> u32 {
-            while parent[v as usize] != v {
-                let g = parent[parent[v as usize] as usize];
-                parent[v as usize] = g;
-                v = g;
-            }
-            v
-        }
+        let mut sets = UnionFind::new(n);
         let mut degree = vec![0u32; n + 1];
         for t in &mesh.triangles {
             for k in 0..3 {
                 let (u, v) = (t[k], t[(k + 1) % 3]);
-                let (ru, rv) = (find(&mut parent, u), find(&mut parent, v));
-                if ru != rv {
-                    parent[ru.max(rv) as usize] = ru.min(rv);
-                }
+                sets.union(u, v);
                 degree[u as usize] += 1;
                 degree[v as usize] += 1;
             }
@@ -115,7 +105,7 @@ impl ExactMesh {
             if !used[v as usize] {
                 continue;
             }
-            let r = find(&mut parent, v);
+            let r = sets.find(v);
             let c = *comp_of_root.entry(r).or_insert_with(|| {
                 best.push((v, vec![(f64::NEG_INFINITY, v); dirs.len()]));
                 best.len() - 1

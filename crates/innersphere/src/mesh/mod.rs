@@ -7,6 +7,7 @@ pub mod closest;
 pub mod io;
 pub mod mass;
 pub mod report;
+pub mod union_find;
 pub mod winding;
 
 pub use io::{load, load_bytes, save_obj, save_stl, Format};

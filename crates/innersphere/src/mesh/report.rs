@@ -6,6 +6,7 @@
 
 use serde::Serialize;
 
+use super::union_find::UnionFind;
 use super::Mesh;
 
 /// Counts and flags that tell whether a mesh is a usable closed solid.
@@ -170,36 +171,21 @@ fn edge_stats(mesh: &Mesh) -> EdgeStats {
 /// vertices used by some triangle.
 fn components(mesh: &Mesh) -> (usize, usize) {
     let nv = mesh.vertices.len();
-    let mut parent: Vec<u32> = (0..nv as u32).collect();
+    let mut sets = UnionFind::new(nv);
     let mut used = vec![false; nv];
-    fn find(parent: &mut [u32], mut x: u32) -> u32 {
-        while parent[x as usize] != x {
-            let grand = parent[parent[x as usize] as usize];
-            parent[x as usize] = grand; // path halving
-            x = grand;
-        }
-        x
-    }
     for &[a, b, c] in &mesh.triangles {
         used[a as usize] = true;
         used[b as usize] = true;
         used[c as usize] = true;
-        let mut ra = find(&mut parent, a);
         for v in [b, c] {
-            let rv = find(&mut parent, v);
-            if rv != ra {
-                // Attach to the smaller root so that trees stay shallow in practice.
-                let (lo, hi) = (ra.min(rv), ra.max(rv));
-                parent[hi as usize] = lo;
-                ra = lo;
-            }
+            sets.union(a, v);
         }
     }
     let mut count = 0;
     let mut referenced = 0;
     for (v, _) in used.iter().enumerate().filter(|(_, &u)| u) {
         referenced += 1;
-        if find(&mut parent, v as u32) == v as u32 {
+        if sets.find(v as u32) == v as u32 {
             count += 1;
         }
     }

@@ -3,7 +3,9 @@
 
 use anyhow::Context;
 use innersphere::glam::DVec3;
-use innersphere::haptic::{occlude, occlude_free, FreeOcclusionOptions, OcclusionOptions};
+use innersphere::haptic::{
+    occlude, occlude_free, FreeOcclusionOptions, Occlusion, OcclusionOptions,
+};
 use innersphere::{Pair, Pose, SharedTree, SphereTree};
 use innersphere_eval::haptic::{crown_centres, temporomandibular_joints};
 use innersphere_eval::motion::AnatomicalFrame;
@@ -140,11 +142,18 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                     .fold(0.0, f64::max),
             }))
             .collect::<Vec<_>>());
-        // The chosen pose's own rest, for its contact figures.
-        let mut pair = Pair::new(&a, &b);
-        let mut o = occlude(&mut pair, &Pose::IDENTITY, &f.pose, &opts)?;
-        o.converged = f.converged;
-        o
+        // The chosen candidate's closing; with no closing in contact, nothing found: the
+        // start, not converged, no contact.
+        f.closing.unwrap_or(Occlusion {
+            pose: from,
+            converged: false,
+            steps: 0,
+            seconds: 0.0,
+            volume: 0.0,
+            max_depth: 0.0,
+            patches: vec![],
+            axis: opts.axis.normalize(),
+        })
     } else {
         let mut pair = Pair::new(&a, &b);
         occlude(&mut pair, &Pose::IDENTITY, &from, &opts)?

@@ -22,7 +22,7 @@
 //! 0.39 mm from the scanned bite at the worst crown centre, in 2–4 s on 2 cores
 //! (docs/OCCLUSION.md).
 
-use super::occlusion::{occlude, OcclusionOptions};
+use super::occlusion::{occlude, Occlusion, OcclusionOptions};
 use crate::error::{num, Error, Result};
 use crate::pose::Pose;
 use crate::query::{Pair, PenetrationOptions, SharedTree};
@@ -106,16 +106,18 @@ pub struct FreeOcclusion {
     pub converged: bool,
     /// The distinct rest poses with contact, best first.
     pub candidates: Vec<Candidate>,
+    /// The chosen candidate's closing (its steps, volume, depth, patches); `None` when no
+    /// closing ended in contact.
+    pub closing: Option<Occlusion>,
     /// Closings that came to rest, of all.
     pub converged_starts: usize,
 }
 
-/// Where one closing rested: its pose, whether it came to rest, its contact patches on the
-/// lateral side and on the other, and (for a cluster) how many starts ended there.
-#[derive(Debug, Clone, Copy)]
+/// Where one closing rested (`o.pose`), its contact patches on the lateral side and on the
+/// other, and (for a cluster) how many starts ended there.
+#[derive(Debug, Clone)]
 struct Rest {
-    pose: Pose,
-    converged: bool,
+    o: Occlusion,
     on: usize,
     off: usize,
     starts: usize,
@@ -214,11 +216,11 @@ pub fn occlude_free(
                 .iter()
                 .filter(|p| (p.point - cw).dot(lateral) > 0.0)
                 .count();
+            let off = o.patches.len() - on;
             Ok(Rest {
-                pose: o.pose,
-                converged: o.converged,
+                o,
                 on,
-                off: o.patches.len() - on,
+                off,
                 starts: 1,
             })
         })
@@ -244,13 +246,13 @@ pub fn occlude_free(
     let mut clusters: Vec<Rest> = Vec::new();
     for rest in rests {
         let rest = rest?;
-        converged_starts += rest.converged as usize;
+        converged_starts += rest.o.converged as usize;
         if rest.on + rest.off == 0 {
             continue;
         }
         match clusters
             .iter_mut()
-            .find(|k| apart(&k.pose, &rest.pose) < opts.same_pose)
+            .find(|k| apart(&k.o.pose, &rest.o.pose) < opts.same_pose)
         {
             Some(k) => k.starts += 1,
             None => clusters.push(rest),
@@ -268,7 +270,7 @@ pub fn occlude_free(
         .par_iter()
         .map(|k| {
             let mut pair = Pair::new(a, b);
-            let p = pair.penetration_with(pose_a, &k.pose, &popts);
+            let p = pair.penetration_with(pose_a, &k.o.pose, &popts);
             // The linear block (world); its part across the closing axis.
             let m = p.stiffness.linear;
             let (l, f) = (lateral, e2);
@@ -280,9 +282,9 @@ pub fn occlude_free(
             let half = 0.5 * (kxx + kyy);
             let disc = (0.25 * (kxx - kyy) * (kxx - kyy) + kxy * kxy).sqrt();
             Candidate {
-                pose: k.pose,
+                pose: k.o.pose,
                 starts: k.starts,
-                converged: k.converged,
+                converged: k.o.converged,
                 contacts: k.on + k.off,
                 lateral_side: k.on,
                 other_side: k.off,
@@ -292,13 +294,12 @@ pub fn occlude_free(
             }
         })
         .collect();
-    let (pose, converged) = candidates
-        .first()
-        .map_or((*from, false), |c| (c.pose, c.converged));
+    let closing = clusters.into_iter().next().map(|k| k.o);
     Ok(FreeOcclusion {
-        pose,
-        converged,
+        pose: closing.as_ref().map_or(*from, |o| o.pose),
+        converged: closing.as_ref().is_some_and(|o| o.converged),
         candidates,
         converged_starts,
+        closing,
     })
 }

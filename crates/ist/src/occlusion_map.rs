@@ -91,21 +91,15 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             let region = t.regions(&mesh.mesh().vertices);
             summarise(mesh.mesh(), gaps, t, &region)
         });
+        // Infinite gaps (no vertex, or none within reach) are written as null.
         json!({
             "mesh": name,
             "vertices": gaps.len(),
-            "min_gap": finite(min),
+            "min_gap": min,
             "vertices_inside": inside,
             "vertices_within_0_1": within(0.1),
             "vertices_within_0_2": within(0.2),
-            "teeth": teeth.map(|t| t.iter().map(|s| json!({
-                "tooth": s.tooth,
-                "vertices": s.vertices,
-                "min_gap": finite(s.min_gap),
-                "area_within_0_1": s.area_within_0_1,
-                "area_within_0_2": s.area_within_0_2,
-                "spots": s.spots,
-            })).collect::<Vec<_>>()),
+            "teeth": teeth,
         })
     };
     let report = json!({
@@ -153,13 +147,4 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
 /// A JSON number with 3 decimals (gaps in mm: µm), or "none".
 fn num(v: &serde_json::Value) -> String {
     v.as_f64().map_or("none".into(), |x| format!("{x:.3}"))
-}
-
-/// A finite number, or JSON null.
-fn finite(x: f64) -> serde_json::Value {
-    if x.is_finite() {
-        json!(x)
-    } else {
-        serde_json::Value::Null
-    }
 }

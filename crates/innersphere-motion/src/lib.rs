@@ -16,7 +16,10 @@
 
 pub mod clearance;
 pub mod csv;
-pub mod frame;
+/// The anatomical frame of a jaw pair, which lives in the library ([`innersphere::anatomy`]).
+pub mod frame {
+    pub use innersphere::anatomy::*;
+}
 pub mod generate;
 pub mod press;
 mod rng;

@@ -49,6 +49,7 @@
 
 #![deny(missing_docs)]
 
+pub mod anatomy;
 pub mod build;
 pub mod contact_map;
 pub mod error;
@@ -63,6 +64,7 @@ pub mod pose;
 pub mod progress;
 pub mod query;
 pub mod shapes;
+pub mod splint;
 pub mod tree;
 
 pub use build::{BuildOptions, BuildReport, Resolution};

@@ -18,6 +18,7 @@ mod print;
 mod progress;
 mod query;
 mod replay;
+mod splint;
 mod view;
 
 use clap::{Parser, Subcommand};
@@ -59,6 +60,9 @@ enum Command {
     /// Both arches coloured by their exact signed gap to each other (PLY), with the contacts
     /// per tooth.
     OcclusionMap(occlusion_map::Args),
+    /// The occlusal splint (surgical wafer) between two arches at a planned pose, as a
+    /// watertight binary STL.
+    Splint(splint::Args),
     /// A live 3D view in the browser: move B, watch contacts, forces, the inner spheres.
     View(view::Args),
 }
@@ -85,6 +89,7 @@ fn main() {
         Command::Haptic(a) => haptic::run(a),
         Command::Occlude(a) => occlude::run(a),
         Command::OcclusionMap(a) => occlusion_map::run(a),
+        Command::Splint(a) => splint::run(a),
         Command::View(a) => view::run(a),
     };
     match result {

@@ -2,6 +2,7 @@
 //! ([`inside`]) and the exact unsigned distance of every inside voxel to the surface
 //! ([`distance`]).
 
+pub mod columns;
 pub mod distance;
 pub mod grid;
 pub mod inside;

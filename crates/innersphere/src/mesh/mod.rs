@@ -6,6 +6,7 @@ pub mod bvh;
 pub mod closest;
 pub mod io;
 pub mod mass;
+pub mod ray;
 pub mod report;
 pub mod union_find;
 pub mod winding;

@@ -15,8 +15,8 @@
 //!   the [`scale`](AnatomicalFrame::scale)); the opening rotation turns about the axis
 //!   through it along left.
 
+use crate::{Error, Mesh, Result};
 use glam::DVec3;
-use innersphere::{Error, Mesh, Result};
 
 /// Distance of the opening hinge behind the lower incisal tip, in millimetres at scale 1.
 pub const HINGE_BEHIND: f64 = 95.0;
@@ -178,7 +178,7 @@ impl AnatomicalFrame {
     }
 
     /// The frame moved with body B by `pose` (directions turn, points move).
-    pub fn moved(&self, pose: &innersphere::Pose) -> AnatomicalFrame {
+    pub fn moved(&self, pose: &crate::Pose) -> AnatomicalFrame {
         AnatomicalFrame {
             up: pose.transform_vector(self.up),
             left: pose.transform_vector(self.left),
@@ -186,6 +186,20 @@ impl AnatomicalFrame {
             incisal: pose.transform_point(self.incisal),
             hinge: pose.transform_point(self.hinge),
             scale: self.scale,
+        }
+    }
+
+    /// The rigid motion that opens the jaw by `opening` at the incisal point: a rotation
+    /// about the hinge axis (through [`hinge`](Self::hinge), along [`left`](Self::left))
+    /// that moves the incisal point that far along its arc, downwards for a positive
+    /// opening. Compose it after B's pose: `frame.opening(o).then(&pose)`.
+    pub fn opening(&self, opening: f64) -> crate::Pose {
+        let r_inc = (self.incisal - self.hinge).length();
+        let theta = if r_inc > 0.0 { opening / r_inc } else { 0.0 };
+        let rotation = glam::DQuat::from_axis_angle(self.left, theta);
+        crate::Pose {
+            rotation,
+            translation: self.hinge - rotation * self.hinge,
         }
     }
 
@@ -245,7 +259,7 @@ fn plane_basis(n: DVec3) -> (DVec3, DVec3) {
 /// Eigen-decomposition of a symmetric 3×3 matrix by Jacobi rotations: eigenvalues ascending
 /// and their unit eigenvectors.
 #[allow(clippy::needless_range_loop)] // matrix code reads best with indices
-pub(crate) fn symmetric_eigen(m: [[f64; 3]; 3]) -> ([f64; 3], [DVec3; 3]) {
+fn symmetric_eigen(m: [[f64; 3]; 3]) -> ([f64; 3], [DVec3; 3]) {
     let mut a = m;
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for _ in 0..64 {

@@ -2,7 +2,6 @@
 //! as a watertight binary STL, with its measurements.
 
 use anyhow::Context;
-use innersphere::anatomy::AnatomicalFrame;
 use innersphere::splint::{self, SplintOptions};
 use innersphere::Pose;
 use std::path::PathBuf;
@@ -21,9 +20,11 @@ pub struct Args {
     #[arg(long, default_value = "0 0 0 1 0 0 0", allow_hyphen_values = true)]
     pose: String,
     /// Then open B about the pair's hinge axis by this much at the incisors (mm): the
-    /// intermediate splint's vertical opening.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    open: f64,
+    /// intermediate splint's vertical opening. `auto`: the least opening that leaves room
+    /// for the wafer (perforated over at most 0.5 % of its outline), as a final splint at
+    /// the final occlusion needs.
+    #[arg(long, default_value = "0", allow_hyphen_values = true)]
+    open: String,
     /// Gap between the wafer and each arch (mm), so that it seats.
     #[arg(long, default_value_t = SplintOptions::default().clearance)]
     clearance: f64,
@@ -53,12 +54,16 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         .pose
         .parse()
         .with_context(|| format!("--pose \"{}\"", args.pose))?;
-    if !args.open.is_finite() || args.open.abs() > 50.0 {
-        anyhow::bail!(
-            "--open must be a number of millimetres within ±50, got {}",
-            args.open
-        );
-    }
+    let open: Option<f64> = match args.open.trim() {
+        "auto" => None,
+        text => match text.parse::<f64>() {
+            Ok(o) if o.is_finite() && o.abs() <= 50.0 => Some(o),
+            _ => anyhow::bail!(
+                "--open must be `auto` or a number of millimetres within ±50, got \"{}\"",
+                args.open
+            ),
+        },
+    };
     crate::files::check_outputs(&[args.out.as_path()], &[&args.a, &args.b])?;
     let opts = SplintOptions {
         clearance: args.clearance,
@@ -70,15 +75,12 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     opts.validate()?;
     let a = crate::files::load_mesh(&args.a)?;
     let b = crate::files::load_mesh(&args.b)?;
-    let pose = if args.open != 0.0 {
-        let b_world: Vec<_> = b
-            .vertices
-            .iter()
-            .map(|v| pose.transform_point(*v))
-            .collect();
-        AnatomicalFrame::from_points(&a.vertices, &b_world)?
-            .opening(args.open)
-            .then(&pose)
+    let opening = match open {
+        Some(o) => o,
+        None => splint::least_opening(&a, &b, &pose, &opts)?,
+    };
+    let pose = if opening != 0.0 {
+        splint::opened(&a, &b, &pose, opening)?
     } else {
         pose
     };
@@ -98,8 +100,12 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             pose.rotation.z
         ]);
         v["out"] = args.out.display().to_string().into();
+        v["opened"] = opening.into();
         crate::print::print_json(&v)?;
     } else {
+        if opening != 0.0 {
+            println!("opened {opening:.2} mm at the incisors about the hinge");
+        }
         println!(
             "{}: {} triangles, {:.1} mm³, {} bod{}, {}",
             args.out.display(),

@@ -69,10 +69,16 @@ pub fn extract(s: &Shape) -> Result<(Mesh, usize)> {
                 for i in 1..=cx {
                     let k = (i - 1) + cx * (j - 1);
                     let z = s.mid[k] + dz;
-                    let mut g = (z - s.lower[k]).min(s.upper[k] - z).min(s.side[k]);
-                    if !s.keep[k] && g > 0.0 {
-                        g = -0.5 * h;
-                    }
+                    // Outside the outline or in a perforation the margin alone decides,
+                    // so the wall there stands the whole thickness of the wafer next to it.
+                    let side = s.side[k];
+                    let g = if side <= 0.0 {
+                        side
+                    } else if !s.keep[k] {
+                        -0.5 * h
+                    } else {
+                        (z - s.lower[k]).min(s.upper[k] - z).min(side)
+                    };
                     // Surface nets: negative inside.
                     layer[i + nx * j] = (-(g as f32)).clamp(-clamp, clamp);
                 }

@@ -136,6 +136,69 @@ pub fn make(a: &Mesh, b: &Mesh, pose: &Pose, opts: &SplintOptions) -> Result<Spl
     Ok(Splint { mesh, report })
 }
 
+/// The largest share of the outline that [`least_opening`] leaves perforated.
+pub const AUTO_PERFORATION: f64 = 0.005;
+/// The widest incisal opening [`least_opening`] tries, in model units (mm).
+pub const MAX_AUTO_OPENING: f64 = 10.0;
+
+/// B's `pose` followed by an opening of `opening` at the incisors about the pair's hinge
+/// axis (the [`AnatomicalFrame`](crate::anatomy::AnatomicalFrame) of A and B at `pose`):
+/// the intermediate splint's vertical opening, or the room a final splint needs for its
+/// material.
+pub fn opened(a: &Mesh, b: &Mesh, pose: &Pose, opening: f64) -> Result<Pose> {
+    if !opening.is_finite() {
+        return Err(Error::InvalidOption(format!(
+            "the opening must be a finite number, got {opening}"
+        )));
+    }
+    let b_world: Vec<DVec3> = b
+        .vertices
+        .iter()
+        .map(|v| pose.transform_point(*v))
+        .collect();
+    Ok(
+        crate::anatomy::AnatomicalFrame::from_points(&a.vertices, &b_world)?
+            .opening(opening)
+            .then(pose),
+    )
+}
+
+/// The least opening about the hinge (to 0.05 model units) at which a wafer between the
+/// arches is perforated over at most [`AUTO_PERFORATION`] of its outline: where the arches
+/// touch (the final occlusion) a wafer needs room for `min_thickness` of material, and
+/// opening about the hinge, as an articulator's raised pin does, keeps the bite's relation.
+/// Searched by bisection on the height field at a grid of at least 0.2.
+pub fn least_opening(a: &Mesh, b: &Mesh, pose: &Pose, opts: &SplintOptions) -> Result<f64> {
+    opts.validate()?;
+    let coarse = SplintOptions {
+        voxel: opts.voxel.max(0.2),
+        ..*opts
+    };
+    let share = |o: f64| -> Result<f64> {
+        let s = shape::shape(a, b, &opened(a, b, pose, o)?, &coarse)?;
+        Ok(s.perforated_area / s.outline_area.max(f64::MIN_POSITIVE))
+    };
+    if share(0.0)? <= AUTO_PERFORATION {
+        return Ok(0.0);
+    }
+    if share(MAX_AUTO_OPENING)? > AUTO_PERFORATION {
+        return Err(Error::InvalidMesh(format!(
+            "even opened {MAX_AUTO_OPENING} at the incisors the arches leave too little room for a wafer {} thick",
+            opts.min_thickness
+        )));
+    }
+    let (mut lo, mut hi) = (0.0, MAX_AUTO_OPENING);
+    while hi - lo > 0.05 {
+        let mid = 0.5 * (lo + hi);
+        if share(mid)? <= AUTO_PERFORATION {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    Ok(hi)
+}
+
 /// Pushes every vertex closer than `clearance` to an arch out along the line from its
 /// nearest arch point, to `clearance` (plus a hair); returns how many moved.
 fn seat(mesh: &mut Mesh, a: &TriangleBvh, b: &TriangleBvh, pose: &Pose, c: f64) -> usize {

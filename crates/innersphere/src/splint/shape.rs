@@ -95,6 +95,8 @@ pub struct Shape {
     pub keep: Vec<bool>,
     /// Area of the perforations: columns inside the outline that are too thin.
     pub perforated_area: f64,
+    /// Area inside the outline.
+    pub outline_area: f64,
     /// Parts of the outline dropped because they do not touch the main part.
     pub dropped_parts: usize,
 }
@@ -199,6 +201,7 @@ pub fn shape(a: &Mesh, b: &Mesh, pose: &Pose, o: &SplintOptions) -> Result<Shape
     let [nx, ny] = dims;
     let mut side = vec![0.0; grid.len()];
     let mut perforated = 0usize;
+    let mut within = 0usize;
     for j in 0..ny {
         for i in 0..nx {
             let k = i + nx * j;
@@ -208,8 +211,11 @@ pub fn shape(a: &Mesh, b: &Mesh, pose: &Pose, o: &SplintOptions) -> Result<Shape
                 / (h * ((j + 1).min(ny - 1) - j.saturating_sub(1)).max(1) as f64);
             let need = o.min_thickness * (1.0 + gx * gx + gy * gy).sqrt();
             let thick = upper[k] - lower[k] - need;
-            if outline[k] > 0.0 && thick <= 0.0 {
-                perforated += 1;
+            if outline[k] > 0.0 {
+                within += 1;
+                if thick <= 0.0 {
+                    perforated += 1;
+                }
             }
             side[k] = outline[k].min(thick);
         }
@@ -231,6 +237,7 @@ pub fn shape(a: &Mesh, b: &Mesh, pose: &Pose, o: &SplintOptions) -> Result<Shape
         side,
         keep,
         perforated_area: perforated as f64 * h * h,
+        outline_area: within as f64 * h * h,
         dropped_parts: parts - 1,
     })
 }

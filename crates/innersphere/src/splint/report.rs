@@ -227,11 +227,13 @@ pub fn pinched_vertices(m: &Mesh) -> usize {
 }
 
 /// Thickness of the wafer along the insertion axis `up`: from each vertex that faces down
-/// (or up) the distance along `up` (or `-up`) to the surface across, past the triangles
+/// (or up, within 45°) the distance along `up` (or `-up`) to the surface across, past the triangles
 /// around the vertex; returns the least and the 1st percentile. This is the plate's
 /// thickness between the imprints that `min_thickness` asks for; steep walls, whose
 /// thickness is across rather than along the axis, are not measured.
 fn thickness(m: &Mesh, bvh: &TriangleBvh, up: DVec3) -> (f64, f64) {
+    // Measured from the vertices whose normal is within 45° of the axis.
+    const FLAT: f64 = std::f64::consts::FRAC_1_SQRT_2;
     let n = m.vertices.len();
     let mut normal = vec![DVec3::ZERO; n];
     for t in 0..m.triangles.len() {
@@ -262,9 +264,9 @@ fn thickness(m: &Mesh, bvh: &TriangleBvh, up: DVec3) -> (f64, f64) {
         .into_par_iter()
         .filter_map(|v| {
             let facing = normal[v].normalize_or_zero().dot(up);
-            let dir = if facing < -0.5 {
+            let dir = if facing < -FLAT {
                 up
-            } else if facing > 0.5 {
+            } else if facing > FLAT {
                 -up
             } else {
                 return None;

@@ -218,6 +218,34 @@ fn occlusion_finds_the_scanned_bite_from_open_starts() {
     }
 }
 
+/// The final splint at the bite `occlude` finds from 3 mm open: opened about the hinge just
+/// enough for its material (`least_opening`), it seats on both arches.
+#[test]
+#[ignore = "real data: run with --ignored"]
+fn the_final_splint_at_the_found_bite_seats_on_both_arches() {
+    let _serial = serial();
+    let j = jaw();
+    let opts = OcclusionOptions {
+        axis: j.frame.up,
+        joints: Some(temporomandibular_joints(&j.frame, &Pose::IDENTITY, 20.0)),
+        ..Default::default()
+    };
+    let from = Pose::from_translation(j.frame.up * -3.0);
+    let mut pair = Pair::new(j.a.clone(), j.b.clone());
+    let bite = occlude(&mut pair, &Pose::IDENTITY, &from, &opts).unwrap();
+    assert!(bite.converged);
+    let load = |rel: &str| Mesh::load(common::data(rel)).unwrap();
+    let a = load("jaw/ofj_p26_maxilla_teeth.stl.gz");
+    let b = load("jaw/ofj_p26_mandible_teeth.stl.gz");
+    let s_opts = innersphere::splint::SplintOptions::default();
+    let open = innersphere::splint::least_opening(&a, &b, &bite.pose, &s_opts).unwrap();
+    assert!(open > 0.5 && open < 5.0, "opened {open} mm");
+    let pose = innersphere::splint::opened(&a, &b, &bite.pose, open).unwrap();
+    let s = innersphere::splint::make(&a, &b, &pose, &s_opts).unwrap();
+    eprintln!("opened {open} mm: {:#?}", s.report);
+    innersphere_testkit::splint::assert_seats(&a, &b, &pose, &s_opts, &s);
+}
+
 /// A free segment (no joints) from 8 random open starts (1–4 mm open along the pair's "up",
 /// ±1.5 mm sideways and forwards, ±3° yaw, ±2° roll and pitch about the crowns' centre, drawn
 /// from a seed): `occlude_free` chooses a pose with every crown centre of the mandible within

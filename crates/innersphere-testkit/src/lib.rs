@@ -4,9 +4,11 @@
 //!   real models are `#[ignore]`d and run by CI with `--ignored`);
 //! - [`alloc`]: a counting global allocator (a test binary declares it with
 //!   `#[global_allocator] static A: Counting = Counting;`), per-thread counts, and every query
-//!   kind and option of the public API to run under it.
+//!   kind and option of the public API to run under it;
+//! - [`splint`]: the checks that a splint seats on both arches.
 
 pub mod alloc;
 pub mod data;
+pub mod splint;
 
 pub use data::{data, data_dir};

@@ -15,7 +15,9 @@
 //!   the [`scale`](AnatomicalFrame::scale)); the opening rotation turns about the axis
 //!   through it along left.
 
-use crate::{Error, Mesh, Result};
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+use crate::pose::Pose;
 use glam::DVec3;
 
 /// Distance of the opening hinge behind the lower incisal tip, in millimetres at scale 1.
@@ -178,7 +180,7 @@ impl AnatomicalFrame {
     }
 
     /// The frame moved with body B by `pose` (directions turn, points move).
-    pub fn moved(&self, pose: &crate::Pose) -> AnatomicalFrame {
+    pub fn moved(&self, pose: &Pose) -> AnatomicalFrame {
         AnatomicalFrame {
             up: pose.transform_vector(self.up),
             left: pose.transform_vector(self.left),
@@ -193,11 +195,11 @@ impl AnatomicalFrame {
     /// about the hinge axis (through [`hinge`](Self::hinge), along [`left`](Self::left))
     /// that moves the incisal point that far along its arc, downwards for a positive
     /// opening. Compose it after B's pose: `frame.opening(o).then(&pose)`.
-    pub fn opening(&self, opening: f64) -> crate::Pose {
+    pub fn opening(&self, opening: f64) -> Pose {
         let r_inc = (self.incisal - self.hinge).length();
         let theta = if r_inc > 0.0 { opening / r_inc } else { 0.0 };
         let rotation = glam::DQuat::from_axis_angle(self.left, theta);
-        crate::Pose {
+        Pose {
             rotation,
             translation: self.hinge - rotation * self.hinge,
         }

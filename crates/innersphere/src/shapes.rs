@@ -192,6 +192,67 @@ pub fn tooth_pair(subdivisions: u32) -> (Mesh, Mesh) {
     (upper, molar(subdivisions, 0.0))
 }
 
+/// A generated dental arch pair for tests and examples (millimetres): `teeth` molar-like
+/// teeth per arch, 0.7 × the size of [`molar`], standing along a parabolic horseshoe
+/// (narrow at the front, +y), the lower arch cusps up and the upper one cusps down, turned
+/// so that their cusps interdigitate with a small overlap at the identity pose, like a
+/// bite. Each tooth is its own closed shell, as in segmented scans.
+pub fn arch_pair(subdivisions: u32, teeth: usize) -> (Mesh, Mesh) {
+    let scale = 0.7;
+    let n = teeth.max(2);
+    // Teeth at equal arc steps along y = 40 − x²/18 (a 48 mm wide, 40 mm deep arch).
+    let curve = |x: f64| DVec3::new(x, 40.0 - x * x / 18.0, 0.0);
+    let mut pts = vec![curve(-24.0)];
+    let mut x = -24.0;
+    while x < 24.0 {
+        x += 0.01;
+        pts.push(curve(x));
+    }
+    let length: f64 = pts.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+    let mut places = Vec::with_capacity(n);
+    let (mut walked, mut next) = (0.0, 0usize);
+    for w in pts.windows(2) {
+        let target = length * (next as f64 + 0.5) / n as f64;
+        let step = (w[1] - w[0]).length();
+        if walked + step >= target && next < n {
+            let dir = (w[1] - w[0]).normalize();
+            places.push((w[0], dir.y.atan2(dir.x)));
+            next += 1;
+        }
+        walked += step;
+    }
+    let arch = |upper: bool| -> Mesh {
+        let mut all = Mesh::default();
+        for (k, &(at, angle)) in places.iter().enumerate() {
+            let phase = if upper {
+                std::f64::consts::FRAC_PI_4
+            } else {
+                0.0
+            };
+            let mut m = molar(subdivisions, phase + 0.3 * k as f64);
+            let (s, c) = angle.sin_cos();
+            for v in &mut m.vertices {
+                let p = *v * scale;
+                let p = if upper {
+                    DVec3::new(p.x, p.y, -p.z + 8.1 * scale)
+                } else {
+                    p
+                };
+                *v = DVec3::new(c * p.x - s * p.y + at.x, s * p.x + c * p.y + at.y, p.z);
+            }
+            if upper {
+                m.flip();
+            }
+            let base = all.vertices.len() as u32;
+            all.vertices.extend(m.vertices);
+            all.triangles
+                .extend(m.triangles.iter().map(|t| t.map(|i| i + base)));
+        }
+        all
+    };
+    (arch(true), arch(false))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,6 +1,6 @@
 //! The library's modules import one way, down a ladder: pose ← error ← output, progress ←
-//! mesh ← shapes ← tree ← field ← packing ← hierarchy ← build, exact ← query, contact_map ←
-//! haptic
+//! mesh ← shapes, anatomy ← tree ← field ← packing ← hierarchy ← build, exact ← query,
+//! contact_map, splint ← haptic
 //! (`tree` is the finished tree's type and file, below the pipeline stages that make it). Reads
 //! every `crate::…` path in the sources (outside their `#[cfg(test)]` modules, which may
 //! build fixtures from a higher layer) and fails on an import from a layer above, or through
@@ -15,14 +15,14 @@ fn layer(module: &str) -> Option<u32> {
         "error" => 1,
         "output" | "progress" => 2,
         "mesh" => 3,
-        "shapes" => 4,
+        "shapes" | "anatomy" => 4,
         "tree" => 5,
         "field" => 6,
         "packing" => 7,
         "hierarchy" => 8,
         "build" | "exact" => 9,
         "contact_map" => 10,
-        "query" => 10,
+        "query" | "splint" => 10,
         "haptic" => 11,
         _ => return None,
     })

@@ -14,6 +14,7 @@ mod convert;
 mod haptic;
 mod motion;
 mod pair;
+mod splint;
 mod tree;
 
 use pyo3::prelude::*;
@@ -31,5 +32,6 @@ fn _innersphere(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<haptic::Tick>()?;
     m.add_function(wrap_pyfunction!(motion::load_motion, m)?)?;
     m.add_function(wrap_pyfunction!(contact_map::contact_map, m)?)?;
+    m.add_function(wrap_pyfunction!(splint::splint, m)?)?;
     Ok(())
 }

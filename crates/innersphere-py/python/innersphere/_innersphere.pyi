@@ -17,6 +17,7 @@ __all__ = [
     "__version__",
     "contact_map",
     "load_motion",
+    "splint",
 ]
 
 #: A pose: a 4×4 homogeneous matrix (row-major ``m[row, col]``, translation in the last
@@ -381,3 +382,25 @@ def contact_map(
     (``ist occlusion-map``'s ``gap``). Arrays keep their vertex order; a file's vertices are
     the loader's (welded). Raises OSError for unreadable files, ValueError for bad meshes or
     poses."""
+
+def splint(
+    a: _MeshLike,
+    b: _MeshLike,
+    pose_b: Optional[_PoseLike] = None,
+    open: Union[float, str, None] = None,
+    clearance: Optional[float] = None,
+    coverage: Optional[float] = None,
+    min_thickness: Optional[float] = None,
+    rim: Optional[float] = None,
+    voxel: Optional[float] = None,
+    out: Optional[_PathLike] = None,
+) -> Tuple[_FloatArray, npt.NDArray[np.uint32], Dict[str, Any]]:
+    """The occlusal splint (surgical wafer) between arch ``a`` (upper, fixed) and arch ``b``
+    at ``pose_b`` (default the identity), each a file path, a ``(vertices, faces)`` pair or a
+    ``trimesh.Trimesh``: the vertices (n, 3) and faces (m, 3) of its closed, outward-facing
+    surface in A's frame, and a dict of its measurements (the JSON of ``ist splint``, with
+    ``opened`` and ``pose``). ``open``: an incisal opening about the hinge (mm) applied after
+    the pose, or ``"auto"`` for the least that leaves room for the wafer. The options default
+    as in ``ist splint`` (mm: clearance 0.1, coverage 2, min_thickness 1, rim 1.5, voxel
+    0.1). ``out``: also write it as a binary STL there. Raises OSError for unreadable or
+    unwritable files, ValueError for bad meshes, poses or options."""

@@ -1,0 +1,101 @@
+//! `innersphere.splint`: the occlusal splint between two arches, as `ist splint` makes it.
+
+use crate::convert::{self, error, json, pose_or_identity};
+use crate::tree::mesh_like;
+use innersphere::splint::{least_opening, make, opened, SplintOptions};
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+/// Vertices (n, 3), faces (m, 3) and the measurements.
+type SplintOut<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<u32>>,
+    Bound<'py, PyAny>,
+);
+
+/// The occlusal splint (surgical wafer) between arch `a` (upper, fixed) and arch `b` at
+/// `pose_b` (default the identity), each a file path, a `(vertices, faces)` pair or a
+/// `trimesh.Trimesh`: the vertices and faces of its closed, outward-facing surface in A's
+/// frame and a dict of its measurements (the JSON of `ist splint`, with `opened` and
+/// `pose`). `open`: an incisal opening about the hinge (mm) applied after the pose, or
+/// "auto" for the least that leaves room for the wafer. Options default as in `ist splint`.
+/// `out`: also write it as a binary STL there. Runs on all cores with the interpreter
+/// released.
+#[pyfunction]
+#[pyo3(signature = (a, b, pose_b=None, open=None, clearance=None, coverage=None,
+                    min_thickness=None, rim=None, voxel=None, out=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn splint<'py>(
+    py: Python<'py>,
+    a: &Bound<'py, PyAny>,
+    b: &Bound<'py, PyAny>,
+    pose_b: Option<&Bound<'py, PyAny>>,
+    open: Option<&Bound<'py, PyAny>>,
+    clearance: Option<f64>,
+    coverage: Option<f64>,
+    min_thickness: Option<f64>,
+    rim: Option<f64>,
+    voxel: Option<f64>,
+    out: Option<&Bound<'py, PyAny>>,
+) -> PyResult<SplintOut<'py>> {
+    let pose = pose_or_identity(pose_b, "pose_b")?;
+    let d = SplintOptions::default();
+    let opts = SplintOptions {
+        clearance: clearance.unwrap_or(d.clearance),
+        coverage: coverage.unwrap_or(d.coverage),
+        min_thickness: min_thickness.unwrap_or(d.min_thickness),
+        rim: rim.unwrap_or(d.rim),
+        voxel: voxel.unwrap_or(d.voxel),
+    };
+    opts.validate().map_err(error)?;
+    let open: Option<f64> = match open {
+        None => Some(0.0),
+        Some(o) if o.extract::<String>().is_ok_and(|s| s == "auto") => None,
+        Some(o) => Some(o.extract::<f64>().map_err(|_| {
+            PyValueError::new_err("open: expected a number of millimetres or \"auto\"")
+        })?),
+    };
+    let out = out.map(convert::path).transpose()?;
+    let ma = mesh_like(py, a, "a", false)?;
+    let mb = mesh_like(py, b, "b", false)?;
+    let (s, opening, pose) = py
+        .detach(|| -> innersphere::Result<_> {
+            let opening = match open {
+                Some(o) => o,
+                None => least_opening(&ma, &mb, &pose, &opts)?,
+            };
+            let pose = if opening != 0.0 {
+                opened(&ma, &mb, &pose, opening)?
+            } else {
+                pose
+            };
+            let s = make(&ma, &mb, &pose, &opts)?;
+            if let Some(p) = &out {
+                innersphere::mesh::save_stl(&s.mesh, p)?;
+            }
+            Ok((s, opening, pose))
+        })
+        .map_err(error)?;
+    let mut report =
+        serde_json::to_value(&s.report).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    report["opened"] = opening.into();
+    report["pose"] = serde_json::json!([
+        pose.translation.x,
+        pose.translation.y,
+        pose.translation.z,
+        pose.rotation.w,
+        pose.rotation.x,
+        pose.rotation.y,
+        pose.rotation.z
+    ]);
+    let n = s.mesh.vertices.len();
+    let m = s.mesh.triangles.len();
+    let v: Vec<f64> = s.mesh.vertices.iter().flat_map(|p| p.to_array()).collect();
+    let f: Vec<u32> = s.mesh.triangles.iter().flatten().copied().collect();
+    Ok((
+        PyArray1::from_vec(py, v).reshape([n, 3])?,
+        PyArray1::from_vec(py, f).reshape([m, 3])?,
+        json(py, &report)?,
+    ))
+}

@@ -1078,3 +1078,63 @@ fn occlusion_map_writes_the_signed_gaps_of_both_meshes() {
         assert!(stderr(&out).starts_with("error: "), "{bad:?}");
     }
 }
+
+/// `ist splint` between generated arches: a watertight STL that `ist inspect` calls closed
+/// and consistently oriented, JSON with the measurements; bad input is a clear error.
+#[test]
+fn splint_writes_a_closed_wafer_and_refuses_bad_input() {
+    let dir = TempDir::new("cli", "splint");
+    let (upper, lower) = shapes::arch_pair(2, 10);
+    let (a, b) = (dir.path("upper.stl"), dir.path("lower.stl"));
+    innersphere::mesh::save_stl(&upper, &a).unwrap();
+    innersphere::mesh::save_stl(&lower, &b).unwrap();
+    let out = dir.path("splint.stl");
+    let r = ist_json(
+        &[
+            "splint",
+            s(&a),
+            s(&b),
+            "--open",
+            "3",
+            "--voxel",
+            "0.2",
+            "-o",
+            s(&out),
+            "--json",
+        ],
+        0,
+    );
+    assert_eq!(r["opened"], 3.0);
+    assert!(
+        r["watertight"] == true && r["manifold"] == true && r["bodies"] == 1,
+        "{r}"
+    );
+    assert!(r["volume"].as_f64().unwrap() > 0.0);
+    let inspect = ist_json(&["inspect", s(&out), "--json"], 0);
+    assert_eq!(inspect["watertight"], true, "{inspect}");
+    assert_eq!(inspect["winding_consistent"], true);
+    assert_eq!(inspect["components"], 1);
+    assert_eq!(inspect["triangles"], r["triangles"]);
+    let help = stdout(&ist(&["splint", "--help"]));
+    assert!(help.contains("mm") && help.contains("auto"), "{help}");
+    for bad in [
+        vec!["splint", s(&a), s(&b), "-o", s(&a)],
+        vec!["splint", s(&a), s(&b), "--open", "wide", "-o", s(&out)],
+        vec!["splint", s(&a), s(&b), "--voxel", "0", "-o", s(&out)],
+        vec!["splint", s(&a), s(&b), "--clearance", "nan", "-o", s(&out)],
+        vec![
+            "splint",
+            s(&a),
+            s(&b),
+            "--pose",
+            "nan 0 0 1 0 0 0",
+            "-o",
+            s(&out),
+        ],
+        vec!["splint", s(&a), s(&dir.path("none.stl")), "-o", s(&out)],
+    ] {
+        let o = ist(&bad);
+        assert_eq!(code(&o), 2, "{bad:?}: {}", stdout(&o));
+        assert!(stderr(&o).starts_with("error: "), "{bad:?}: {}", stderr(&o));
+    }
+}

@@ -84,3 +84,27 @@ fn every_query_of_pair_reaches_c_python_and_ist_query() {
         "queries of Pair missing at a door: {missing:?}"
     );
 }
+
+/// The planning tools of the library (offline: meshes in, files and measurements out) reach
+/// `ist` and the Python module. Not the C ABI: a C or C++ program links the library for its
+/// servo loop and queries; the planning tools read and write files and take seconds, and a C
+/// program runs `ist` for them (its JSON is the interface).
+#[test]
+fn every_planning_tool_reaches_ist_and_python() {
+    let stubs = read("crates/innersphere-py/python/innersphere/_innersphere.pyi");
+    let lib = read("crates/innersphere/src/lib.rs");
+    let help = Command::new(env!("CARGO_BIN_EXE_ist"))
+        .arg("--help")
+        .output()
+        .expect("ist runs");
+    let help = String::from_utf8_lossy(&help.stdout);
+    // (library module, ist subcommand, Python function)
+    for (module, cmd, py) in [
+        ("contact_map", "occlusion-map", "contact_map"),
+        ("splint", "splint", "splint"),
+    ] {
+        assert!(lib.contains(&format!("pub mod {module};")), "{module}");
+        assert!(help.contains(&format!("  {cmd} ")), "ist {cmd} missing");
+        assert!(stubs.contains(&format!("def {py}(")), "Python {py} missing");
+    }
+}

@@ -478,6 +478,21 @@ async function loadBody(name) {
   }
 }
 
+/** The splint (`ist view --splint`): a resin-coloured solid fixed in A's frame, with a
+ *  checkbox to hide it. */
+async function loadSplint(info) {
+  if (!info.splint) return;
+  const geo = await loadMesh('splint');
+  if (!geo) return;
+  const mesh = new THREE.Mesh(geo, new THREE.MeshPhongMaterial({
+    color: 0x8fd0c8, shininess: 60, transparent: true, opacity: 0.8, side: THREE.DoubleSide,
+  }));
+  mesh.name = 'splint';
+  bodyA.add(mesh);
+  $('splint-panel').hidden = false;
+  $('show-splint').addEventListener('change', (e) => { mesh.visible = e.target.checked; });
+}
+
 // ---------------------------------------------------------------------------------------
 // Camera framing
 // ---------------------------------------------------------------------------------------
@@ -1289,7 +1304,7 @@ async function main() {
   setupShiftDrag();
   connect();
   try {
-    await Promise.all([loadBody('a'), loadBody('b')]);
+    await Promise.all([loadBody('a'), loadBody('b'), loadSplint(ist.info)]);
   } catch (err) {
     showError(err);
   }

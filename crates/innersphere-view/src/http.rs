@@ -179,9 +179,10 @@ pub fn serve(
     let addr = listener
         .local_addr()
         .map_err(|e| format!("the server has no address: {e}"))?;
-    // B starts where the motion starts, else beside A, apart along x.
-    let start = match &scene.motion {
-        Some(m) if !m.frames.is_empty() => m.frames[0].pose,
+    // B starts at the given pose, else where the motion starts, else beside A, apart along x.
+    let start = match (&scene.start, &scene.motion) {
+        (Some(p), _) => *p,
+        (None, Some(m)) if !m.frames.is_empty() => m.frames[0].pose,
         _ => {
             let (a, b) = (&scene.a, &scene.b);
             let wa = a.meta.bbox_max[0] - a.meta.bbox_min[0];
@@ -442,6 +443,7 @@ fn info(app: &App) -> Value {
     }
     json!({
         "bodies": {"a": body(&s.a, s.mesh_a.is_some()), "b": body(&s.b, s.mesh_b.is_some())},
+        "splint": s.splint.is_some(),
         "motion": s.motion.as_ref().map(|m| json!({"frames": m.len(), "seconds": m.duration()})),
         "rate_hz": app.opts.rate,
         "modes": modes,
@@ -490,6 +492,12 @@ fn spheres(app: &App, query: &str) -> Resp {
 }
 
 fn mesh(app: &App, query: &str) -> Resp {
+    if param(query, "body") == Some("splint") {
+        return match &app.scene.splint {
+            Some(m) => binary(encode::mesh(m)),
+            None => error(404, "no splint (start ist view with --splint)"),
+        };
+    }
     match which(app, query) {
         Ok((_, Some(m))) => binary(encode::mesh(m)),
         Ok((_, None)) => error(

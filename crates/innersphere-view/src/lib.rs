@@ -41,6 +41,11 @@ pub struct Scene {
     pub teeth_a: Option<Teeth>,
     /// B's teeth (its mesh's own frame).
     pub teeth_b: Option<Teeth>,
+    /// A splint to draw between the arches (fixed in A's frame, as `ist splint` writes it).
+    pub splint: Option<Mesh>,
+    /// Where B starts (default: where the motion starts, else beside A); a splint's pose
+    /// shows it seated between the arches.
+    pub start: Option<innersphere::Pose>,
 }
 
 impl Scene {
@@ -69,6 +74,8 @@ impl Scene {
             motion: Some(motion),
             teeth_a: None,
             teeth_b: None,
+            splint: None,
+            start: None,
         })
     }
 }

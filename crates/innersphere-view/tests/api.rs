@@ -353,3 +353,57 @@ fn a_scene_without_meshes_has_no_contact_map() {
         .unwrap_err()
         .contains("needs both meshes"));
 }
+
+#[test]
+fn a_splint_is_served_in_a_s_frame_and_b_starts_at_its_pose() {
+    // The demo scene has no splint: the info says so and the mesh is a 404.
+    let (code, info) = json("GET", "/api/info", "");
+    assert_eq!((code, &info["splint"]), (200, &Value::Bool(false)));
+    assert_eq!(request("GET", "/api/mesh?body=splint", "").0, 404);
+    // A scene with one (a small box standing in for it) and B's start pose.
+    let mut scene = server().scene.clone();
+    let splint = innersphere::shapes::cuboid(innersphere::glam::DVec3::new(1.0, 0.5, 0.25));
+    scene.splint = Some(splint.clone());
+    let start = innersphere::Pose::from_translation(innersphere::glam::DVec3::new(0.0, 0.0, -0.5));
+    scene.start = Some(start);
+    scene.motion = None; // in motion mode the motion moves B
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let opts = ServeOptions {
+            port: 0,
+            ..Default::default()
+        };
+        serve(scene, opts, move |addr| tx.send(addr).unwrap()).unwrap();
+    });
+    let addr = rx.recv_timeout(Duration::from_secs(30)).unwrap();
+    let get = |path: &str| -> Vec<u8> {
+        let mut s = TcpStream::connect(addr).unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+        write!(
+            s,
+            "GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n"
+        )
+        .unwrap();
+        let mut out = Vec::new();
+        s.read_to_end(&mut out).unwrap();
+        let start = out.windows(4).position(|w| w == b"\r\n\r\n").unwrap() + 4;
+        let text = String::from_utf8_lossy(&out[..start]).to_ascii_lowercase();
+        assert!(text.starts_with("http/1.1 200"), "{path}: {text}");
+        let body = out[start..].to_vec();
+        if text.contains("transfer-encoding: chunked") {
+            dechunk(&body)
+        } else {
+            body
+        }
+    };
+    let info: Value = serde_json::from_slice(&get("/api/info")).unwrap();
+    assert_eq!(info["splint"], true);
+    let mesh = get("/api/mesh?body=splint");
+    let nv = u32::from_le_bytes(mesh[0..4].try_into().unwrap()) as usize;
+    let nt = u32::from_le_bytes(mesh[4..8].try_into().unwrap()) as usize;
+    assert_eq!((nv, nt), (splint.vertices.len(), splint.triangles.len()));
+    assert_eq!(mesh.len(), 8 + 12 * nv + 12 * nt);
+    let state: Value = serde_json::from_slice(&get("/api/state")).unwrap();
+    let t = &state["target_b"];
+    assert!(close(&t[2], -0.5) && close(&t[0], 0.0), "{state}");
+}

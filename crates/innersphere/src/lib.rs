@@ -38,6 +38,9 @@
 //! query/      the Pair and one file per query kind, over a kernel and the fronts
 //! exact/      exact mesh-mesh distance, intersection and penetration depth (also the
 //!             accuracy reference of the sphere queries)
+//! anatomy.rs  the anatomical frame of a jaw pair (occlusal up, anterior, hinge)
+//! contact_map/ every vertex's signed gap to the other arch, per tooth
+//! splint/     the occlusal splint (surgical wafer) between two arches at a pose
 //! haptic/     6-DOF haptic rendering: the contact model, the servo, the single-thread and
 //!             multi-rate loops, occlusion
 //! output.rs   writing outputs: never onto an input, through a temporary file renamed

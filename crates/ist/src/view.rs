@@ -47,6 +47,14 @@ pub struct Args {
     /// Teeth of B (B's mesh frame).
     #[arg(long)]
     teeth_b: Option<PathBuf>,
+    /// A splint to draw between the arches (an STL from `ist splint`, in A's frame); start
+    /// B at the splint's pose (`--pose-b`, the `pose` of its JSON) to see it seated.
+    #[arg(long)]
+    splint: Option<PathBuf>,
+    /// Where B starts, "tx ty tz qw qx qy qz" in A's frame (default: where the motion
+    /// starts, else beside A).
+    #[arg(long, allow_hyphen_values = true)]
+    pose_b: Option<String>,
 }
 
 /// Runs the subcommand; returns the process exit code (it serves until interrupted).
@@ -86,6 +94,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 .transpose()?,
             teeth_a: None,
             teeth_b: None,
+            splint: None,
+            start: None,
         }
     };
     let meshes = scene.mesh_a.is_some() && scene.mesh_b.is_some();
@@ -96,6 +106,19 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     }
     scene.teeth_a = teeth_a;
     scene.teeth_b = teeth_b;
+    scene.splint = args
+        .splint
+        .as_ref()
+        .map(|p| crate::files::load_mesh(p).context("loading --splint"))
+        .transpose()?;
+    scene.start = args
+        .pose_b
+        .as_ref()
+        .map(|t| {
+            t.parse::<innersphere::Pose>()
+                .with_context(|| format!("--pose-b \"{t}\""))
+        })
+        .transpose()?;
     let opts = ServeOptions {
         port: args.port,
         stiffness: args.stiffness,

@@ -56,6 +56,27 @@ PY
 [ -s "$OUT/map_a.ply" ] && [ -s "$OUT/map_b.ply" ] || { echo "FAILED: the contact map PLYs"; exit 1; }
 echo "ok: occlusion map of the jaw pair"
 
+# The intermediate splint: the mandible opened 3 mm about the hinge (docs/SPLINT.md), with its
+# wall time and peak memory where /usr/bin/time is installed.
+TIME=""; [ -x /usr/bin/time ] && TIME="/usr/bin/time -f %e,%M -o $OUT/splint.time"
+$TIME "$IST" splint "$J/ofj_p26_maxilla_teeth.stl.gz" "$J/ofj_p26_mandible_teeth.stl.gz" --open 3 \
+  -o "$OUT/splint.stl" --json > "$OUT/splint.json"
+python3 - "$OUT/splint.json" "$OUT/splint.time" <<'PY' || { echo "FAILED: ist splint on the jaws"; cat "$OUT/splint.json"; exit 1; }
+import json, os, sys
+s = json.load(open(sys.argv[1]))
+assert s["watertight"] and s["manifold"] and s["winding_consistent"] and s["bodies"] == 1, s
+assert s["volume"] > 0 and s["a_vertices_inside"] == 0 and s["b_vertices_inside"] == 0, s
+assert min(s["min_distance_a"], s["min_distance_b"]) >= 0.1 - 0.02, s
+assert min(s["coverage_a"], s["coverage_b"]) >= 0.85, s
+line = f"splint: {s['triangles']} triangles, coverage {s['coverage_a']:.3f}/{s['coverage_b']:.3f}, {s['seconds']:.1f} s"
+if os.path.exists(sys.argv[2]):
+    wall, kb = open(sys.argv[2]).read().strip().splitlines()[-1].split(",")
+    assert int(kb) <= 1_000_000, f"peak memory {kb} KB"
+    line += f"; ist splint {wall} s wall, {int(kb) / 1e6:.2f} GB peak"
+print(line)
+PY
+echo "ok: intermediate splint of the jaw pair"
+
 for f in "$DATA"/bad/*.stl; do
   name=$(basename "$f")
   set +e

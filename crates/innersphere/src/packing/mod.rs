@@ -7,13 +7,13 @@
 //! the voxels within twice the new radius are visited: a voxel farther away has a remaining
 //! distance ≤ the new radius < its distance to the new sphere, so it cannot change.
 
+mod queue;
 mod refine;
 
 use crate::field::DistanceField;
 use crate::mesh::bvh::TriangleBvh;
 use glam::DVec3;
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
+use queue::{Entry, MaxQueue};
 
 /// One inner sphere, in f64 model units.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,26 +47,6 @@ impl Default for PackingOptions {
     }
 }
 
-/// Max-heap entry: remaining distance, ties broken by the smaller voxel index (deterministic).
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Entry {
-    value: f64,
-    cell: u32,
-}
-impl Eq for Entry {}
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for Entry {
-    fn cmp(&self, other: &Self) -> Ordering {
-        self.value
-            .total_cmp(&other.value)
-            .then_with(|| other.cell.cmp(&self.cell))
-    }
-}
-
 /// Packs inner spheres into `field`. Every sphere's radius is at most the exact distance of its
 /// centre to the surface and to every earlier sphere, so the spheres lie inside the mesh and do
 /// not overlap. Deterministic.
@@ -82,15 +62,18 @@ pub fn pack(
     let grid = &field.grid;
     // Remaining distance of every cell; negative = outside or already covered.
     let mut remaining = vec![-1.0f64; grid.len()];
-    let mut heap = BinaryHeap::with_capacity(field.inside.len());
     // Spheres below 1e-4 voxel are useless and would vanish when rounded to f32.
     let floor = opts.min_radius.max(1e-4 * grid.h);
     for (&cell, &d) in field.inside.iter().zip(&field.dist) {
         remaining[cell as usize] = d;
-        if d > 0.0 && d >= floor {
-            heap.push(Entry { value: d, cell });
-        }
     }
+    let mut heap = MaxQueue::with(|emit| {
+        for (&cell, &d) in field.inside.iter().zip(&field.dist) {
+            if d > 0.0 && d >= floor {
+                emit(Entry { value: d, cell });
+            }
+        }
+    });
     progress.start("packing spheres", field.inside.len() as u64);
     let mut spheres = Vec::new();
     let h = grid.h;

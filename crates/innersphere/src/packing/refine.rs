@@ -68,19 +68,23 @@ impl<'a> Refiner<'a> {
     }
 
     /// Free radius at `c` (distance to the surface and to every placed sphere) and the nearest
-    /// obstacle point.
-    fn free(&self, c: DVec3, spheres: &[Sphere]) -> (f64, DVec3) {
-        let hit = self.bvh.closest_point(c, f64::INFINITY);
-        let (mut best, mut at) = match hit {
-            Some(h) => (h.dist_sq.sqrt(), h.point),
-            None => (f64::INFINITY, c),
+    /// obstacle point, given an upper bound of the free radius (`f64::INFINITY` for none): the
+    /// surface is searched within the bound only, which prunes most of the triangle tree. The
+    /// answer is the same as without the bound (a bound that turns out too small, by rounding,
+    /// falls back to the unbounded search).
+    fn free(&self, c: DVec3, spheres: &[Sphere], bound: f64) -> (f64, DVec3) {
+        let b = bound * (1.0 + 1e-9) + 1e-12 * self.h;
+        let (mut best, mut at, mut found) = match self.bvh.closest_point(c, b * b) {
+            Some(h) => (h.dist_sq.sqrt(), h.point, true),
+            None => (b, c, false),
         };
-        let consider = |id: u32, best: &mut f64, at: &mut DVec3| {
+        let consider = |id: u32, best: &mut f64, at: &mut DVec3, found: &mut bool| {
             let s = spheres[id as usize];
             let d = (c - s.center).length();
             let gap = d - s.radius;
             if gap < *best {
                 *best = gap;
+                *found = true;
                 *at = if d > 0.0 {
                     s.center + (c - s.center) * (s.radius / d)
                 } else {
@@ -89,27 +93,31 @@ impl<'a> Refiner<'a> {
             }
         };
         for &id in &self.big {
-            consider(id, &mut best, &mut at);
+            consider(id, &mut best, &mut at, &mut found);
         }
         let reach = best.max(0.0);
         let a = self.cell_of(c - reach);
-        let b = self.cell_of(c + reach);
-        for z in a[2]..=b[2] {
-            for y in a[1]..=b[1] {
-                for x in a[0]..=b[0] {
+        let bb = self.cell_of(c + reach);
+        for z in a[2]..=bb[2] {
+            for y in a[1]..=bb[1] {
+                for x in a[0]..=bb[0] {
                     let i = (x + self.dims[0] * (y + self.dims[1] * z)) as usize;
                     for &id in &self.buckets[i] {
-                        consider(id, &mut best, &mut at);
+                        consider(id, &mut best, &mut at, &mut found);
                     }
                 }
             }
+        }
+        if !found && bound.is_finite() {
+            return self.free(c, spheres, f64::INFINITY);
         }
         (best, at)
     }
 
     /// Moves the centre from voxel centre `v` (free radius `rho`) toward a larger free ball.
     pub(super) fn refine(&mut self, v: DVec3, rho: f64, spheres: &[Sphere]) -> (DVec3, f64) {
-        let (mut f, mut q) = self.free(v, spheres);
+        // The grid's remaining distance is the free radius at the voxel centre.
+        let (mut f, mut q) = self.free(v, spheres, rho);
         // The grid value is exact, but never trust a refinement that would shrink the sphere
         // (or a NaN).
         if f.is_nan() || f < rho {
@@ -124,7 +132,8 @@ impl<'a> Refiner<'a> {
                 break;
             }
             let cand = c + away * (step.min(0.5 * f) / len);
-            let (fc, qc) = self.free(cand, spheres);
+            // The free radius is 1-Lipschitz: at most f plus the distance moved.
+            let (fc, qc) = self.free(cand, spheres, f + (cand - c).length());
             if fc > f && (cand - v).length() <= fc {
                 c = cand;
                 f = fc;

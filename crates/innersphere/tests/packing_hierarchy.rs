@@ -274,3 +274,43 @@ proptest! {
         assert_tree_invariants(&tree, &spheres);
     }
 }
+
+/// The packing from distance bounds (what the build runs) places the same spheres, bit for
+/// bit, as the packing from exact distances, with and without off-grid refinement and a
+/// minimum radius, on generated meshes of several shapes.
+#[test]
+fn packing_from_bounds_equals_packing_from_exact_distances() {
+    use innersphere::field::distance;
+    use innersphere::mesh::bvh::TriangleBvh;
+    use innersphere::shapes;
+    let meshes = [
+        shapes::molar(3, 0.2),
+        shapes::torus(1.0, 0.35, 48, 24),
+        shapes::ellipsoid(DVec3::new(1.0, 0.6, 0.4), 3),
+    ];
+    for mesh in &meshes {
+        let (lo, hi) = mesh.bbox();
+        let grid = VoxelGrid::with_resolution(lo, hi, 40).unwrap();
+        let bvh = TriangleBvh::new(mesh);
+        let exact = distance::compute(mesh, grid, &Silent).unwrap();
+        let bounds = distance::bounds(mesh, &bvh, grid, &Silent).unwrap();
+        assert_eq!(exact.inside, bounds.inside);
+        assert!(exact.dist.iter().zip(&bounds.bound).all(|(e, b)| e <= b));
+        assert!(
+            exact.dist.iter().zip(&bounds.bound).any(|(e, b)| e < b),
+            "loose somewhere"
+        );
+        for opts in [
+            PackingOptions::default(),
+            PackingOptions {
+                min_radius: 0.5 * grid.h,
+                refine_steps: 8,
+                ..Default::default()
+            },
+        ] {
+            let want = packing::pack(&exact, &opts, Some(&bvh), &Silent);
+            let got = packing::pack_bounded(&bounds, &bvh, &opts, &Silent);
+            assert_eq!(want, got, "{opts:?}");
+        }
+    }
+}

@@ -92,7 +92,8 @@ impl SphereTree {
 pub struct StageSeconds {
     /// Mesh validation, defect report and orientation.
     pub prepare: f64,
-    /// Inside test and exact distance of every inside voxel.
+    /// Inside test, the triangle tree and an upper bound of every inside voxel's distance
+    /// (the exact distances the packing needs are timed in `packing`).
     pub distance_field: f64,
     /// Greedy sphere packing.
     pub packing: f64,
@@ -197,7 +198,11 @@ pub fn build_tree(
     let t_prepare = t0.elapsed().as_secs_f64();
 
     let t1 = Instant::now();
-    let field = field::distance::compute(&mesh, grid, progress)?;
+    progress.start("triangle tree", 1);
+    let bvh = TriangleBvh::new(&mesh);
+    progress.finish();
+    // Upper bounds of the voxels' distances; the packing makes exact only those it needs.
+    let field = field::distance::bounds(&mesh, &bvh, grid, progress)?;
     let t_field = t1.elapsed().as_secs_f64();
     if field.inside.is_empty() {
         return Err(Error::InvalidMesh(format!(
@@ -207,8 +212,8 @@ pub fn build_tree(
     }
 
     let t2 = Instant::now();
-    let surface = (opts.packing.refine_steps > 0).then(|| TriangleBvh::new(&mesh));
-    let spheres = packing::pack(&field, &opts.packing, surface.as_ref(), progress);
+    let spheres = packing::pack_bounded(&field, &bvh, &opts.packing, progress);
+    drop(bvh);
     let t_pack = t2.elapsed().as_secs_f64();
     if spheres.is_empty() {
         // The packing's floor is the larger of the minimum radius and 1e-4 voxel: blame the

@@ -10,7 +10,8 @@
 mod queue;
 mod refine;
 
-use crate::field::DistanceField;
+use crate::field::distance::DistanceBounds;
+use crate::field::{DistanceField, VoxelGrid};
 use crate::mesh::bvh::TriangleBvh;
 use glam::DVec3;
 use queue::{Entry, MaxQueue};
@@ -59,16 +60,69 @@ pub fn pack(
     surface: Option<&TriangleBvh>,
     progress: &dyn crate::progress::Progress,
 ) -> Vec<Sphere> {
-    let grid = &field.grid;
+    let voxels = Voxels {
+        grid: &field.grid,
+        inside: &field.inside,
+    };
+    pack_voxels(voxels, &field.dist, None, opts, surface, progress)
+}
+
+/// [`pack`] from upper bounds of the voxels' distances ([`DistanceBounds`]): a voxel's
+/// distance is made exact (a query of `bvh`, the mesh's tree, pruned by its bound) only when
+/// it comes to the top of the queue uncovered, and is put back when it shrinks. Every other
+/// entry's value is at least its exact one, so the voxel on top with an exact value is the
+/// one [`pack`] would take: the same spheres, bit for bit, for about a third of the exact
+/// distance queries on the jaw (two of three voxels are covered before they come up).
+pub fn pack_bounded(
+    field: &DistanceBounds,
+    bvh: &TriangleBvh,
+    opts: &PackingOptions,
+    progress: &dyn crate::progress::Progress,
+) -> Vec<Sphere> {
+    let voxels = Voxels {
+        grid: &field.grid,
+        inside: &field.inside,
+    };
+    let surface = (opts.refine_steps > 0).then_some(bvh);
+    pack_voxels(
+        voxels,
+        &field.bound,
+        Some((bvh, &field.slot)),
+        opts,
+        surface,
+        progress,
+    )
+}
+
+/// The inside voxels: the grid and their linear indices, ascending.
+#[derive(Clone, Copy)]
+struct Voxels<'a> {
+    grid: &'a VoxelGrid,
+    inside: &'a [u32],
+}
+
+/// The packing over voxels with distances `dist` (exact, or upper bounds with `lazy`: the
+/// tree and each bound's triangle slot).
+fn pack_voxels(
+    field: Voxels<'_>,
+    dist: &[f64],
+    lazy: Option<(&TriangleBvh, &[u32])>,
+    opts: &PackingOptions,
+    surface: Option<&TriangleBvh>,
+    progress: &dyn crate::progress::Progress,
+) -> Vec<Sphere> {
+    let grid = field.grid;
     // Remaining distance of every inside voxel, in the order of `field.inside` (the queue's
     // `cell` is that position: the same order as the grid index); negative = covered. Only
     // the inside voxels are held (on the jaw 8M of a 64M-cell grid), found row by row.
-    let mut remaining = field.dist.clone();
+    let mut remaining = dist.to_vec();
+    // With bounds: whether the voxel's distance to the surface is exact yet.
+    let mut exact = vec![lazy.is_none(); if lazy.is_some() { dist.len() } else { 0 }];
     let rows = Rows::of(field);
     // Spheres below 1e-4 voxel are useless and would vanish when rounded to f32.
     let floor = opts.min_radius.max(1e-4 * grid.h);
     let mut heap = MaxQueue::with(|emit| {
-        for (pos, &d) in field.dist.iter().enumerate() {
+        for (pos, &d) in dist.iter().enumerate() {
             if d > 0.0 && d >= floor {
                 emit(Entry {
                     value: d,
@@ -105,6 +159,24 @@ pub fn pack(
         }
         let [ci, cj, ck] = grid.coords(field.inside[cell as usize] as usize);
         let voxel = grid.center(ci, cj, ck);
+        if let Some((bvh, slots)) = lazy {
+            let pos = cell as usize;
+            if !exact[pos] {
+                exact[pos] = true;
+                // value = min(bound, gaps) and the exact distance is at most the bound.
+                let e = bvh
+                    .closest_point(voxel, bvh.slot_distance_sq(voxel, slots[pos]))
+                    .map_or(value, |c| c.dist_sq.sqrt());
+                let now = value.min(e);
+                if now != value {
+                    remaining[pos] = now;
+                    if now > 0.0 && now >= floor {
+                        heap.push(Entry { value: now, cell });
+                    }
+                    continue;
+                }
+            }
+        }
         let (center, radius) = match refiner.as_mut() {
             Some(r) => r.refine(voxel, value, &spheres),
             None => (voxel, value),
@@ -186,11 +258,11 @@ struct Rows {
 }
 
 impl Rows {
-    fn of(field: &DistanceField) -> Rows {
+    fn of(field: Voxels<'_>) -> Rows {
         let [nx, ny, nz] = field.grid.dims;
         let rows = ny as usize * nz as usize;
         let mut start = vec![0u32; rows + 1];
-        for &c in &field.inside {
+        for &c in field.inside {
             start[(c / nx) as usize + 1] += 1;
         }
         for r in 0..rows {
@@ -204,7 +276,7 @@ impl Rows {
     #[inline]
     fn span(
         &self,
-        field: &DistanceField,
+        field: Voxels<'_>,
         r: usize,
         base: u32,
         lo: i64,

@@ -43,10 +43,10 @@ pub enum PresetArg {
     /// half a voxel, 8 refinement steps (the library's recommendation for unknown units).
     Fine,
     /// Jaw scans in mm, accuracy-calibrated: 0.1 mm voxels, 0.05 mm minimum radius, 8
-    /// refinement steps (p95 error 0.027 mm on the arches, ~13 s and ~0.5 GB per arch on 2 cores).
+    /// refinement steps (p95 error 0.027 mm on the arches, ~9 s and ~0.56 GB per arch on 2 cores).
     Jaw,
     /// Jaw scans in mm, the query benchmark's trees: 0.15 mm voxels, 0.05 mm minimum radius,
-    /// 8 refinement steps (2.7× faster to build than jaw, p95 error 0.046 mm on the molars).
+    /// 8 refinement steps (2.3× faster to build than jaw, p95 error 0.046 mm on the molars).
     JawFast,
 }
 

@@ -35,18 +35,18 @@ pub enum Preset {
     /// off-grid refinement steps (the ratio and steps chosen in `docs/RESULTS.md`, where they
     /// gave a distance error p95 of about a quarter voxel with 4× fewer spheres than the
     /// plain packing at the same error). 27× the voxels of `Default`, and the refinement
-    /// runs on one thread: the bunny in 15 s and 0.6 GB, 131k spheres (2 cores). What
+    /// runs on one thread: the bunny in 10 s and 0.63 GB, 131k spheres (2 cores). What
     /// [`BuildOptions::recommended_for`] returns.
     Fine,
     /// Jaw scans in **millimetres**, the accuracy-calibrated setting of `docs/RESULTS.md`:
     /// 0.1 mm voxels, 0.05 mm minimum radius, 8 refinement steps. On the real arches:
     /// distance error p95 0.027 mm (the bar is 0.03 mm), no missed contact deeper than
-    /// 0.1 mm, about 150k spheres, 12–13 s and 0.5 GB per arch on 2 cores; a molar in 1.3 s
+    /// 0.1 mm, about 150k spheres, 9 s and 0.56 GB per arch on 2 cores; a molar in 1.3 s
     /// (14k spheres, p95 0.023 mm).
     Jaw,
     /// Jaw scans in **millimetres**, the query benchmark's trees (`BENCHMARKS.md`): 0.15 mm
-    /// voxels, 0.05 mm minimum radius, 8 refinement steps. About 110k spheres and 4.7 s
-    /// per arch on 2 cores (2.7× faster to build than `Jaw`), but distance error p95 0.046 mm on the molars,
+    /// voxels, 0.05 mm minimum radius, 8 refinement steps. About 110k spheres and 4 s
+    /// per arch on 2 cores (2.3× faster to build than `Jaw`), but distance error p95 0.046 mm on the molars,
     /// above the 0.03 mm bar: for iterating and timing, not for the final trees.
     JawFast,
 }

@@ -135,6 +135,10 @@ pub struct Accuracy {
     pub missed_contacts: usize,
     /// Missed contacts where the meshes interpenetrate by more than `deep`.
     pub missed_contacts_deep: usize,
+    /// The deepest interpenetration among the missed contacts (model units, mm for the jaw
+    /// scans; 0 when none): how deep a contact the trees can miss.
+    #[serde(rename = "missed_contacts_max_depth_mm")]
+    pub missed_contacts_max_depth: f64,
     /// Frames where the trees overlap but the meshes are separated.
     pub false_contacts: usize,
     /// Frames between a compared frame and the one the exact method's warm start comes from
@@ -490,6 +494,7 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
                 if !tree_contact {
                     acc.missed_contacts += 1;
                     let depth = exact::penetration_depth(ma, &id, mb, &f.pose, &mut scratch);
+                    acc.missed_contacts_max_depth = acc.missed_contacts_max_depth.max(depth);
                     if depth > opts.deep {
                         acc.missed_contacts_deep += 1;
                     }

@@ -18,10 +18,15 @@ use innersphere_eval::replay::{
 /// The tree of a unit ball: the grid has a voxel at the centre, so the packing is one sphere,
 /// the ball itself.
 fn ball_tree() -> SharedTree {
-    let grid = VoxelGrid::covering(DVec3::splat(-1.0), DVec3::splat(1.0), 0.1).unwrap();
-    let field = DistanceField::from_signed_distance(grid, |p| 1.0 - p.length());
+    ball_tree_of(1.0)
+}
+
+/// The tree of a ball of radius `r` (one sphere).
+fn ball_tree_of(r: f64) -> SharedTree {
+    let grid = VoxelGrid::covering(DVec3::splat(-r), DVec3::splat(r), 0.1).unwrap();
+    let field = DistanceField::from_signed_distance(grid, |p| r - p.length());
     let spheres = packing::pack(&field, &PackingOptions::default(), None, &Silent);
-    assert!((spheres[0].radius - 1.0).abs() < 1e-9);
+    assert!((spheres[0].radius - r).abs() < 1e-9);
     let meta = TreeMeta {
         mesh_volume: 4.0 / 3.0 * std::f64::consts::PI,
         coverage: 1.0,
@@ -152,6 +157,7 @@ fn replay_of_two_balls_matches_the_closed_form() {
     assert_eq!(acc.frames, 20);
     assert_eq!(acc.separated_frames, 10);
     assert_eq!(acc.missed_contacts, 0);
+    assert_eq!(acc.missed_contacts_max_depth, 0.0);
     assert_eq!(acc.false_contacts, 0);
     // The icosphere is inscribed in the ball: the meshes are a little farther apart than the
     // balls, by at most twice the polyhedron's deviation from the sphere.
@@ -408,4 +414,35 @@ fn the_csv_holds_each_kinds_own_answer() {
         let dd: f64 = dist[i].parse().unwrap();
         assert!((dd - (d - 2.0).max(0.0)).abs() < 1e-5, "frame {i}: {dd}");
     }
+}
+
+/// Trees smaller than their meshes (balls of radius 0.8 for unit icospheres) miss the contacts
+/// where the meshes overlap by less than 0.4: each is counted, and the deepest one is reported
+/// (here the frame at centre distance 1.7, about 0.3 deep).
+#[test]
+fn replay_reports_the_deepest_missed_contact() {
+    let (a, b) = (ball_tree_of(0.8), ball_tree_of(0.8));
+    let centre = [3.0, 1.95, 1.9, 1.8, 1.7];
+    let motion = motion_of(&centre);
+    let mesh = innersphere::shapes::icosphere(4);
+    let exact = ExactMesh::new(&mesh).unwrap();
+    let report = replay(
+        &a,
+        &b,
+        &motion,
+        Some((&exact, &exact)),
+        &ReplayOptions::default(),
+    );
+    let acc = report.accuracy.unwrap();
+    assert_eq!(acc.missed_contacts, 4, "{acc:?}");
+    let mut scratch = innersphere::exact::ExactScratch::new();
+    let deepest = innersphere::exact::penetration_depth(
+        &exact,
+        &Pose::IDENTITY,
+        &exact,
+        &Pose::from_translation(DVec3::new(1.7, 0.0, 0.0)),
+        &mut scratch,
+    );
+    assert_eq!(acc.missed_contacts_max_depth, deepest);
+    assert!((0.28..=0.3 + 1e-9).contains(&deepest), "{deepest}");
 }

@@ -157,10 +157,10 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     }
     if let Some(acc) = &report.accuracy {
         println!(
-            "exact reference on {} frames ({} separated): abs error p50 {:.4} p95 {:.4} max {:.4} units (model units, mm for the jaw scans), relative p50 {:.4} p95 {:.4}; missed contacts {} ({} deeper than {} units), false contacts {}",
+            "exact reference on {} frames ({} separated): abs error p50 {:.4} p95 {:.4} max {:.4} units (model units, mm for the jaw scans), relative p50 {:.4} p95 {:.4}; missed contacts {} ({} deeper than {} units, the deepest {:.4}), false contacts {}",
             acc.frames, acc.separated_frames, acc.abs_err_p50, acc.abs_err_p95, acc.abs_err_max,
             acc.rel_err_p50, acc.rel_err_p95, acc.missed_contacts, acc.missed_contacts_deep,
-            opts.deep, acc.false_contacts
+            opts.deep, acc.missed_contacts_max_depth, acc.false_contacts
         );
         let best = if n > 1 {
             format!(

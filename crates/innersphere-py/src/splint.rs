@@ -2,7 +2,7 @@
 
 use crate::convert::{self, error, json, pose_or_identity};
 use crate::tree::mesh_like;
-use innersphere::splint::{least_opening, make, opened, SplintOptions};
+use innersphere::splint::{make_opened, Opening, SplintOptions};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -49,46 +49,27 @@ pub fn splint<'py>(
         voxel: voxel.unwrap_or(d.voxel),
     };
     opts.validate().map_err(error)?;
-    let open: Option<f64> = match open {
-        None => Some(0.0),
-        Some(o) if o.extract::<String>().is_ok_and(|s| s == "auto") => None,
-        Some(o) => Some(o.extract::<f64>().map_err(|_| {
+    let opening = match open {
+        None => Opening::By(0.0),
+        Some(o) if o.extract::<String>().is_ok_and(|s| s == "auto") => Opening::Auto,
+        Some(o) => Opening::By(o.extract::<f64>().map_err(|_| {
             PyValueError::new_err("open: expected a number of millimetres or \"auto\"")
         })?),
     };
     let out = out.map(convert::path).transpose()?;
     let ma = mesh_like(py, a, "a", false)?;
     let mb = mesh_like(py, b, "b", false)?;
-    let (s, opening, pose) = py
+    let s = py
         .detach(|| -> innersphere::Result<_> {
-            let opening = match open {
-                Some(o) => o,
-                None => least_opening(&ma, &mb, &pose, &opts)?,
-            };
-            let pose = if opening != 0.0 {
-                opened(&ma, &mb, &pose, opening)?
-            } else {
-                pose
-            };
-            let s = make(&ma, &mb, &pose, &opts)?;
+            let s = make_opened(&ma, &mb, &pose, opening, &opts)?;
             if let Some(p) = &out {
                 innersphere::mesh::save_stl(&s.mesh, p)?;
             }
-            Ok((s, opening, pose))
+            Ok(s)
         })
         .map_err(error)?;
-    let mut report =
+    let report =
         serde_json::to_value(&s.report).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    report["opened"] = opening.into();
-    report["pose"] = serde_json::json!([
-        pose.translation.x,
-        pose.translation.y,
-        pose.translation.z,
-        pose.rotation.w,
-        pose.rotation.x,
-        pose.rotation.y,
-        pose.rotation.z
-    ]);
     let n = s.mesh.vertices.len();
     let m = s.mesh.triangles.len();
     let v: Vec<f64> = s.mesh.vertices.iter().flat_map(|p| p.to_array()).collect();

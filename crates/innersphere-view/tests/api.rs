@@ -20,23 +20,29 @@ fn server() -> &'static Server {
     static S: OnceLock<Server> = OnceLock::new();
     S.get_or_init(|| {
         let scene = Scene::demo().unwrap();
-        let (tx, rx) = std::sync::mpsc::channel();
-        let s = scene.clone();
-        std::thread::spawn(move || {
-            let opts = ServeOptions {
-                port: 0,
-                ..Default::default()
-            };
-            serve(s, opts, move |addr| tx.send(addr).unwrap()).unwrap();
-        });
-        let addr = rx.recv_timeout(Duration::from_secs(30)).unwrap();
+        let addr = serve_scene(scene.clone(), ServeOptions::default());
         Server { addr, scene }
     })
 }
 
-/// (status, body) of one request.
+/// A server of `scene` on its own free port (the options' port is replaced).
+fn serve_scene(scene: Scene, opts: ServeOptions) -> SocketAddr {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let opts = ServeOptions { port: 0, ..opts };
+        serve(scene, opts, move |addr| tx.send(addr).unwrap()).unwrap();
+    });
+    rx.recv_timeout(Duration::from_secs(30)).unwrap()
+}
+
+/// (status, body) of one request to the shared server.
 fn request(method: &str, path: &str, body: &str) -> (u16, Vec<u8>) {
-    let mut s = TcpStream::connect(server().addr).unwrap();
+    request_to(server().addr, method, path, body)
+}
+
+/// (status, body) of one request to the server at `addr`.
+fn request_to(addr: SocketAddr, method: &str, path: &str, body: &str) -> (u16, Vec<u8>) {
+    let mut s = TcpStream::connect(addr).unwrap();
     s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
     write!(
         s,
@@ -308,16 +314,7 @@ fn the_contact_map_is_the_library_s_at_the_map_s_pose() {
 fn a_scene_without_meshes_has_no_contact_map() {
     let mut scene = server().scene.clone();
     scene.mesh_b = None;
-    let (tx, rx) = std::sync::mpsc::channel();
-    let s = scene.clone();
-    std::thread::spawn(move || {
-        let opts = ServeOptions {
-            port: 0,
-            ..Default::default()
-        };
-        serve(s, opts, move |addr| tx.send(addr).unwrap()).unwrap();
-    });
-    let addr = rx.recv_timeout(Duration::from_secs(30)).unwrap();
+    let addr = serve_scene(scene.clone(), ServeOptions::default());
     let get = |path: &str, body: Option<&str>| {
         let mut s = TcpStream::connect(addr).unwrap();
         s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
@@ -367,34 +364,11 @@ fn a_splint_is_served_in_a_s_frame_and_b_starts_at_its_pose() {
     let start = innersphere::Pose::from_translation(innersphere::glam::DVec3::new(0.0, 0.0, -0.5));
     scene.start = Some(start);
     scene.motion = None; // in motion mode the motion moves B
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let opts = ServeOptions {
-            port: 0,
-            ..Default::default()
-        };
-        serve(scene, opts, move |addr| tx.send(addr).unwrap()).unwrap();
-    });
-    let addr = rx.recv_timeout(Duration::from_secs(30)).unwrap();
+    let addr = serve_scene(scene, ServeOptions::default());
     let get = |path: &str| -> Vec<u8> {
-        let mut s = TcpStream::connect(addr).unwrap();
-        s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
-        write!(
-            s,
-            "GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n"
-        )
-        .unwrap();
-        let mut out = Vec::new();
-        s.read_to_end(&mut out).unwrap();
-        let start = out.windows(4).position(|w| w == b"\r\n\r\n").unwrap() + 4;
-        let text = String::from_utf8_lossy(&out[..start]).to_ascii_lowercase();
-        assert!(text.starts_with("http/1.1 200"), "{path}: {text}");
-        let body = out[start..].to_vec();
-        if text.contains("transfer-encoding: chunked") {
-            dechunk(&body)
-        } else {
-            body
-        }
+        let (code, body) = request_to(addr, "GET", path, "");
+        assert_eq!(code, 200, "{path}");
+        body
     };
     let info: Value = serde_json::from_slice(&get("/api/info")).unwrap();
     assert_eq!(info["splint"], true);

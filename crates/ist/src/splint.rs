@@ -2,7 +2,7 @@
 //! as a watertight binary STL, with its measurements.
 
 use anyhow::Context;
-use innersphere::splint::{self, SplintOptions};
+use innersphere::splint::{self, Opening, SplintOptions};
 use innersphere::Pose;
 use std::path::PathBuf;
 
@@ -54,10 +54,10 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         .pose
         .parse()
         .with_context(|| format!("--pose \"{}\"", args.pose))?;
-    let open: Option<f64> = match args.open.trim() {
-        "auto" => None,
+    let opening = match args.open.trim() {
+        "auto" => Opening::Auto,
         text => match text.parse::<f64>() {
-            Ok(o) if o.is_finite() && o.abs() <= 50.0 => Some(o),
+            Ok(o) if o.is_finite() && o.abs() <= 50.0 => Opening::By(o),
             _ => anyhow::bail!(
                 "--open must be `auto` or a number of millimetres within ±50, got \"{}\"",
                 args.open
@@ -75,36 +75,17 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     opts.validate()?;
     let a = crate::files::load_mesh(&args.a)?;
     let b = crate::files::load_mesh(&args.b)?;
-    let opening = match open {
-        Some(o) => o,
-        None => splint::least_opening(&a, &b, &pose, &opts)?,
-    };
-    let pose = if opening != 0.0 {
-        splint::opened(&a, &b, &pose, opening)?
-    } else {
-        pose
-    };
-    let s = splint::make(&a, &b, &pose, &opts)?;
+    let s = splint::make_opened(&a, &b, &pose, opening, &opts)?;
     innersphere::mesh::save_stl(&s.mesh, &args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
     let r = &s.report;
     if args.json {
         let mut v = serde_json::to_value(r)?;
-        v["pose"] = serde_json::json!([
-            pose.translation.x,
-            pose.translation.y,
-            pose.translation.z,
-            pose.rotation.w,
-            pose.rotation.x,
-            pose.rotation.y,
-            pose.rotation.z
-        ]);
         v["out"] = args.out.display().to_string().into();
-        v["opened"] = opening.into();
         crate::print::print_json(&v)?;
     } else {
-        if opening != 0.0 {
-            println!("opened {opening:.2} mm at the incisors about the hinge");
+        if r.opened != 0.0 {
+            println!("opened {:.2} mm at the incisors about the hinge", r.opened);
         }
         println!(
             "{}: {} triangles, {:.1} mm³, {} bod{}, {}",

@@ -25,16 +25,48 @@ impl TriangleBvh {
         t_max: f64,
         skip: impl Fn(u32) -> bool,
     ) -> Option<RayHit> {
-        let inv = DVec3::ONE / dir;
         let mut best: Option<RayHit> = None;
-        let mut t_best = t_max;
-        let mut stack = [0u32; MAX_DEPTH + 2];
-        let mut sp = 0usize;
+        self.walk(origin, dir, t_min, t_max, |slot, t| {
+            let triangle = self.order[slot];
+            if skip(triangle) {
+                return f64::INFINITY;
+            }
+            best = Some(RayHit { t, triangle });
+            t
+        });
+        best
+    }
+
+    /// How many triangles the ray `origin + t·dir` (`t > 0`) crosses: odd inside a closed
+    /// mesh, even outside (for a ray that meets no edge or vertex exactly: pick a direction
+    /// off the mesh's axes).
+    pub fn crossings(&self, origin: DVec3, dir: DVec3) -> usize {
+        let mut count = 0;
+        self.walk(origin, dir, 0.0, f64::INFINITY, |_, _| {
+            count += 1;
+            f64::INFINITY
+        });
+        count
+    }
+
+    /// Calls `hit(slot, t)` for every triangle the ray meets at `t_min < t ≤ cutoff`, where
+    /// the cutoff starts at `t_max` and becomes the smaller of itself and what `hit` returns
+    /// (infinity: keep it), so that a nearest-hit search prunes what lies beyond its hit.
+    fn walk(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        t_min: f64,
+        t_max: f64,
+        mut hit: impl FnMut(usize, f64) -> f64,
+    ) {
         if self.nodes.is_empty() {
-            return None;
+            return;
         }
-        stack[sp] = 0;
-        sp += 1;
+        let inv = DVec3::ONE / dir;
+        let mut cutoff = t_max;
+        let mut stack = [0u32; MAX_DEPTH + 2];
+        let mut sp = 1usize;
         while sp > 0 {
             sp -= 1;
             let i = stack[sp];
@@ -42,21 +74,16 @@ impl TriangleBvh {
             let t0 = (n.lo - origin) * inv;
             let t1 = (n.hi - origin) * inv;
             let enter = t0.min(t1).max_element().max(t_min);
-            let exit = t0.max(t1).min_element().min(t_best);
+            let exit = t0.max(t1).min_element().min(cutoff);
             // NaN (a zero direction component on the box's face) counts as a hit.
             if enter > exit {
                 continue;
             }
             if n.is_leaf() {
                 for slot in n.start as usize..(n.start + n.count) as usize {
-                    let tri = self.order[slot];
-                    if skip(tri) {
-                        continue;
-                    }
                     if let Some(t) = intersect(origin, dir, &self.tris[slot]) {
-                        if t > t_min && t <= t_best {
-                            t_best = t;
-                            best = Some(RayHit { t, triangle: tri });
+                        if t > t_min && t <= cutoff {
+                            cutoff = cutoff.min(hit(slot, t));
                         }
                     }
                 }
@@ -66,46 +93,6 @@ impl TriangleBvh {
                 sp += 2;
             }
         }
-        best
-    }
-}
-
-impl TriangleBvh {
-    /// How many triangles the ray `origin + t·dir` (`t > 0`) crosses: odd inside a closed
-    /// mesh, even outside (for a ray that meets no edge or vertex exactly: pick a direction
-    /// off the mesh's axes).
-    pub fn crossings(&self, origin: DVec3, dir: DVec3) -> usize {
-        let inv = DVec3::ONE / dir;
-        let mut count = 0;
-        let mut stack = [0u32; MAX_DEPTH + 2];
-        let mut sp = 0usize;
-        if self.nodes.is_empty() {
-            return 0;
-        }
-        stack[sp] = 0;
-        sp += 1;
-        while sp > 0 {
-            sp -= 1;
-            let i = stack[sp];
-            let n = &self.nodes[i as usize];
-            let t0 = (n.lo - origin) * inv;
-            let t1 = (n.hi - origin) * inv;
-            if t0.min(t1).max_element().max(0.0) > t0.max(t1).min_element() {
-                continue;
-            }
-            if n.is_leaf() {
-                for slot in n.start as usize..(n.start + n.count) as usize {
-                    if intersect(origin, dir, &self.tris[slot]).is_some_and(|t| t > 0.0) {
-                        count += 1;
-                    }
-                }
-            } else if sp + 2 <= stack.len() {
-                stack[sp] = n.start;
-                stack[sp + 1] = i + 1;
-                sp += 2;
-            }
-        }
-        count
     }
 }
 

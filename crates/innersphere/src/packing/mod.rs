@@ -117,7 +117,7 @@ fn pack_voxels(
     // the inside voxels are held (on the jaw 8M of a 64M-cell grid), found row by row.
     let mut remaining = dist.to_vec();
     // With bounds: whether the voxel's distance to the surface is exact yet.
-    let mut exact = vec![lazy.is_none(); if lazy.is_some() { dist.len() } else { 0 }];
+    let mut exact = vec![false; if lazy.is_some() { dist.len() } else { 0 }];
     let rows = Rows::of(field);
     // Spheres below 1e-4 voxel are useless and would vanish when rounded to f32.
     let floor = opts.min_radius.max(1e-4 * grid.h);

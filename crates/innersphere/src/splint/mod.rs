@@ -132,8 +132,42 @@ pub fn make(a: &Mesh, b: &Mesh, pose: &Pose, opts: &SplintOptions) -> Result<Spl
         t_report.elapsed(),
     ]
     .map(|d| d.as_secs_f64());
+    report.pose = pose.to_array();
     report.seconds = start.elapsed().as_secs_f64();
     Ok(Splint { mesh, report })
+}
+
+/// How far B is opened about the hinge before the splint is made ([`make_opened`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Opening {
+    /// This far at the incisors (model units; 0: at the pose as given).
+    By(f64),
+    /// The least that leaves room for the wafer ([`least_opening`]).
+    Auto,
+}
+
+/// [`make`] at `pose` opened about the hinge as asked ([`opened`], [`least_opening`]): the
+/// intermediate splint (`By(o)`) or the final one (`Auto`). The report says how far it
+/// opened and the pose it was made at.
+pub fn make_opened(
+    a: &Mesh,
+    b: &Mesh,
+    pose: &Pose,
+    opening: Opening,
+    opts: &SplintOptions,
+) -> Result<Splint> {
+    let o = match opening {
+        Opening::By(o) => o,
+        Opening::Auto => least_opening(a, b, pose, opts)?,
+    };
+    let at = if o != 0.0 {
+        opened(a, b, pose, o)?
+    } else {
+        *pose
+    };
+    let mut s = make(a, b, &at, opts)?;
+    s.report.opened = o;
+    Ok(s)
 }
 
 /// The largest share of the outline that [`least_opening`] leaves perforated.

@@ -85,12 +85,6 @@ pub fn smooth_fill(v: &[f64], dims: Dims, sigma: f64) -> Vec<f64> {
         .collect()
 }
 
-/// Plain Gaussian smoothing (σ in cells) of a map with every cell finite; the border is
-/// extended by its nearest cell through the normalization.
-pub fn smooth(v: &[f64], dims: Dims, sigma: f64) -> Vec<f64> {
-    smooth_fill(v, dims, sigma)
-}
-
 /// The minimum over the `(2r+1)²` square around each cell (infinite cells are ignored
 /// unless all are).
 pub fn min_filter(v: &[f64], dims: Dims, r: usize) -> Vec<f64> {
@@ -121,21 +115,16 @@ pub fn distance_to(mask: &[bool], dims: Dims) -> Vec<f64> {
     let [nx, ny] = dims;
     let big = 1e20;
     let mut f: Vec<f64> = mask.iter().map(|m| if *m { 0.0 } else { big }).collect();
-    let mut line = Vec::new();
-    for j in 0..ny {
-        line.clear();
-        line.extend((0..nx).map(|i| f[i + nx * j]));
-        let d = envelope(&line);
-        for i in 0..nx {
-            f[i + nx * j] = d[i];
-        }
-    }
-    for i in 0..nx {
-        line.clear();
-        line.extend((0..ny).map(|j| f[i + nx * j]));
-        let d = envelope(&line);
-        for j in 0..ny {
-            f[i + nx * j] = d[j];
+    // Rows, then columns: each line replaced by its 1-D transform.
+    for (len, lines, stride, step) in [(nx, ny, 1, nx), (ny, nx, nx, 1)] {
+        let mut line = vec![0.0; len];
+        for l in 0..lines {
+            for (i, c) in line.iter_mut().enumerate() {
+                *c = f[l * step + i * stride];
+            }
+            for (i, d) in envelope(&line).into_iter().enumerate() {
+                f[l * step + i * stride] = d;
+            }
         }
     }
     f.into_iter()
@@ -257,7 +246,7 @@ mod tests {
         let dims = [30, 20];
         let plane = |k: usize| 0.3 * (k % 30) as f64 + 0.1 * (k / 30) as f64;
         let full: Vec<f64> = (0..600).map(plane).collect();
-        let s = smooth(&full, dims, 1.5);
+        let s = smooth_fill(&full, dims, 1.5);
         for j in 6..14 {
             for i in 6..24 {
                 assert!((s[i + 30 * j] - plane(i + 30 * j)).abs() < 1e-9);

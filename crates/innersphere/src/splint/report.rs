@@ -60,6 +60,11 @@ pub struct SplintReport {
     pub dropped_specks: usize,
     /// Vertices pushed out to the clearance after extraction.
     pub moved_vertices: usize,
+    /// How far B was opened about the hinge at the incisors before the splint was made
+    /// ([`make_opened`](super::make_opened); 0 for [`make`](super::make)).
+    pub opened: f64,
+    /// The pose of B it was made at, `[tx, ty, tz, qw, qx, qy, qz]` in A's frame.
+    pub pose: [f64; 7],
     /// The insertion axis (occlusal up, from B to A) in A's frame.
     pub insertion_axis: [f64; 3],
     /// The options it was made with.
@@ -159,6 +164,8 @@ pub fn report(
         coverage_b,
         perforated_area: shape.perforated_area,
         dropped_parts: shape.dropped_parts,
+        opened: 0.0,
+        pose: [0.0; 7],
         dropped_specks: 0,
         moved_vertices: 0,
         insertion_axis: shape.frame.axes[2].to_array(),
@@ -181,10 +188,9 @@ fn vertex_areas(m: &Mesh) -> Vec<f64> {
     area
 }
 
-/// Vertices whose triangles do not form one fan: following the edges opposite a vertex
-/// (`b → c` for each triangle `v, b, c`) does not visit them all in one cycle.
-pub fn pinched_vertices(m: &Mesh) -> usize {
-    // Directed opposite edges, bucketed by vertex.
+/// The triangles around each vertex: those of vertex `v` are
+/// `tris[start[v]..start[v + 1]]`, in mesh order.
+fn triangles_around(m: &Mesh) -> (Vec<u32>, Vec<u32>) {
     let n = m.vertices.len();
     let mut start = vec![0u32; n + 1];
     for t in &m.triangles {
@@ -196,18 +202,34 @@ pub fn pinched_vertices(m: &Mesh) -> usize {
         start[i + 1] += start[i];
     }
     let mut fill = start.clone();
-    let mut opp = vec![(0u32, 0u32); start[n] as usize];
-    for t in &m.triangles {
-        for k in 0..3 {
-            let v = t[k] as usize;
-            opp[fill[v] as usize] = (t[(k + 1) % 3], t[(k + 2) % 3]);
-            fill[v] += 1;
+    let mut tris = vec![0u32; start[n] as usize];
+    for (t, tri) in m.triangles.iter().enumerate() {
+        for &v in tri {
+            tris[fill[v as usize] as usize] = t as u32;
+            fill[v as usize] += 1;
         }
     }
+    (start, tris)
+}
+
+/// Vertices whose triangles do not form one fan: following the edges opposite a vertex
+/// (`b → c` for each triangle `v, b, c`) does not visit them all in one cycle.
+pub fn pinched_vertices(m: &Mesh) -> usize {
+    let n = m.vertices.len();
+    let (start, around) = triangles_around(m);
+    // The edge opposite `v` in triangle `t`, in the triangle's direction.
+    let opposite = |v: u32, t: u32| -> (u32, u32) {
+        let tri = m.triangles[t as usize];
+        let k = tri.iter().position(|&x| x == v).unwrap_or(0);
+        (tri[(k + 1) % 3], tri[(k + 2) % 3])
+    };
     (0..n)
         .into_par_iter()
         .filter(|&v| {
-            let fan = &opp[start[v] as usize..start[v + 1] as usize];
+            let fan: Vec<(u32, u32)> = around[start[v] as usize..start[v + 1] as usize]
+                .iter()
+                .map(|&t| opposite(v as u32, t))
+                .collect();
             if fan.is_empty() {
                 return false;
             }
@@ -243,23 +265,7 @@ fn thickness(m: &Mesh, bvh: &TriangleBvh, up: DVec3) -> (f64, f64) {
             normal[i as usize] += nt;
         }
     }
-    let mut start = vec![0u32; n + 1];
-    for t in &m.triangles {
-        for &v in t {
-            start[v as usize + 1] += 1;
-        }
-    }
-    for i in 0..n {
-        start[i + 1] += start[i];
-    }
-    let mut fill = start.clone();
-    let mut around = vec![0u32; start[n] as usize];
-    for (t, tri) in m.triangles.iter().enumerate() {
-        for &v in tri {
-            around[fill[v as usize] as usize] = t as u32;
-            fill[v as usize] += 1;
-        }
-    }
+    let (start, around) = triangles_around(m);
     let mut t: Vec<f64> = (0..n)
         .into_par_iter()
         .filter_map(|v| {

@@ -190,7 +190,7 @@ pub fn shape(a: &Mesh, b: &Mesh, pose: &Pose, o: &SplintOptions) -> Result<Shape
         .collect();
     let dist = raster::distance_to(&core, dims);
     let margin: Vec<f64> = dist.iter().map(|d| o.rim - d * h).collect();
-    let outline = raster::smooth(&margin, dims, OUTLINE_SIGMA / h);
+    let outline = raster::smooth_fill(&margin, dims, OUTLINE_SIGMA / h);
 
     // Thick enough across the mid-surface: vertical thickness ≥ t·√(1 + |∇m|²).
     let mid: Vec<f64> = cap_a

@@ -353,10 +353,12 @@ fn free_occlusion_from_many_starts_seats_the_peg() {
     assert_eq!(f.candidates.iter().map(|c| c.starts).sum::<usize>(), 8);
     assert_eq!(f.pose, f.candidates[0].pose);
     for c in &f.candidates {
-        // The turn about its own axis is a symmetry of the peg: its axis is what must agree.
+        // The turn about its own axis is a symmetry of the peg: its axis is what must agree,
+        // to a fifth of the ring's voxel (0.094 mm): the spheres are symmetric only to their
+        // packing's resolution.
         for p in [DVec3::new(0.0, 0.0, 3.0), DVec3::new(0.0, 0.0, -3.0)] {
             let q = c.pose.transform_point(p);
-            assert!(q.truncate().length() < 0.01, "{c:?}");
+            assert!(q.truncate().length() < 0.02, "{c:?}");
         }
         assert!(
             c.contacts > 0 && c.lateral_side > 0 && c.other_side > 0,

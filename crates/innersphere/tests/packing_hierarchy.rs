@@ -314,3 +314,111 @@ fn packing_from_bounds_equals_packing_from_exact_distances() {
         }
     }
 }
+
+/// The parallel packing on generated meshes, with and without refinement: every sphere lies
+/// within the surface's distance of its centre and none overlap, the spheres are the same on
+/// 1 and 4 threads, and they fill at least 97 % of the volume the global greedy order fills.
+#[test]
+fn parallel_packing_is_valid_thread_independent_and_as_full_as_the_global_order() {
+    use innersphere::field::distance;
+    use innersphere::mesh::bvh::TriangleBvh;
+    use innersphere::shapes;
+    let meshes = [
+        shapes::molar(3, 0.2),
+        shapes::torus(1.0, 0.35, 48, 24),
+        shapes::ellipsoid(DVec3::new(1.0, 0.6, 0.4), 3),
+    ];
+    let on = |threads: usize, f: &(dyn Fn() -> Vec<Sphere> + Sync)| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(f)
+    };
+    for mesh in &meshes {
+        let (lo, hi) = mesh.bbox();
+        let grid = VoxelGrid::with_resolution(lo, hi, 48).unwrap();
+        let bvh = TriangleBvh::new(mesh);
+        let bounds = distance::bounds(mesh, &bvh, grid, &Silent).unwrap();
+        let exact = distance::compute(mesh, grid, &Silent).unwrap();
+        assert!(exact.dist.iter().zip(&bounds.bound).any(|(e, b)| e < b));
+        let surface = |p: DVec3| bvh.closest_point(p, f64::INFINITY).unwrap().dist_sq.sqrt();
+        for opts in [
+            PackingOptions::default(),
+            PackingOptions {
+                min_radius: 0.5 * grid.h,
+                refine_steps: 8,
+                ..Default::default()
+            },
+        ] {
+            let one = on(1, &|| packing::pack_parallel(&bounds, &bvh, &opts, &Silent));
+            let four = on(4, &|| packing::pack_parallel(&bounds, &bvh, &opts, &Silent));
+            assert_eq!(one, four, "{opts:?}");
+            // The bounds' tightness changes nothing: exact distances as bounds, same spheres.
+            let tight = distance::DistanceBounds {
+                bound: exact.dist.clone(),
+                ..bounds.clone()
+            };
+            let from_exact = packing::pack_parallel(&tight, &bvh, &opts, &Silent);
+            assert_eq!(one, from_exact, "{opts:?}");
+            assert_packing_invariants(&one, &surface);
+            let global = packing::pack_bounded(&bounds, &bvh, &opts, &Silent);
+            let (v, g) = (packing::total_volume(&one), packing::total_volume(&global));
+            assert!(v >= 0.97 * g, "{opts:?}: volume {v} against {g}");
+        }
+    }
+}
+
+/// With a finite sphere budget the parallel packing is the global order's (the largest N).
+#[test]
+fn parallel_packing_with_a_budget_is_the_global_order() {
+    use innersphere::field::distance;
+    use innersphere::mesh::bvh::TriangleBvh;
+    let mesh = innersphere::shapes::molar(3, 0.2);
+    let (lo, hi) = mesh.bbox();
+    let grid = VoxelGrid::with_resolution(lo, hi, 32).unwrap();
+    let bvh = TriangleBvh::new(&mesh);
+    let bounds = distance::bounds(&mesh, &bvh, grid, &Silent).unwrap();
+    let opts = PackingOptions {
+        max_spheres: 50,
+        ..Default::default()
+    };
+    let got = packing::pack_parallel(&bounds, &bvh, &opts, &Silent);
+    assert_eq!(got.len(), 50);
+    assert_eq!(got, packing::pack_bounded(&bounds, &bvh, &opts, &Silent));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(12))]
+    /// The parallel packing on random ellipsoids and grids: spheres within the surface's
+    /// distance of their centres, disjoint, and the same on 1 and 3 threads.
+    #[test]
+    fn parallel_packing_invariants_on_random_ellipsoids(
+        rx in 0.3..1.2f64, ry in 0.3..1.2f64, rz in 0.3..1.2f64,
+        cells in 16u32..40, refine in any::<bool>(), min_r in 0.0..0.6f64,
+    ) {
+        use innersphere::field::distance;
+        use innersphere::mesh::bvh::TriangleBvh;
+        let mesh = innersphere::shapes::ellipsoid(DVec3::new(rx, ry, rz), 3);
+        let (lo, hi) = mesh.bbox();
+        let grid = VoxelGrid::with_resolution(lo, hi, cells).unwrap();
+        let bvh = TriangleBvh::new(&mesh);
+        let bounds = distance::bounds(&mesh, &bvh, grid, &Silent).unwrap();
+        let opts = PackingOptions {
+            min_radius: min_r * grid.h,
+            refine_steps: if refine { 8 } else { 0 },
+            ..Default::default()
+        };
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| packing::pack_parallel(&bounds, &bvh, &opts, &Silent))
+        };
+        let one = on(1);
+        prop_assert_eq!(&one, &on(3));
+        prop_assert!(!one.is_empty());
+        assert_packing_invariants(&one, &|p| bvh.closest_point(p, f64::INFINITY).unwrap().dist_sq.sqrt());
+    }
+}

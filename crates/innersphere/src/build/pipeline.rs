@@ -212,7 +212,7 @@ pub fn build_tree(
     }
 
     let t2 = Instant::now();
-    let spheres = packing::pack_bounded(&field, &bvh, &opts.packing, progress);
+    let spheres = packing::pack_parallel(&field, &bvh, &opts.packing, progress);
     drop(bvh);
     let t_pack = t2.elapsed().as_secs_f64();
     if spheres.is_empty() {

@@ -7,12 +7,15 @@
 //! the voxels within twice the new radius are visited: a voxel farther away has a remaining
 //! distance ≤ the new radius < its distance to the new sphere, so it cannot change.
 
+mod banded;
+mod cells;
 mod queue;
 mod refine;
 
 use crate::field::distance::DistanceBounds;
 use crate::field::{DistanceField, VoxelGrid};
 use crate::mesh::bvh::TriangleBvh;
+use cells::{cover, Remaining, Rows, Voxels};
 use glam::DVec3;
 use queue::{Entry, MaxQueue};
 
@@ -94,15 +97,31 @@ pub fn pack_bounded(
     )
 }
 
-/// The inside voxels: the grid and their linear indices, ascending.
-#[derive(Clone, Copy)]
-struct Voxels<'a> {
-    grid: &'a VoxelGrid,
-    inside: &'a [u32],
+/// The spheres of [`pack_bounded`] packed on all of rayon's threads: the greedy order is
+/// kept within bands of remaining distance (each band's lower end 0.8 of its upper end) and,
+/// within a band, within independent blocks of the grid that are packed at the same time
+/// (`banded` module). The same guarantees (inside the mesh, disjoint, deterministic and the
+/// same for any number of threads), not the same spheres as the global order: a band's
+/// spheres come block by block. With a finite `max_spheres` this is [`pack_bounded`], whose
+/// global order makes "the largest N" meaningful.
+pub fn pack_parallel(
+    field: &DistanceBounds,
+    bvh: &TriangleBvh,
+    opts: &PackingOptions,
+    progress: &dyn crate::progress::Progress,
+) -> Vec<Sphere> {
+    if opts.max_spheres != usize::MAX {
+        return pack_bounded(field, bvh, opts, progress);
+    }
+    let voxels = Voxels {
+        grid: &field.grid,
+        inside: &field.inside,
+    };
+    banded::pack(voxels, &field.bound, bvh, &field.slot, opts, progress)
 }
 
 /// The packing over voxels with distances `dist` (exact, or upper bounds with `lazy`: the
-/// tree and each bound's triangle slot).
+/// tree and each bound's triangle slot), in the global greedy order.
 fn pack_voxels(
     field: Voxels<'_>,
     dist: &[f64],
@@ -112,15 +131,12 @@ fn pack_voxels(
     progress: &dyn crate::progress::Progress,
 ) -> Vec<Sphere> {
     let grid = field.grid;
-    // Remaining distance of every inside voxel, in the order of `field.inside` (the queue's
-    // `cell` is that position: the same order as the grid index); negative = covered. Only
-    // the inside voxels are held (on the jaw 8M of a 64M-cell grid), found row by row.
-    let mut remaining = dist.to_vec();
+    // Only the inside voxels are held (on the jaw 8M of a 64M-cell grid), found row by row.
+    let remaining = Remaining::new(dist);
     // With bounds: whether the voxel's distance to the surface is exact yet.
     let mut exact = vec![false; if lazy.is_some() { dist.len() } else { 0 }];
     let rows = Rows::of(field);
-    // Spheres below 1e-4 voxel are useless and would vanish when rounded to f32.
-    let floor = opts.min_radius.max(1e-4 * grid.h);
+    let floor = floor(opts, grid);
     let mut heap = MaxQueue::with(|emit| {
         for (pos, &d) in dist.iter().enumerate() {
             if d > 0.0 && d >= floor {
@@ -133,8 +149,6 @@ fn pack_voxels(
     });
     progress.start("packing spheres", field.inside.len() as u64);
     let mut spheres = Vec::new();
-    let h = grid.h;
-    let dims = grid.dims;
     let mut covered_since_report = 0u64;
     let mut refiner = match surface {
         Some(bvh) if opts.refine_steps > 0 => {
@@ -142,11 +156,13 @@ fn pack_voxels(
         }
         _ => None,
     };
+    // One extra cell of reach covers the rounding of an off-grid centre.
+    let pad = i64::from(refiner.is_some());
     while let Some(Entry { value, cell }) = heap.pop() {
         if spheres.len() >= opts.max_spheres {
             break;
         }
-        let current = remaining[cell as usize];
+        let current = remaining.get(cell as usize);
         if current != value {
             // Stale entry: the voxel shrank (or was covered) after it was pushed.
             if current > 0.0 && current >= floor {
@@ -163,13 +179,9 @@ fn pack_voxels(
             let pos = cell as usize;
             if !exact[pos] {
                 exact[pos] = true;
-                // value = min(bound, gaps) and the exact distance is at most the bound.
-                let e = bvh
-                    .closest_point(voxel, bvh.slot_distance_sq(voxel, slots[pos]))
-                    .map_or(value, |c| c.dist_sq.sqrt());
-                let now = value.min(e);
+                let now = exact_distance(bvh, voxel, slots[pos], value);
                 if now != value {
-                    remaining[pos] = now;
+                    remaining.set(pos, now);
                     if now > 0.0 && now >= floor {
                         heap.push(Entry { value: now, cell });
                     }
@@ -177,8 +189,8 @@ fn pack_voxels(
                 }
             }
         }
-        let (center, radius) = match refiner.as_mut() {
-            Some(r) => r.refine(voxel, value, &spheres),
+        let (center, radius) = match refiner.as_ref() {
+            Some(r) => r.refine(voxel, value, &spheres, &[], f64::INFINITY),
             None => (voxel, value),
         };
         if let Some(r) = refiner.as_mut() {
@@ -186,60 +198,10 @@ fn pack_voxels(
         }
         spheres.push(Sphere { center, radius });
         // The sphere may sit off the voxel grid: measure from its real centre. The popped
-        // voxel is always covered (refinement keeps it inside the sphere).
-        let fc = (center - grid.origin) / h;
-        let (ci, cj, ck) = (
-            fc.x.round() as u32,
-            fc.y.round() as u32,
-            fc.z.round() as u32,
-        );
-
-        // Visit the cells within 2·radius of the centre, row by row.
-        let reach = 2.0 * radius;
-        let reach_cells = (reach / h).floor() as i64;
-        let reach_sq = reach * reach;
-        let r_sq = radius * radius;
-        // One extra cell of reach covers the rounding of an off-grid centre.
-        let pad = i64::from(refiner.is_some());
-        let reach_cells = reach_cells + pad;
-        let (ci, cj, ck) = (ci as i64, cj as i64, ck as i64);
-        for k in (ck - reach_cells).max(0)..=(ck + reach_cells).min(dims[2] as i64 - 1) {
-            let dz = grid.origin.z + k as f64 * h - center.z;
-            for j in (cj - reach_cells).max(0)..=(cj + reach_cells).min(dims[1] as i64 - 1) {
-                let dy = grid.origin.y + j as f64 * h - center.y;
-                let dyz = dy * dy + dz * dz;
-                if dyz > reach_sq {
-                    continue;
-                }
-                let span = ((reach_sq - dyz).sqrt() / h).floor() as i64 + pad;
-                let (lo, hi) = ((ci - span).max(0), (ci + span).min(dims[0] as i64 - 1));
-                let row = grid.index(0, j as u32, k as u32) as u32;
-                for pos in rows.span(
-                    field,
-                    j as usize + dims[1] as usize * k as usize,
-                    row,
-                    lo,
-                    hi,
-                ) {
-                    let slot = &mut remaining[pos];
-                    if *slot < 0.0 {
-                        continue;
-                    }
-                    let i = field.inside[pos] - row;
-                    let dx = grid.origin.x + i as f64 * h - center.x;
-                    let d_sq = dx * dx + dyz;
-                    if d_sq <= r_sq {
-                        *slot = -1.0;
-                        covered_since_report += 1;
-                    } else {
-                        let gap = d_sq.sqrt() - radius;
-                        if gap < *slot {
-                            *slot = gap;
-                        }
-                    }
-                }
-            }
-        }
+        // voxel is always covered (refinement keeps it inside the sphere). Every other
+        // voxel's remaining distance is at most `value` ≤ radius, so none beyond 2·radius
+        // changes.
+        covered_since_report += cover(field, &rows, &remaining, center, radius, 2.0 * radius, pad);
         if covered_since_report >= 65_536 {
             progress.advance(covered_since_report);
             covered_since_report = 0;
@@ -250,44 +212,21 @@ fn pack_voxels(
     spheres
 }
 
-/// Where each grid row's inside voxels sit in `field.inside` (ascending), so that the
-/// voxels of a row segment are found without a per-cell array over the whole grid.
-struct Rows {
-    /// `start[r]..start[r + 1]`: the positions of row `r = j + ny·k`.
-    start: Vec<u32>,
+/// The smallest radius placed: the larger of the option and 1e-4 voxel (smaller spheres are
+/// useless and would vanish when rounded to f32).
+fn floor(opts: &PackingOptions, grid: &VoxelGrid) -> f64 {
+    opts.min_radius.max(1e-4 * grid.h)
 }
 
-impl Rows {
-    fn of(field: Voxels<'_>) -> Rows {
-        let [nx, ny, nz] = field.grid.dims;
-        let rows = ny as usize * nz as usize;
-        let mut start = vec![0u32; rows + 1];
-        for &c in field.inside {
-            start[(c / nx) as usize + 1] += 1;
-        }
-        for r in 0..rows {
-            start[r + 1] += start[r];
-        }
-        Rows { start }
-    }
-
-    /// The positions of the inside voxels of row `r` (first cell index `base`) with
-    /// `lo ≤ i ≤ hi`.
-    #[inline]
-    fn span(
-        &self,
-        field: Voxels<'_>,
-        r: usize,
-        base: u32,
-        lo: i64,
-        hi: i64,
-    ) -> std::ops::Range<usize> {
-        let (a, b) = (self.start[r] as usize, self.start[r + 1] as usize);
-        let cells = &field.inside[a..b];
-        let first = cells.partition_point(|&c| ((c - base) as i64) < lo);
-        let last = cells.partition_point(|&c| ((c - base) as i64) <= hi);
-        a + first..a + last
-    }
+/// The exact distance of `voxel` to the surface, given `value` = min(its bound, gaps to the
+/// spheres) and the bound's triangle `slot`: min(value, exact) (the exact distance is at most
+/// the bound).
+#[inline]
+fn exact_distance(bvh: &TriangleBvh, voxel: DVec3, slot: u32, value: f64) -> f64 {
+    let e = bvh
+        .closest_point(voxel, bvh.slot_distance_sq(voxel, slot))
+        .map_or(value, |c| c.dist_sq.sqrt());
+    value.min(e)
 }
 
 /// Total volume of a set of spheres.

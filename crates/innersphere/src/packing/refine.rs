@@ -72,14 +72,14 @@ impl<'a> Refiner<'a> {
     /// surface is searched within the bound only, which prunes most of the triangle tree. The
     /// answer is the same as without the bound (a bound that turns out too small, by rounding,
     /// falls back to the unbounded search).
-    fn free(&self, c: DVec3, spheres: &[Sphere], bound: f64) -> (f64, DVec3) {
+    /// `extra` are spheres not registered yet (checked one by one).
+    fn free(&self, c: DVec3, spheres: &[Sphere], extra: &[Sphere], bound: f64) -> (f64, DVec3) {
         let b = bound * (1.0 + 1e-9) + 1e-12 * self.h;
         let (mut best, mut at, mut found) = match self.bvh.closest_point(c, b * b) {
             Some(h) => (h.dist_sq.sqrt(), h.point, true),
             None => (b, c, false),
         };
-        let consider = |id: u32, best: &mut f64, at: &mut DVec3, found: &mut bool| {
-            let s = spheres[id as usize];
+        let consider_sphere = |s: Sphere, best: &mut f64, at: &mut DVec3, found: &mut bool| {
             let d = (c - s.center).length();
             let gap = d - s.radius;
             if gap < *best {
@@ -92,6 +92,12 @@ impl<'a> Refiner<'a> {
                 };
             }
         };
+        let consider = |id: u32, best: &mut f64, at: &mut DVec3, found: &mut bool| {
+            consider_sphere(spheres[id as usize], best, at, found);
+        };
+        for &s in extra {
+            consider_sphere(s, &mut best, &mut at, &mut found);
+        }
         for &id in &self.big {
             consider(id, &mut best, &mut at, &mut found);
         }
@@ -109,15 +115,23 @@ impl<'a> Refiner<'a> {
             }
         }
         if !found && bound.is_finite() {
-            return self.free(c, spheres, f64::INFINITY);
+            return self.free(c, spheres, extra, f64::INFINITY);
         }
         (best, at)
     }
 
-    /// Moves the centre from voxel centre `v` (free radius `rho`) toward a larger free ball.
-    pub(super) fn refine(&mut self, v: DVec3, rho: f64, spheres: &[Sphere]) -> (DVec3, f64) {
+    /// Moves the centre from voxel centre `v` (free radius `rho`) toward a larger free ball,
+    /// of radius at most `cap`. `extra`: placed spheres not registered yet.
+    pub(super) fn refine(
+        &self,
+        v: DVec3,
+        rho: f64,
+        spheres: &[Sphere],
+        extra: &[Sphere],
+        cap: f64,
+    ) -> (DVec3, f64) {
         // The grid's remaining distance is the free radius at the voxel centre.
-        let (mut f, mut q) = self.free(v, spheres, rho);
+        let (mut f, mut q) = self.free(v, spheres, extra, rho);
         // The grid value is exact, but never trust a refinement that would shrink the sphere
         // (or a NaN).
         if f.is_nan() || f < rho {
@@ -133,8 +147,8 @@ impl<'a> Refiner<'a> {
             }
             let cand = c + away * (step.min(0.5 * f) / len);
             // The free radius is 1-Lipschitz: at most f plus the distance moved.
-            let (fc, qc) = self.free(cand, spheres, f + (cand - c).length());
-            if fc > f && (cand - v).length() <= fc {
+            let (fc, qc) = self.free(cand, spheres, extra, f + (cand - c).length());
+            if fc > f && fc <= cap && (cand - v).length() <= fc {
                 c = cand;
                 f = fc;
                 q = qc;

@@ -1,0 +1,211 @@
+//! The greedy packing on many threads: in bands of remaining distance, and within a band in
+//! independent blocks of the grid.
+//!
+//! The global greedy order (always the largest remaining distance next) is one chain. Here
+//! the distances are taken in bands `[τ·RATIO, τ)` from the largest down, and within a band
+//! the grid is cut into cubic blocks, each packed greedily on its own. Blocks are coloured by
+//! the parities of their coordinates (8 colours); blocks of one colour are at least one block
+//! apart and are packed at the same time. A block is wide enough that what one block's
+//! spheres change (the voxels within their reach) never meets another same-coloured block's
+//! voxels or changes, so every block sees exactly the state a serial run of the same order
+//! would: the spheres stay inside the mesh and disjoint, and the result does not depend on the
+//! number of threads (blocks' spheres are appended in block order).
+//!
+//! In a band every remaining distance is below τ, so a sphere of radius `r` changes only the
+//! voxels within `r + τ` of its centre (farther ones keep a remaining distance below their
+//! gap to it); refinement may not grow a sphere beyond `τ + 2 voxels` in the band, which
+//! bounds the block size needed.
+
+use super::cells::{cover, Remaining, Rows, Voxels};
+use super::queue::Entry;
+use super::refine::Refiner;
+use super::{exact_distance, floor, PackingOptions, Sphere};
+use crate::mesh::bvh::TriangleBvh;
+use rayon::prelude::*;
+use std::collections::BinaryHeap;
+use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
+
+/// Each band's lower end over its upper end.
+const RATIO: f64 = 0.8;
+
+/// How far refinement may grow a sphere beyond its band's top, in voxels.
+const GROWTH_VOXELS: f64 = 2.0;
+
+/// The packing of [`super::pack_bounded`] in bands and blocks (see the module docs).
+pub(super) fn pack(
+    field: Voxels<'_>,
+    bounds: &[f64],
+    bvh: &TriangleBvh,
+    slots: &[u32],
+    opts: &PackingOptions,
+    progress: &dyn crate::progress::Progress,
+) -> Vec<Sphere> {
+    let grid = field.grid;
+    let h = grid.h;
+    let remaining = Remaining::new(bounds);
+    let exact: Vec<AtomicBool> = (0..bounds.len()).map(|_| AtomicBool::new(false)).collect();
+    let rows = Rows::of(field);
+    let floor = floor(opts, grid);
+    let mut refiner = (opts.refine_steps > 0).then(|| Refiner::new(grid, bvh, opts.refine_steps));
+    let pad = i64::from(refiner.is_some());
+    let growth = if refiner.is_some() {
+        GROWTH_VOXELS * h
+    } else {
+        0.0
+    };
+    let mut live: Vec<u32> = (0..bounds.len() as u32)
+        .into_par_iter()
+        .filter(|&p| {
+            let v = bounds[p as usize];
+            v > 0.0 && v >= floor
+        })
+        .collect();
+    // The bands' ends are `floor / RATIO^n`: the same for any upper bounds, so the spheres do
+    // not depend on how tight the bounds are (a voxel whose bound lies in a higher band is
+    // made exact there and waits for its own band).
+    let largest = live
+        .par_iter()
+        .map(|&p| bounds[p as usize])
+        .reduce(|| 0.0, f64::max);
+    let edge = |n: i32| floor / RATIO.powi(n);
+    let mut n = 0;
+    while edge(n) < largest {
+        n += 1;
+    }
+    progress.start("packing spheres", field.inside.len() as u64);
+    let mut spheres: Vec<Sphere> = Vec::new();
+    while !live.is_empty() {
+        // Every remaining distance is at most `top`; the band is [low, top]. The last band
+        // takes everything down to the floor.
+        let top = edge(n);
+        n = (n - 1).max(0);
+        let low = edge(n);
+        let cap = top + growth;
+        // Writes reach 2·cap + top + 1.5 voxels from a block's voxels: two same-coloured
+        // blocks, one block apart, never meet.
+        let side = (((4.0 * cap + 2.0 * top) / h).ceil() as u32 + 4).max(8);
+        // The band's voxels, by colour and block.
+        let mut entries: Vec<(u64, Entry)> = live
+            .par_iter()
+            .filter_map(|&p| {
+                let v = remaining.get(p as usize);
+                (v >= low).then(|| {
+                    let [i, j, k] = grid.coords(field.inside[p as usize] as usize);
+                    let (bi, bj, bk) = ((i / side) as u64, (j / side) as u64, (k / side) as u64);
+                    let colour = (bi & 1) | (bj & 1) << 1 | (bk & 1) << 2;
+                    let key = colour << 60 | bk << 40 | bj << 20 | bi;
+                    (key, Entry { value: v, cell: p })
+                })
+            })
+            .collect();
+        entries.par_sort_unstable_by_key(|e| e.0);
+        let mut blocks: Vec<&[(u64, Entry)]> = entries.chunk_by(|a, b| a.0 == b.0).collect();
+        let mut covered = 0u64;
+        for colour in 0..8u64 {
+            let n = blocks.partition_point(|b| b[0].0 >> 60 <= colour);
+            let (these, rest) = blocks.split_at(n);
+            let band = Band {
+                field,
+                rows: &rows,
+                remaining: &remaining,
+                exact: &exact,
+                bvh,
+                slots,
+                refiner: refiner.as_ref(),
+                low,
+                top,
+                cap,
+                pad,
+            };
+            let placed: Vec<(Vec<Sphere>, u64)> =
+                these.par_iter().map(|b| band.block(b, &spheres)).collect();
+            blocks = rest.to_vec();
+            for (local, c) in placed {
+                covered += c;
+                for s in local {
+                    if let Some(r) = refiner.as_mut() {
+                        r.insert(spheres.len() as u32, s.center, s.radius);
+                    }
+                    spheres.push(s);
+                }
+            }
+        }
+        progress.advance(covered);
+        live = live
+            .into_par_iter()
+            .filter(|&p| {
+                let v = remaining.get(p as usize);
+                v > 0.0 && v >= floor
+            })
+            .collect();
+    }
+    progress.finish();
+    spheres
+}
+
+/// What the blocks of one band share.
+struct Band<'a> {
+    field: Voxels<'a>,
+    rows: &'a Rows,
+    remaining: &'a Remaining,
+    exact: &'a [AtomicBool],
+    bvh: &'a TriangleBvh,
+    slots: &'a [u32],
+    refiner: Option<&'a Refiner<'a>>,
+    /// The band is `[low, top)`.
+    low: f64,
+    top: f64,
+    /// The largest radius refinement may reach.
+    cap: f64,
+    pad: i64,
+}
+
+impl Band<'_> {
+    /// Packs one block greedily down to `low`; returns its spheres and the voxels covered.
+    fn block(&self, entries: &[(u64, Entry)], spheres: &[Sphere]) -> (Vec<Sphere>, u64) {
+        let grid = self.field.grid;
+        let mut heap: BinaryHeap<Entry> = entries.iter().map(|e| e.1).collect();
+        let mut local = Vec::new();
+        let mut covered = 0;
+        while let Some(Entry { value, cell }) = heap.pop() {
+            let pos = cell as usize;
+            let current = self.remaining.get(pos);
+            if current != value {
+                if current > 0.0 && current >= self.low {
+                    heap.push(Entry {
+                        value: current,
+                        cell,
+                    });
+                }
+                continue;
+            }
+            let [ci, cj, ck] = grid.coords(self.field.inside[pos] as usize);
+            let voxel = grid.center(ci, cj, ck);
+            if !self.exact[pos].swap(true, Relaxed) {
+                let now = exact_distance(self.bvh, voxel, self.slots[pos], value);
+                if now != value {
+                    self.remaining.set(pos, now);
+                    if now > 0.0 && now >= self.low {
+                        heap.push(Entry { value: now, cell });
+                    }
+                    continue;
+                }
+            }
+            let (center, radius) = match self.refiner {
+                Some(r) => r.refine(voxel, value, spheres, &local, self.cap),
+                None => (voxel, value),
+            };
+            local.push(Sphere { center, radius });
+            covered += cover(
+                self.field,
+                self.rows,
+                self.remaining,
+                center,
+                radius,
+                radius + self.top,
+                self.pad,
+            );
+        }
+        (local, covered)
+    }
+}

@@ -13,8 +13,8 @@
 //!
 //! In a band every remaining distance is below τ, so a sphere of radius `r` changes only the
 //! voxels within `r + τ` of its centre (farther ones keep a remaining distance below their
-//! gap to it); refinement may not grow a sphere beyond `τ + 2 voxels` in the band, which
-//! bounds the block size needed.
+//! gap to it); refinement grows a sphere by at most the distance its centre moves (half a
+//! voxel a step), which bounds the block size needed.
 
 use super::cells::{cover, Remaining, Rows, Voxels};
 use super::queue::Entry;
@@ -27,9 +27,6 @@ use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 /// Each band's lower end over its upper end.
 const RATIO: f64 = 0.8;
-
-/// How far refinement may grow a sphere beyond its band's top, in voxels.
-const GROWTH_VOXELS: f64 = 2.0;
 
 /// The packing of [`super::pack_bounded`] in bands and blocks (see the module docs).
 pub(super) fn pack(
@@ -48,8 +45,10 @@ pub(super) fn pack(
     let floor = floor(opts, grid);
     let mut refiner = (opts.refine_steps > 0).then(|| Refiner::new(grid, bvh, opts.refine_steps));
     let pad = i64::from(refiner.is_some());
+    // Refinement moves a centre at most half a voxel a step, and a sphere grows at most as
+    // far as its centre moves: its radius stays below the band's top plus this.
     let growth = if refiner.is_some() {
-        GROWTH_VOXELS * h
+        0.5 * h * f64::from(opts.refine_steps)
     } else {
         0.0
     };
@@ -155,7 +154,7 @@ struct Band<'a> {
     /// The band is `[low, top)`.
     low: f64,
     top: f64,
-    /// The largest radius refinement may reach.
+    /// The largest radius refinement can reach (a safeguard: it never binds).
     cap: f64,
     pad: i64,
 }

@@ -34,20 +34,21 @@ pub enum Preset {
     /// of the paper's evaluation, `ist bench paper`), minimum radius half a voxel and 8
     /// off-grid refinement steps (the ratio and steps chosen in `docs/RESULTS.md`, where they
     /// gave a distance error p95 of about a quarter voxel with 4× fewer spheres than the
-    /// plain packing at the same error). 27× the voxels of `Default`, and the refinement
-    /// runs on one thread: the bunny in 10 s and 0.63 GB, 131k spheres (2 cores). What
-    /// [`BuildOptions::recommended_for`] returns.
+    /// plain packing at the same error). 27× the voxels of `Default`: the bunny in 4.6 s and
+    /// 0.40 GB, 132k spheres (2 cores). What [`BuildOptions::recommended_for`] returns.
     Fine,
     /// Jaw scans in **millimetres**, the accuracy-calibrated setting of `docs/RESULTS.md`:
     /// 0.1 mm voxels, 0.05 mm minimum radius, 8 refinement steps. On the real arches:
-    /// distance error p95 0.027 mm (the bar is 0.03 mm), no missed contact deeper than
-    /// 0.1 mm, about 150k spheres, 9 s and 0.56 GB per arch on 2 cores; a molar in 1.3 s
-    /// (14k spheres, p95 0.023 mm).
+    /// distance error p95 0.020–0.036 mm on four unseen motions (0.03 mm is the bar of
+    /// `docs/RESULTS.md`), no missed contact deeper than 0.08 mm, about 150k spheres, 3.3 s
+    /// and 0.44 GB per arch on 2 cores (FCL builds its OBBRSS tree of an arch in 1.2 s);
+    /// a molar in 0.3 s (14k spheres).
     Jaw,
     /// Jaw scans in **millimetres**, the query benchmark's trees (`BENCHMARKS.md`): 0.15 mm
-    /// voxels, 0.05 mm minimum radius, 8 refinement steps. About 110k spheres and 4 s
-    /// per arch on 2 cores (2.3× faster to build than `Jaw`), but distance error p95 0.046 mm on the molars,
-    /// above the 0.03 mm bar: for iterating and timing, not for the final trees.
+    /// voxels, 0.05 mm minimum radius, 8 refinement steps. About 110k spheres, 1.7 s and
+    /// 0.19 GB per arch on 2 cores (1.9× faster to build than `Jaw`), but distance error p95
+    /// 0.046 mm on the molars, above the 0.03 mm bar: for iterating and timing, not for the
+    /// final trees.
     JawFast,
 }
 

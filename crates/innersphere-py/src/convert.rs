@@ -194,12 +194,11 @@ impl PosesA {
         Ok(PosesA::Each(all))
     }
 
-    /// A's pose on frame `i`.
-    #[inline]
-    pub(crate) fn at(&self, i: usize) -> &Pose {
+    /// The poses of A as the library's batches take them: one for all, or one per frame.
+    pub(crate) fn as_slice(&self) -> &[Pose] {
         match self {
-            PosesA::One(p) => p,
-            PosesA::Each(v) => &v[i],
+            PosesA::One(p) => std::slice::from_ref(p),
+            PosesA::Each(v) => v,
         }
     }
 }

@@ -3,7 +3,7 @@
 use crate::convert::{error, non_negative, pose, pose_or_identity, poses, vec3, PosesA};
 use crate::tree::Tree;
 use innersphere::glam::DVec3;
-use innersphere::query::{Paper, TraversalOptions};
+use innersphere::query::{BatchOptions, Paper, TraversalOptions};
 use innersphere::{
     ContactResult, Distance, DistanceOptions, MultipointOptions, Patch, Penetration,
     PenetrationOptions, Pose,
@@ -283,6 +283,14 @@ fn batch(
     Ok((b, a))
 }
 
+/// The batch options of `threads` (None: all cores) and `chunk`.
+fn batch_options(threads: Option<usize>, chunk: usize) -> BatchOptions {
+    BatchOptions {
+        threads: threads.unwrap_or(0),
+        chunk,
+    }
+}
+
 /// `n` rows of 3 as an (n, 3) float64 array.
 fn rows3(py: Python<'_>, v: Vec<[f64; 3]>) -> PyResult<Bound<'_, PyArray2<f64>>> {
     let n = v.len();
@@ -524,77 +532,88 @@ impl Pair {
         Ok(())
     }
 
-    /// Pair.distance for each pose of B in poses, an (N, 7) or (N, 4, 4) array, in order and
-    /// carrying the pair's state from pose to pose (as `ist replay` does: on a new or reset
-    /// pair the distances equal its `distance` column). pose_a: None (identity), one pose, or
-    /// N poses. Returns the (N,) float64 distances (0 where the packings overlap). Loops in
-    /// Rust with the interpreter released.
-    #[pyo3(signature = (poses, *, pose_a=None))]
+    /// Pair.distance for each pose of B in poses, an (N, 7) or (N, 4, 4) array, in order, on
+    /// `threads` threads (None: all cores). The poses are cut into chunks of `chunk`; each
+    /// chunk starts from a fresh state and carries it from pose to pose (as `ist replay`
+    /// does), so the answers never depend on `threads` (on a new pair and a batch of at most
+    /// `chunk` poses they are `distance` pose after pose). This pair's own state is neither
+    /// used nor changed. pose_a: None (identity), one pose, or N poses. Returns the (N,)
+    /// float64 distances (0 where the packings overlap). The interpreter is released.
+    #[pyo3(signature = (poses, *, pose_a=None, threads=None, chunk=1024))]
     fn distance_many<'py>(
         &self,
         py: Python<'py>,
         poses: &Bound<'py, PyAny>,
         pose_a: Option<&Bound<'py, PyAny>>,
+        threads: Option<usize>,
+        chunk: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let (pb, pa) = batch(poses, pose_a)?;
-        let mut guard = self.lock()?;
-        let inner: &mut innersphere::Pair = &mut guard;
-        let out: Vec<f64> = py.detach(|| {
-            pb.iter()
-                .enumerate()
-                .map(|(i, b)| inner.distance(pa.at(i), b).distance)
-                .collect()
-        });
-        Ok(PyArray1::from_vec(py, out))
+        let (a, b, o) = (
+            self.a.get().shared.clone(),
+            self.b.get().shared.clone(),
+            batch_options(threads, chunk),
+        );
+        let out = py
+            .detach(|| innersphere::query::batch::distance_many(&a, &b, pa.as_slice(), &pb, &o))
+            .map_err(error)?;
+        Ok(PyArray1::from_iter(py, out.iter().map(|d| d.distance)))
     }
 
-    /// Pair.contact for each pose of B (an (N, 7) or (N, 4, 4) array), in order, carrying
-    /// the pair's state: an (N,) bool array. Interpreter released.
-    #[pyo3(signature = (poses, *, pose_a=None))]
+    /// Pair.contact for each pose of B (an (N, 7) or (N, 4, 4) array), in order, on
+    /// `threads` threads in chunks of `chunk` as distance_many: an (N,) bool array.
+    #[pyo3(signature = (poses, *, pose_a=None, threads=None, chunk=1024))]
     fn contact_many<'py>(
         &self,
         py: Python<'py>,
         poses: &Bound<'py, PyAny>,
         pose_a: Option<&Bound<'py, PyAny>>,
+        threads: Option<usize>,
+        chunk: usize,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (pb, pa) = batch(poses, pose_a)?;
-        let mut guard = self.lock()?;
-        let inner: &mut innersphere::Pair = &mut guard;
-        let out: Vec<bool> = py.detach(|| {
-            pb.iter()
-                .enumerate()
-                .map(|(i, b)| inner.contact(pa.at(i), b).in_contact())
-                .collect()
-        });
-        Ok(PyArray1::from_vec(py, out))
+        let (a, b, o) = (
+            self.a.get().shared.clone(),
+            self.b.get().shared.clone(),
+            batch_options(threads, chunk),
+        );
+        let out = py
+            .detach(|| innersphere::query::batch::contact_many(&a, &b, pa.as_slice(), &pb, &o))
+            .map_err(error)?;
+        Ok(PyArray1::from_iter(py, out.iter().map(|c| c.in_contact())))
     }
 
-    /// Pair.penetration for each pose of B (an (N, 7) or (N, 4, 4) array), in order,
-    /// carrying the pair's state (on a new or reset pair the volumes equal `ist replay
-    /// --query penetration`'s). Returns a dict of numpy arrays: volume (N,), max_depth (N,),
-    /// force (N, 3), torque (N, 3) (on B, about its centre of mass), torque_a (N, 3),
-    /// normal (N, 3), pairs (N,) int64, contact (N,) bool. Interpreter released.
-    #[pyo3(signature = (poses, stiffness=1.0, *, pose_a=None))]
+    /// Pair.penetration for each pose of B (an (N, 7) or (N, 4, 4) array), in order, on
+    /// `threads` threads in chunks of `chunk` as distance_many (on a new pair and a batch of
+    /// at most `chunk` poses the volumes equal `ist replay --query penetration`'s). Returns a
+    /// dict of numpy arrays: volume (N,), max_depth (N,), force (N, 3), torque (N, 3) (on B,
+    /// about its centre of mass), torque_a (N, 3), normal (N, 3), pairs (N,) int64, contact
+    /// (N,) bool. Interpreter released.
+    #[pyo3(signature = (poses, stiffness=1.0, *, pose_a=None, threads=None, chunk=1024))]
     fn penetration_many<'py>(
         &self,
         py: Python<'py>,
         poses: &Bound<'py, PyAny>,
         stiffness: f64,
         pose_a: Option<&Bound<'py, PyAny>>,
+        threads: Option<usize>,
+        chunk: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
         let (pb, pa) = batch(poses, pose_a)?;
-        let opts = PenetrationOptions {
+        let query = PenetrationOptions {
             stiffness: stiffness_arg(stiffness)?,
             ..Default::default()
         };
-        let mut guard = self.lock()?;
-        let inner: &mut innersphere::Pair = &mut guard;
-        let out: Vec<Penetration> = py.detach(|| {
-            pb.iter()
-                .enumerate()
-                .map(|(i, b)| inner.penetration_with(pa.at(i), b, &opts))
-                .collect()
-        });
+        let (a, b, o) = (
+            self.a.get().shared.clone(),
+            self.b.get().shared.clone(),
+            batch_options(threads, chunk),
+        );
+        let out: Vec<Penetration> = py
+            .detach(|| {
+                innersphere::query::batch::penetration_many(&a, &b, pa.as_slice(), &pb, &query, &o)
+            })
+            .map_err(error)?;
         let v3 = |f: fn(&Penetration) -> DVec3| -> Vec<[f64; 3]> {
             out.iter().map(|p| f(p).to_array()).collect()
         };

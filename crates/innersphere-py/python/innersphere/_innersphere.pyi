@@ -256,20 +256,35 @@ class Pair:
     def reset(self) -> None:
         """Forgets all temporal coherence: the next query starts from scratch."""
     def distance_many(
-        self, poses: _PosesLike, *, pose_a: Optional[Union[_PoseLike, _PosesLike]] = None
+        self,
+        poses: _PosesLike,
+        *,
+        pose_a: Optional[Union[_PoseLike, _PosesLike]] = None,
+        threads: Optional[int] = None,
+        chunk: int = 1024,
     ) -> _FloatArray:
-        """``distance`` for each pose of B in order, carrying the pair's state (on a new or
-        reset pair: ``ist replay``'s distances). Returns shape (N,)."""
+        """``distance`` for each pose of B in order, on ``threads`` threads (None: all
+        cores), in chunks of ``chunk`` poses that each start from a fresh state and carry it
+        (``ist replay``'s distances); the answers never depend on ``threads``. Returns shape
+        (N,)."""
     def contact_many(
-        self, poses: _PosesLike, *, pose_a: Optional[Union[_PoseLike, _PosesLike]] = None
+        self,
+        poses: _PosesLike,
+        *,
+        pose_a: Optional[Union[_PoseLike, _PosesLike]] = None,
+        threads: Optional[int] = None,
+        chunk: int = 1024,
     ) -> npt.NDArray[np.bool_]:
-        """``contact`` for each pose of B in order: shape (N,) bool."""
+        """``contact`` for each pose of B in order (threads and chunks as distance_many):
+        shape (N,) bool."""
     def penetration_many(
         self,
         poses: _PosesLike,
         stiffness: float = 1.0,
         *,
         pose_a: Optional[Union[_PoseLike, _PosesLike]] = None,
+        threads: Optional[int] = None,
+        chunk: int = 1024,
     ) -> Dict[str, npt.NDArray[Any]]:
         """``penetration`` for each pose of B in order: a dict of arrays volume (N,),
         max_depth (N,), force (N, 3), torque (N, 3) (on B), torque_a (N, 3), normal (N, 3),

@@ -34,6 +34,7 @@
 //! `docs/ARCHITECTURE.md` maps the files. [`brute`] holds O(n·m) references over all leaf
 //! pairs that the tests compare against.
 
+pub mod batch;
 mod budgeted;
 mod contact;
 mod distance;
@@ -46,6 +47,7 @@ mod search;
 pub mod brute;
 pub(crate) mod kernel;
 
+pub use batch::BatchOptions;
 pub use budgeted::BudgetedVolume;
 pub use contact::ContactResult;
 pub use distance::{Distance, DistanceOptions};

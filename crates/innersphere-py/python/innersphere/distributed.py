@@ -1,0 +1,268 @@
+"""Pose sweeps and cohort builds on a Dask cluster (``pip install "innersphere[distributed]"``).
+
+Dask distributed, not Ray: it runs on a laptop (``LocalCluster``), on HPC schedulers
+(dask-jobqueue: SLURM, PBS, SGE) and on Kubernetes with the same ``Client``; it ships numpy
+arrays without copies, retries failed tasks, replaces lost workers' work, and shows every task
+on its dashboard; its futures keep their order. Ray would do the same for this workload but
+brings its own object store and runtime to install for what is a map over chunks.
+
+- ``sweep(client, tree_a, tree_b, poses, query=...)``: one query kind over many poses of B,
+  in chunks across the workers. Returns exactly what ``Pair(tree_a, tree_b).<query>_many``
+  returns on one machine (the same bits: a task's chunk is a whole number of the batch's
+  fresh-state chunks).
+- ``build_many(client, meshes, out_dir, preset=...)``: one tree per mesh across the workers;
+  every item's outcome (tree file or error) is reported.
+- ``contact_map_many(client, pairs)``: the occlusion map (``contact_map``) of many arch
+  pairs.
+
+Trees are sent once per worker (``client.scatter(..., broadcast=True)``; a ``Tree`` pickles
+as its file's bytes) and stay in the worker's memory for every chunk. Meshes and output
+folders of ``build_many`` / ``contact_map_many`` are paths every worker can read and write (a
+shared file system), as in a cohort study's data folder.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+try:
+    from dask.distributed import Client, Future, progress as _dask_progress, wait
+except ImportError as e:  # pragma: no cover - exercised only without the extra
+    raise ImportError(
+        'innersphere.distributed needs Dask distributed: pip install "innersphere[distributed]" '
+        '(or pip install "dask[distributed]")'
+    ) from e
+
+from ._innersphere import Pair, Tree, contact_map
+
+__all__ = ["sweep", "build_many", "contact_map_many", "QUERIES"]
+
+#: The query kinds of ``sweep`` and the batch method each one runs.
+QUERIES = {
+    "distance": "distance_many",
+    "contact": "contact_many",
+    "penetration": "penetration_many",
+}
+
+_TreeLike = Union[Tree, str, "os.PathLike[str]"]
+
+
+def _tree(t: _TreeLike) -> Tree:
+    if isinstance(t, Tree):
+        return t
+    if isinstance(t, (str, os.PathLike)):
+        return Tree.load(t)
+    raise TypeError(f"a tree must be a Tree or a path to a .ist file, not {type(t).__name__}")
+
+
+def _poses(p: Any, name: str) -> np.ndarray:
+    arr = np.ascontiguousarray(np.asarray(p, dtype=np.float64))
+    if arr.ndim == 2 and arr.shape[1] == 7 or arr.ndim == 3 and arr.shape[1:] == (4, 4):
+        return arr
+    raise ValueError(f"{name}: expected an (N, 7) or (N, 4, 4) array, got shape {arr.shape}")
+
+
+def _sweep_chunk(
+    tree_a: Tree,
+    tree_b: Tree,
+    poses: np.ndarray,
+    pose_a: Optional[np.ndarray],
+    method: str,
+    kwargs: Dict[str, Any],
+) -> Any:
+    """One task: the local batch call on one chunk of poses (runs on a worker)."""
+    return getattr(Pair(tree_a, tree_b), method)(poses, pose_a=pose_a, **kwargs)
+
+
+def _show(futures: List[Future], progress: bool) -> None:
+    if progress:
+        _dask_progress(futures)
+    wait(futures)
+
+
+def sweep(
+    client: Client,
+    tree_a: _TreeLike,
+    tree_b: _TreeLike,
+    poses: Any,
+    query: str = "distance",
+    chunk: int = 65536,
+    *,
+    pose_a: Any = None,
+    stiffness: float = 1.0,
+    batch_chunk: int = 1024,
+    threads: int = 1,
+    retries: int = 3,
+    progress: bool = False,
+) -> Any:
+    """``Pair(tree_a, tree_b).<query>_many(poses, pose_a=pose_a, chunk=batch_chunk)`` across
+    the cluster of ``client``, the same arrays bit for bit and in input order.
+
+    tree_a, tree_b: ``Tree`` objects or paths of ``.ist`` files (read here, then sent once to
+        every worker).
+    poses: B's poses, ``(N, 7)`` or ``(N, 4, 4)``. pose_a: None, one pose, or N poses.
+    query: "distance" (float64 (N,)), "contact" (bool (N,)) or "penetration" (a dict of
+        arrays, as ``Pair.penetration_many``; ``stiffness`` applies).
+    chunk: poses per task; a multiple of ``batch_chunk`` (each task answers its poses in
+        fresh-state chunks of ``batch_chunk``, exactly as the local call does).
+    threads: threads per task (1: one core per Dask worker thread, the cluster's parallelism
+        is its workers'; None: all the worker machine's cores).
+    retries: how often the engine reruns a failed task (a task of a lost worker is rerun
+        elsewhere regardless).
+    progress: show Dask's progress bar while the tasks run (the dashboard shows them anyway).
+    """
+    if query not in QUERIES:
+        raise ValueError(f"query must be one of {', '.join(QUERIES)}, not {query!r}")
+    if not isinstance(chunk, int) or not isinstance(batch_chunk, int) or batch_chunk < 1 or chunk < 1:
+        raise ValueError("chunk and batch_chunk must be positive integers")
+    if chunk % batch_chunk:
+        raise ValueError(
+            f"chunk ({chunk}) must be a multiple of batch_chunk ({batch_chunk}): a task starts a "
+            "fresh state where the local batch does"
+        )
+    b = _poses(poses, "poses")
+    n = len(b)
+    a_each: Optional[np.ndarray] = None
+    a_one: Any = None
+    if pose_a is not None:
+        pa = np.asarray(pose_a, dtype=np.float64)
+        if pa.shape in ((7,), (4, 4)):
+            a_one = pa
+        else:
+            a_each = _poses(pa, "pose_a")
+            if len(a_each) != n:
+                raise ValueError(f"pose_a: {len(a_each)} poses for a batch of {n}")
+    ta, tb = _tree(tree_a), _tree(tree_b)
+    kwargs: Dict[str, Any] = {"chunk": batch_chunk, "threads": threads}
+    if query == "penetration":
+        kwargs["stiffness"] = stiffness
+    method = QUERIES[query]
+    if n == 0:
+        return getattr(Pair(ta, tb), method)(b, pose_a=a_one, **kwargs)
+    fa, fb = client.scatter([ta, tb], broadcast=True, hash=False)
+    futures = []
+    for start in range(0, n, chunk):
+        part = b[start : start + chunk]
+        pa_part = a_each[start : start + chunk] if a_each is not None else a_one
+        futures.append(
+            client.submit(
+                _sweep_chunk, fa, fb, part, pa_part, method, kwargs, retries=retries, pure=False
+            )
+        )
+    _show(futures, progress)
+    parts = client.gather(futures)
+    for k, (start, part) in enumerate(zip(range(0, n, chunk), parts)):
+        want = min(chunk, n - start)
+        got = len(part["volume"]) if isinstance(part, dict) else len(part)
+        if got != want:
+            raise RuntimeError(f"chunk {k} came back with {got} answers for {want} poses")
+    if query == "penetration":
+        return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
+    return np.concatenate(parts)
+
+
+def _build_one(mesh: str, out: str, preset: Optional[str], options: Dict[str, Any]) -> Dict[str, Any]:
+    """One task: build and save one tree; every failure is a reported outcome, not an error."""
+    t0 = time.perf_counter()
+    item: Dict[str, Any] = {"mesh": mesh, "tree": out, "ok": False, "error": None}
+    try:
+        import warnings
+
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            tree = Tree.build(mesh, preset=preset, **options)
+        tree.save(out)
+        item.update(
+            ok=True,
+            spheres=tree.leaf_count,
+            nodes=tree.node_count,
+            warnings=[str(w.message) for w in caught],
+        )
+    except (OSError, ValueError) as e:
+        item["error"] = f"{type(e).__name__}: {e}"
+    item["seconds"] = time.perf_counter() - t0
+    return item
+
+
+def build_many(
+    client: Client,
+    meshes: Sequence[Union[str, "os.PathLike[str]"]],
+    out_dir: Union[str, "os.PathLike[str]"],
+    preset: Optional[str] = None,
+    *,
+    retries: int = 1,
+    progress: bool = False,
+    **options: Any,
+) -> List[Dict[str, Any]]:
+    """Builds one tree per mesh across the cluster into ``out_dir/<mesh name>.ist``.
+
+    Returns one dict per mesh, in order: mesh, tree (the output path), ok, error (None, or
+    the library's message: a bad mesh is one reported error while the rest build), spheres,
+    nodes, warnings, seconds. ``preset`` and ``options`` are ``Tree.build``'s. Meshes and
+    ``out_dir`` must be reachable from every worker. Two meshes that would write the same tree
+    file are refused before anything runs.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [os.fspath(m) for m in meshes]
+    targets = []
+    for m in paths:
+        name = Path(m).name
+        for suffix in (".gz", ".stl", ".obj", ".ply", ".off", ".STL", ".OBJ", ".PLY", ".OFF"):
+            if name.endswith(suffix):
+                name = name[: -len(suffix)]
+        targets.append(os.fspath(out / f"{name}.ist"))
+    seen: Dict[str, str] = {}
+    for m, t in zip(paths, targets):
+        if t in seen:
+            raise ValueError(f"{seen[t]} and {m} would both be written to {t}")
+        seen[t] = m
+    futures = [
+        client.submit(_build_one, m, t, preset, options, retries=retries, pure=False)
+        for m, t in zip(paths, targets)
+    ]
+    _show(futures, progress)
+    results: List[Dict[str, Any]] = []
+    for m, t, f in zip(paths, targets, futures):
+        try:
+            results.append(f.result())
+        except Exception as e:  # the task itself died (a lost worker beyond its retries)
+            results.append({"mesh": m, "tree": t, "ok": False, "error": f"{type(e).__name__}: {e}"})
+    return results
+
+
+def _map_one(a: str, b: str, pose_b: Any, pose_a: Any) -> Tuple[np.ndarray, np.ndarray]:
+    return contact_map(a, b, pose_b=pose_b, pose_a=pose_a)
+
+
+def contact_map_many(
+    client: Client,
+    pairs: Sequence[Tuple[Any, Any]],
+    poses_b: Optional[Sequence[Any]] = None,
+    *,
+    retries: int = 1,
+    progress: bool = False,
+) -> List[Any]:
+    """``contact_map(a, b, pose_b)`` for each mesh pair ``(a, b)`` (paths every worker can
+    read), across the cluster, in order: per pair the two gap arrays, or the exception
+    raised for that pair (one bad pair does not lose the others)."""
+    poses = list(poses_b) if poses_b is not None else [None] * len(pairs)
+    if len(poses) != len(pairs):
+        raise ValueError(f"{len(poses)} poses for {len(pairs)} pairs")
+    futures = [
+        client.submit(_map_one, os.fspath(a), os.fspath(b), p, None, retries=retries, pure=False)
+        for (a, b), p in zip(pairs, poses)
+    ]
+    _show(futures, progress)
+    out: List[Any] = []
+    for f in futures:
+        try:
+            out.append(f.result())
+        except Exception as e:
+            out.append(e)
+    return out

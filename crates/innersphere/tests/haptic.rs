@@ -318,12 +318,24 @@ fn occlusion_of_a_peg_in_a_ring_ends_in_the_same_seat() {
             let d = (e.transform_point(p) - ends[0].transform_point(p)).length();
             assert!(d < 0.01, "{d} mm apart: {e:?} vs {:?}", ends[0]);
         }
-        // Centred in the ring and upright.
-        assert!(
-            e.transform_point(DVec3::ZERO).truncate().length() < 0.01,
-            "{e:?}"
-        );
+        assert_seated(e);
     }
+}
+
+/// The peg's pose `e` is centred in the ring and upright to the packing's resolution: its
+/// centre within half the ring's voxel (6 mm / 64) of the axis, its own axis within 2° of the
+/// ring's. (The packing of a symmetric shape is not symmetric — the greedy packing runs in
+/// blocks — and spheres inside the surface by up to a quarter voxel tilt a peg seated on a
+/// 1 mm ring by up to about 2°.)
+fn assert_seated(e: &Pose) {
+    let off = e.transform_point(DVec3::ZERO).truncate().length();
+    let tilt = e
+        .rotation
+        .mul_vec3(DVec3::Z)
+        .angle_between(DVec3::Z)
+        .to_degrees();
+    assert!(off < 0.5 * 6.0 / 64.0, "{off} mm off centre: {e:?}");
+    assert!(tilt < 2.0, "tilted {tilt}°: {e:?}");
 }
 
 /// A free peg closed from starts spread around its start: every start seats it centred and
@@ -353,13 +365,8 @@ fn free_occlusion_from_many_starts_seats_the_peg() {
     assert_eq!(f.candidates.iter().map(|c| c.starts).sum::<usize>(), 8);
     assert_eq!(f.pose, f.candidates[0].pose);
     for c in &f.candidates {
-        // The turn about its own axis is a symmetry of the peg: its axis is what must agree,
-        // to a fifth of the ring's voxel (0.094 mm): the spheres are symmetric only to their
-        // packing's resolution.
-        for p in [DVec3::new(0.0, 0.0, 3.0), DVec3::new(0.0, 0.0, -3.0)] {
-            let q = c.pose.transform_point(p);
-            assert!(q.truncate().length() < 0.02, "{c:?}");
-        }
+        // The turn about its own axis is a symmetry of the peg: its axis is what must agree.
+        assert_seated(&c.pose);
         assert!(
             c.contacts > 0 && c.lateral_side > 0 && c.other_side > 0,
             "{c:?}"

@@ -39,13 +39,13 @@ pub enum Preset {
     Fine,
     /// Jaw scans in **millimetres**, the accuracy-calibrated setting of `docs/RESULTS.md`:
     /// 0.1 mm voxels, 0.05 mm minimum radius, 8 refinement steps. On the real arches:
-    /// distance error p95 0.020–0.036 mm on four unseen motions (0.03 mm is the bar of
-    /// `docs/RESULTS.md`), no missed contact deeper than 0.08 mm, about 150k spheres, 3.3 s
-    /// and 0.44 GB per arch on 2 cores (FCL builds its OBBRSS tree of an arch in 1.2 s);
-    /// a molar in 0.3 s (14k spheres).
+    /// distance error p95 0.028 mm on the 5 s chew of `docs/RESULTS.md` (its bar: 0.03 mm)
+    /// and 0.021–0.045 mm on four unseen motions, no missed contact deeper than 0.08 mm,
+    /// about 150k spheres, 3.6 s and 0.44 GB per arch on 2 cores (FCL builds its OBBRSS tree
+    /// of an arch in 1.2 s); a molar in 0.3 s (14k spheres).
     Jaw,
     /// Jaw scans in **millimetres**, the query benchmark's trees (`BENCHMARKS.md`): 0.15 mm
-    /// voxels, 0.05 mm minimum radius, 8 refinement steps. About 110k spheres, 1.7 s and
+    /// voxels, 0.05 mm minimum radius, 8 refinement steps. About 110k spheres, 1.9 s and
     /// 0.19 GB per arch on 2 cores (1.9× faster to build than `Jaw`), but distance error p95
     /// 0.046 mm on the molars, above the 0.03 mm bar: for iterating and timing, not for the
     /// final trees.

@@ -98,7 +98,7 @@ pub fn pack_bounded(
 }
 
 /// The spheres of [`pack_bounded`] packed on all of rayon's threads: the greedy order is
-/// kept within bands of remaining distance (each band's lower end 0.8 of its upper end) and,
+/// kept within bands of remaining distance (each band's lower end 0.9 of its upper end) and,
 /// within a band, within independent blocks of the grid that are packed at the same time
 /// (`banded` module). The same guarantees (inside the mesh, disjoint, deterministic and the
 /// same for any number of threads), not the same spheres as the global order: a band's

@@ -89,3 +89,115 @@ pub fn bench_build(mesh_path: &Path, opts: &BuildOptions, repeats: usize) -> Res
         peak_memory_bytes: super::sysinfo::peak_memory_bytes(),
     })
 }
+
+/// One thread count of [`bench_batch`].
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct BatchBenchRow {
+    /// Worker threads.
+    pub threads: usize,
+    /// Best wall time of the repeats, s.
+    pub seconds: f64,
+    /// Poses per second at the best time.
+    pub poses_per_second: f64,
+    /// Speed over the first row's.
+    pub speedup: f64,
+    /// Whether the answers equal the first row's bit for bit.
+    pub same_answers: bool,
+}
+
+/// `n` poses of B around the identity (where a scanned jaw pair bites): a rotation of up to
+/// `deg` degrees about a random axis through `centre` and a shift of up to `mm` along each
+/// axis, from `seed` (xorshift64*; the same seed gives the same poses).
+pub fn perturbed_poses(
+    n: usize,
+    seed: u64,
+    mm: f64,
+    deg: f64,
+    centre: innersphere::glam::DVec3,
+) -> Vec<innersphere::Pose> {
+    use innersphere::glam::{DQuat, DVec3};
+    let mut s = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+    let mut u = move || {
+        s ^= s >> 12;
+        s ^= s << 25;
+        s ^= s >> 27;
+        (s.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    (0..n)
+        .map(|_| {
+            let axis = loop {
+                let v = DVec3::new(u(), u(), u());
+                if v.length_squared() > 1e-6 && v.length_squared() <= 1.0 {
+                    break v.normalize();
+                }
+            };
+            let q = DQuat::from_axis_angle(axis, u() * deg.to_radians());
+            let t = centre - q * centre + DVec3::new(u(), u(), u()) * mm;
+            innersphere::Pose::new(t, q).expect("finite")
+        })
+        .collect()
+}
+
+/// The batch kind of [`bench_batch`]: "distance", "contact" or "penetration".
+pub fn bench_batch(
+    a: &innersphere::SharedTree,
+    b: &innersphere::SharedTree,
+    poses: &[innersphere::Pose],
+    query: &str,
+    threads: &[usize],
+    chunk: usize,
+    repeats: usize,
+) -> Result<Vec<BatchBenchRow>> {
+    use innersphere::query::batch::{self, BatchOptions};
+    let id = [innersphere::Pose::IDENTITY];
+    let run = |t: usize| -> Result<Vec<u64>> {
+        let o = BatchOptions { threads: t, chunk };
+        Ok(match query {
+            "distance" => batch::distance_many(a, b, &id, poses, &o)?
+                .iter()
+                .map(|d| d.distance.to_bits())
+                .collect(),
+            "contact" => batch::contact_many(a, b, &id, poses, &o)?
+                .iter()
+                .map(|c| c.in_contact() as u64)
+                .collect(),
+            "penetration" => batch::penetration_many(a, b, &id, poses, &Default::default(), &o)?
+                .iter()
+                .flat_map(|p| {
+                    [
+                        p.volume.to_bits(),
+                        p.force.x.to_bits(),
+                        p.torque_b.z.to_bits(),
+                    ]
+                })
+                .collect(),
+            other => {
+                return Err(innersphere::Error::InvalidOption(format!(
+                    "query must be distance, contact or penetration, not {other}"
+                )))
+            }
+        })
+    };
+    let mut rows: Vec<BatchBenchRow> = Vec::new();
+    let mut first: Option<Vec<u64>> = None;
+    for &t in threads {
+        let mut best = f64::INFINITY;
+        let mut answers = Vec::new();
+        for _ in 0..repeats.max(1) {
+            let t0 = Instant::now();
+            answers = run(t)?;
+            best = best.min(t0.elapsed().as_secs_f64());
+        }
+        let same = first.as_ref().is_none_or(|f| *f == answers);
+        first.get_or_insert(answers);
+        let base = rows.first().map_or(best, |r| r.seconds);
+        rows.push(BatchBenchRow {
+            threads: t,
+            seconds: best,
+            poses_per_second: poses.len() as f64 / best,
+            speedup: base / best,
+            same_answers: same,
+        });
+    }
+    Ok(rows)
+}

@@ -26,6 +26,41 @@ enum What {
         #[arg(long)]
         json: bool,
     },
+    /// Batch queries on several thread counts: poses per second, and whether every thread
+    /// count answers the same bits.
+    Batch {
+        /// Tree of body A (fixed).
+        a: PathBuf,
+        /// Tree of body B.
+        b: PathBuf,
+        /// Poses of B: random around the identity (for a scanned jaw pair, the bite).
+        #[arg(long, default_value_t = 100_000)]
+        poses: usize,
+        /// Largest shift along each axis, in model units (mm for the jaw scans).
+        #[arg(long, default_value_t = 2.0)]
+        mm: f64,
+        /// Largest rotation, in degrees, about B's centre of mass.
+        #[arg(long, default_value_t = 4.0)]
+        deg: f64,
+        /// Seed of the poses.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Query kind: distance, contact or penetration.
+        #[arg(long, default_value = "distance")]
+        query: String,
+        /// Thread counts to time (0 = all cores).
+        #[arg(long, value_delimiter = ',', default_value = "1,0")]
+        threads: Vec<usize>,
+        /// Poses per fresh-state chunk.
+        #[arg(long, default_value_t = 1024)]
+        chunk: usize,
+        /// Runs per thread count (the best is reported).
+        #[arg(long, default_value_t = 3)]
+        repeat: usize,
+        /// Print JSON instead of a markdown table.
+        #[arg(long)]
+        json: bool,
+    },
     /// Reproduce the paper's figures on a pair along a motion: CSV files and PNG charts.
     Paper {
         /// Mesh of body A (fixed).
@@ -110,6 +145,57 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 );
             }
             Ok(0)
+        }
+        What::Batch {
+            a,
+            b,
+            poses,
+            mm,
+            deg,
+            seed,
+            query,
+            threads,
+            chunk,
+            repeat,
+            json,
+        } => {
+            if poses > 100_000_000 || !(mm.is_finite() && deg.is_finite()) {
+                anyhow::bail!("--poses must be at most 1e8 and --mm, --deg finite numbers");
+            }
+            let ta = innersphere::SharedTree::new(crate::files::load_tree(&a)?);
+            let tb = innersphere::SharedTree::new(crate::files::load_tree(&b)?);
+            let centre = innersphere::glam::DVec3::from_array(tb.meta.center_of_mass);
+            let p = innersphere_eval::bench::perturbed_poses(poses, seed, mm, deg, centre);
+            let rows = innersphere_eval::bench::bench_batch(
+                &ta, &tb, &p, &query, &threads, chunk, repeat,
+            )?;
+            if json {
+                crate::print::print_json(&rows)?;
+            } else {
+                println!("machine: {}", innersphere_eval::sysinfo::cpu_description());
+                println!("{poses} poses, {query}, chunks of {chunk}, best of {repeat}");
+                println!("| threads | s | poses/s | speed-up | same answers |");
+                println!("|---|---|---|---|---|");
+                for r in &rows {
+                    println!(
+                        "| {} | {:.3} | {:.0} | {:.2} | {} |",
+                        if r.threads == 0 {
+                            "all".to_string()
+                        } else {
+                            r.threads.to_string()
+                        },
+                        r.seconds,
+                        r.poses_per_second,
+                        r.speedup,
+                        r.same_answers
+                    );
+                }
+            }
+            Ok(if rows.iter().all(|r| r.same_answers) {
+                0
+            } else {
+                1
+            })
         }
         What::Build {
             meshes,

@@ -78,6 +78,9 @@ def test_sweep_equals_the_local_batch(client, trees, tree_files, query):
     local = getattr(innersphere.Pair(*trees), isd.QUERIES[query])(poses, chunk=64)
     got = isd.sweep(client, *trees, poses, query=query, chunk=640, batch_chunk=64)
     assert same(got, local)
+    # The defaults: every pose from a fresh state, as the local call with chunk=1.
+    local1 = getattr(innersphere.Pair(*trees), isd.QUERIES[query])(poses, chunk=1)
+    assert same(isd.sweep(client, *trees, poses, query=query, chunk=1000), local1)
     # Trees as paths, 4×4 matrices, a moving A.
     pa = random_poses(5000, 4, spread=0.1)
     local = getattr(innersphere.Pair(*trees), isd.QUERIES[query])(poses, pose_a=pa, chunk=64)

@@ -126,6 +126,43 @@ typedef struct ist_pose {
 } ist_pose;
 
 /*
+ Result of ist_penetration (world frame).
+ */
+typedef struct ist_penetration_result {
+  /*
+   Volume of the intersection of the two sphere packings (model units³).
+   */
+  double volume;
+  /*
+   Largest overlap of two leaf spheres (model units).
+   */
+  double max_depth;
+  /*
+   Unit contact normal: the direction B is pushed (zero without contact).
+   */
+  double normal[3];
+  /*
+   Penalty force on B: stiffness × volume × normal (the force on A is its opposite).
+   */
+  double force[3];
+  /*
+   Torque on A about A's centre of mass (that of the mesh the tree was built from,
+   stored in the tree file).
+   */
+  double torque_a[3];
+  /*
+   Torque on B about B's centre of mass.
+   */
+  double torque_b[3];
+  /*
+   Number of contact patches, at most 8 (overlaps are grouped with the nearest patch,
+   within 1/8 of the smaller root sphere's radius; beyond 8 patches, with the nearest
+   one); read them with ist_penetration_patch.
+   */
+  size_t patch_count;
+} ist_penetration_result;
+
+/*
  Settings of a haptic loop. Units: mm, N, s, kg; torques in N·mm.
  */
 typedef struct ist_haptic_params {
@@ -340,43 +377,6 @@ typedef struct ist_budgeted_result {
 } ist_budgeted_result;
 
 /*
- Result of ist_penetration (world frame).
- */
-typedef struct ist_penetration_result {
-  /*
-   Volume of the intersection of the two sphere packings (model units³).
-   */
-  double volume;
-  /*
-   Largest overlap of two leaf spheres (model units).
-   */
-  double max_depth;
-  /*
-   Unit contact normal: the direction B is pushed (zero without contact).
-   */
-  double normal[3];
-  /*
-   Penalty force on B: stiffness × volume × normal (the force on A is its opposite).
-   */
-  double force[3];
-  /*
-   Torque on A about A's centre of mass (that of the mesh the tree was built from,
-   stored in the tree file).
-   */
-  double torque_a[3];
-  /*
-   Torque on B about B's centre of mass.
-   */
-  double torque_b[3];
-  /*
-   Number of contact patches, at most 8 (overlaps are grouped with the nearest patch,
-   within 1/8 of the smaller root sphere's radius; beyond 8 patches, with the nearest
-   one); read them with ist_penetration_patch.
-   */
-  size_t patch_count;
-} ist_penetration_result;
-
-/*
  One contact patch of the last ist_penetration (world frame).
  */
 typedef struct ist_patch {
@@ -462,6 +462,36 @@ extern "C" {
  The library's version, e.g. "0.1.0" (static; do not free).
  */
 const char *ist_version(void);
+
+/*
+ ist_distance for `n` poses of B (`poses_b`), A at `poses_a` (`n_a` = 1: one pose for all;
+ `n_a` = `n`: one each), on `threads` threads (0: all cores) in chunks of `chunk` poses
+ that each start from a fresh state (1: every pose as a new pair answers it, right for
+ scattered poses; a motion gains from long chunks). The answers never depend on
+ `threads`. `out[i]` = the distance (0 where the packings overlap). Allocates.
+
+ # Safety
+ Every pointer is NULL or valid for its count.
+ */
+int ist_distance_many(const struct ist_tree *a, const struct ist_tree *b, const struct ist_pose *poses_a, size_t n_a, const struct ist_pose *poses_b, size_t n, size_t threads, size_t chunk, double *out);
+
+/*
+ ist_contact for `n` poses of B, as ist_distance_many: `out[i]` = 1 where the packings
+ overlap, else 0. Allocates.
+
+ # Safety
+ Every pointer is NULL or valid for its count.
+ */
+int ist_contact_many(const struct ist_tree *a, const struct ist_tree *b, const struct ist_pose *poses_a, size_t n_a, const struct ist_pose *poses_b, size_t n, size_t threads, size_t chunk, int *out);
+
+/*
+ ist_penetration_with_stiffness for `n` poses of B, as ist_distance_many: `out[i]` (its
+ patch_count is given; the patches of a batch are not kept). Allocates.
+
+ # Safety
+ Every pointer is NULL or valid for its count.
+ */
+int ist_penetration_many(const struct ist_tree *a, const struct ist_tree *b, const struct ist_pose *poses_a, size_t n_a, const struct ist_pose *poses_b, size_t n, double stiffness, size_t threads, size_t chunk, struct ist_penetration_result *out);
 
 /*
  The message of the last failing call on this thread ("" when none failed yet). The

@@ -5,6 +5,7 @@
 //! the Rust API: the same answers, bit for bit.
 #![allow(non_camel_case_types)]
 
+mod batch;
 mod error;
 mod haptic;
 mod query;

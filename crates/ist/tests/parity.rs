@@ -108,3 +108,23 @@ fn every_planning_tool_reaches_ist_and_python() {
         assert!(stubs.contains(&format!("def {py}(")), "Python {py} missing");
     }
 }
+
+/// Every batch of the library (`query::batch`'s `…_many`) reaches the C ABI and the Python
+/// module (`ist bench batch` times them). Read from the batch module's source.
+#[test]
+fn every_batch_reaches_c_and_python() {
+    let src = read("crates/innersphere/src/query/batch.rs");
+    let header = read("include/innersphere.h");
+    let stubs = read("crates/innersphere-py/python/innersphere/_innersphere.pyi");
+    let batches: Vec<&str> = src
+        .split("pub fn ")
+        .skip(1)
+        .map(|s| s.split('(').next().unwrap_or(""))
+        .filter(|n| n.ends_with("_many"))
+        .collect();
+    assert_eq!(batches.len(), 3, "{batches:?}");
+    for k in batches {
+        assert!(header.contains(&format!(" ist_{k}(")), "C: ist_{k}");
+        assert!(stubs.contains(&format!("def {k}(")), "Python: Pair.{k}");
+    }
+}

@@ -317,6 +317,82 @@ static void errors(const char* dir, ist_tree* a, ist_tree* b) {
     CHECK(strlen(ist_version()) > 0, "version");
 }
 
+/* The batches against single queries on a fresh pair (chunk 1), on 1 and 3 threads and on
+ * all cores, with one pose of A for all and one each; a chunk of 5 equals a pair reset every
+ * 5 poses; bad arguments are refused. Prints nothing (the single queries are diffed against
+ * Rust above). */
+static void batches(const char* dir, ist_tree* a, ist_tree* b) {
+    char* path = join(dir, "poses.txt");
+    FILE* f = fopen(path, "r");
+    free(path);
+    size_t n = 0, cap = 16;
+    ist_pose* pa = malloc(cap * sizeof *pa);
+    ist_pose* pb = malloc(cap * sizeof *pb);
+    while (f && read_pose(f, &pa[n]) && read_pose(f, &pb[n])) {
+        if (++n == cap) {
+            cap *= 2;
+            pa = realloc(pa, cap * sizeof *pa);
+            pb = realloc(pb, cap * sizeof *pb);
+        }
+    }
+    if (f) fclose(f);
+    CHECK(n > 10, "%zu poses", n);
+    double* d = malloc(n * sizeof *d);
+    int* c = malloc(n * sizeof *c);
+    ist_penetration_result* p = malloc(n * sizeof *p);
+    ist_pair* pair = ist_pair_new(a, b);
+    const size_t threads[3] = {1, 3, 0};
+    for (int t = 0; t < 3; t++) {
+        for (int each = 0; each < 2; each++) {
+            size_t n_a = each ? n : 1;
+            CHECK(ist_distance_many(a, b, pa, n_a, pb, n, threads[t], 1, d) == IST_OK, "distance_many");
+            CHECK(ist_contact_many(a, b, pa, n_a, pb, n, threads[t], 1, c) == IST_OK, "contact_many");
+            CHECK(ist_penetration_many(a, b, pa, n_a, pb, n, 2.5, threads[t], 1, p) == IST_OK,
+                  "penetration_many");
+            for (size_t i = 0; i < n; i++) {
+                const ist_pose* x = each ? &pa[i] : &pa[0];
+                ist_distance_result dr;
+                ist_penetration_result pr;
+                int in = -1;
+                ist_pair_reset(pair);
+                ist_distance(pair, x, &pb[i], &dr);
+                ist_pair_reset(pair);
+                ist_contact(pair, x, &pb[i], &in);
+                ist_pair_reset(pair);
+                ist_penetration_with_stiffness(pair, x, &pb[i], 2.5, &pr);
+                CHECK(memcmp(&d[i], &dr.distance, sizeof(double)) == 0, "distance %zu", i);
+                CHECK(c[i] == in, "contact %zu", i);
+                CHECK(memcmp(&p[i], &pr, sizeof pr) == 0, "penetration %zu", i);
+            }
+        }
+    }
+    /* Chunks of 5: a pair reset every 5 poses. */
+    CHECK(ist_penetration_many(a, b, pa, n, pb, n, 2.5, 2, 5, p) == IST_OK, "chunks of 5");
+    for (size_t i = 0; i < n; i++) {
+        ist_penetration_result pr;
+        if (i % 5 == 0) ist_pair_reset(pair);
+        ist_penetration_with_stiffness(pair, &pa[i], &pb[i], 2.5, &pr);
+        CHECK(memcmp(&p[i], &pr, sizeof pr) == 0, "chunk of 5, pose %zu", i);
+    }
+    CHECK(ist_distance_many(a, b, pa, 2, pb, n, 0, 1, d) == IST_ERR_INVALID_ARGUMENT, "n_a 2");
+    CHECK(ist_distance_many(a, b, pa, 1, pb, n, 0, 0, d) == IST_ERR_INVALID_ARGUMENT, "chunk 0");
+    CHECK(ist_distance_many(a, b, pa, 1, pb, n, 0, 1, NULL) == IST_ERR_NULL, "NULL out");
+    CHECK(ist_distance_many(a, b, NULL, 1, pb, n, 0, 1, d) == IST_ERR_NULL, "NULL poses_a");
+    CHECK(ist_distance_many(NULL, b, pa, 1, pb, n, 0, 1, d) == IST_ERR_NULL, "NULL tree");
+    CHECK(ist_distance_many(a, b, pa, 0, NULL, 0, 0, 1, NULL) == IST_OK, "an empty batch");
+    ist_pose nan = pb[0];
+    nan.t[0] = NAN;
+    CHECK(ist_contact_many(a, b, pa, 1, &nan, 1, 0, 1, c) == IST_ERR_POSE, "NaN pose");
+    CHECK(ist_penetration_many(a, b, pa, 1, pb, 1, 1e308, 0, 1, p) == IST_ERR_INVALID_ARGUMENT,
+          "stiffness 1e308");
+    ist_pair_free(pair);
+    free(pa);
+    free(pb);
+    free(d);
+    free(c);
+    free(p);
+}
+
 int main(int argc, char** argv) {
     if (argc != 2) {
         fprintf(stderr, "usage: %s DIR (from `reference make DIR`)\n", argv[0]);
@@ -333,6 +409,7 @@ int main(int argc, char** argv) {
         return 1;
     }
     answers(argv[1], a, b);
+    batches(argv[1], a, b);
     errors(argv[1], a, b);
     multirate(argv[1], a, b);
     /* A tree saved and loaded back answers the same. */

@@ -15,8 +15,9 @@ brings its own object store and runtime to install for what is a map over chunks
 - ``contact_map_many(client, pairs)``: the occlusion map (``contact_map``) of many arch
   pairs.
 
-Trees are sent once per worker (``client.scatter(..., broadcast=True)``; a ``Tree`` pickles
-as its file's bytes) and stay in the worker's memory for every chunk. Meshes and output
+Trees are sent once per worker (``client.scatter(..., broadcast=True, hash=True)``; a
+``Tree`` pickles as its file's bytes, and the content key makes a later sweep of the same
+trees send nothing) and stay in the worker's memory for every chunk. Meshes and output
 folders of ``build_many`` / ``contact_map_many`` are paths every worker can read and write (a
 shared file system), as in a cohort study's data folder.
 """
@@ -148,7 +149,9 @@ def sweep(
     method = QUERIES[query]
     if n == 0:
         return getattr(Pair(ta, tb), method)(b, pose_a=a_one, **kwargs)
-    fa, fb = client.scatter([ta, tb], broadcast=True, hash=False)
+    # Keyed by content (a Tree pickles as its file's bytes): a tree already on the workers
+    # from an earlier sweep is not sent again.
+    fa, fb = client.scatter([ta, tb], broadcast=True, hash=True)
     futures = []
     for start in range(0, n, chunk):
         part = b[start : start + chunk]

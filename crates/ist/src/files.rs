@@ -53,7 +53,7 @@ pub fn load_mesh(path: &std::path::Path) -> anyhow::Result<innersphere::Mesh> {
 }
 
 /// True when the file starts with the tree file's magic number.
-fn is_tree_file(path: &std::path::Path) -> bool {
+pub fn is_tree_file(path: &std::path::Path) -> bool {
     use std::io::Read;
     let mut magic = [0u8; 8];
     std::fs::File::open(path)

@@ -10,11 +10,15 @@ use std::path::PathBuf;
 /// Arguments of `ist haptic`. Units: millimetres, newtons, seconds (torques in N·mm).
 #[derive(clap::Args)]
 pub struct Args {
-    /// Tree file of body A (fixed, at the identity pose).
+    /// Tree file of body A (fixed, at the identity pose), or its mesh (built with --preset,
+    /// cached).
     a: PathBuf,
     /// Tree file of body B, the tool the device moves (its tree must hold mass properties:
     /// built by this version of `ist build`).
     b: PathBuf,
+    /// How a mesh given for A or B becomes its tree.
+    #[command(flatten)]
+    body: crate::bodies::BodyArgs,
     /// The device trajectory: a motion CSV (`t,tx,ty,tz,qw,qx,qy,qz`, the device's pose of B
     /// in A's frame; mm and s), e.g. from `ist motion --scenario press`.
     #[arg(long)]
@@ -99,8 +103,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     } else {
         None
     };
-    let a = crate::files::load_tree(&args.a)?;
-    let b = crate::files::load_tree(&args.b)?;
+    let a = crate::bodies::load(&args.a, &args.body)?;
+    let b = crate::bodies::load(&args.b, &args.body)?;
     let device = Motion::load(&args.device)?;
     let session = Session {
         realtime: args.realtime,

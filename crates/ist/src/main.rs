@@ -4,6 +4,7 @@
 //! line and the dispatch.
 
 mod bench;
+mod bodies;
 mod build;
 mod check;
 mod demo;

@@ -15,10 +15,14 @@ use std::path::PathBuf;
 /// Arguments of `ist occlude`. Units: millimetres, newtons, seconds.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Tree file of body A (fixed, at the identity pose).
+    /// Tree file of body A (fixed, at the identity pose), or its mesh (built with --preset,
+    /// cached).
     a: PathBuf,
-    /// Tree file of body B (its tree must hold mass properties: built by this version).
+    /// Tree file or mesh of body B (its tree must hold mass properties: built by this version).
     b: PathBuf,
+    /// How a mesh given for A or B becomes its tree.
+    #[command(flatten)]
+    body: crate::bodies::BodyArgs,
     /// Starting pose of B in A's frame, "tx ty tz qw qx qy qz" (p' = R(q)·p + t).
     #[arg(long, allow_hyphen_values = true)]
     from: String,
@@ -87,8 +91,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         .reference
         .parse()
         .with_context(|| format!("--reference \"{}\"", args.reference))?;
-    let a = crate::files::load_tree(&args.a)?;
-    let b = crate::files::load_tree(&args.b)?;
+    let a = crate::bodies::load(&args.a, &args.body)?;
+    let b = crate::bodies::load(&args.b, &args.body)?;
     let frame = AnatomicalFrame::from_points(&leaf_centres(&a), &leaf_centres(&b))?;
     let axis = match &args.axis {
         Some(v) => DVec3::new(v[0], v[1], v[2]),

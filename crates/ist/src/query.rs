@@ -30,10 +30,13 @@ pub enum Kind {
 /// Arguments of `ist query`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Tree file of body A (at the identity pose).
+    /// Tree file of body A (at the identity pose), or its mesh (built with --preset, cached).
     a: PathBuf,
-    /// Tree file of body B.
+    /// Tree file or mesh of body B.
     b: PathBuf,
+    /// How a mesh given for A or B becomes its tree.
+    #[command(flatten)]
+    body: crate::bodies::BodyArgs,
     /// Pose of B in A's frame, "tx ty tz qw qx qy qz" (p' = R(q)·p + t; t in model units,
     /// mm for the jaw scans; q is normalized).
     #[arg(long, default_value = "0 0 0 1 0 0 0", allow_hyphen_values = true)]
@@ -96,10 +99,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     if args.k == 0 {
         anyhow::bail!("--k must be at least 1 (the most contacts multipoint reports)");
     }
-    let a = crate::files::load_tree(&args.a)?;
-    let b = crate::files::load_tree(&args.b)?;
-    crate::files::warn_if_stale(&args.a, &a);
-    crate::files::warn_if_stale(&args.b, &b);
+    let a = crate::bodies::load(&args.a, &args.body)?;
+    let b = crate::bodies::load(&args.b, &args.body)?;
     let pose_a = Pose::IDENTITY;
     let mut pair = Pair::new(a, b);
     let t0 = std::time::Instant::now();

@@ -7,10 +7,13 @@ use std::path::PathBuf;
 /// Arguments of `ist replay`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Tree of body A (at the identity).
+    /// Tree of body A (at the identity), or its mesh (built with --preset, cached).
     a: PathBuf,
-    /// Tree of body B (moved by the motion).
+    /// Tree or mesh of body B (moved by the motion).
     b: PathBuf,
+    /// How a mesh given for A or B becomes its tree.
+    #[command(flatten)]
+    body: crate::bodies::BodyArgs,
     /// Motion CSV (`t,tx,ty,tz,qw,qx,qy,qz`: the pose of B in A's frame; t in seconds,
     /// translations in model units, mm for the jaw scans).
     #[arg(long)]
@@ -68,10 +71,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         inputs.extend(args.exact.iter().flatten().map(|p| p.as_path()));
         crate::files::check_outputs(&[csv], &inputs)?;
     }
-    let a = innersphere::SharedTree::new(crate::files::load_tree(&args.a)?);
-    let b = innersphere::SharedTree::new(crate::files::load_tree(&args.b)?);
-    crate::files::warn_if_stale(&args.a, &a);
-    crate::files::warn_if_stale(&args.b, &b);
+    let a = innersphere::SharedTree::new(crate::bodies::load(&args.a, &args.body)?);
+    let b = innersphere::SharedTree::new(crate::bodies::load(&args.b, &args.body)?);
     let motion = innersphere_eval::motion::Motion::load(&args.motion)?;
     let exact = match &args.exact {
         Some(m) => {

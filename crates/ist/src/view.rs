@@ -10,10 +10,14 @@ use std::path::PathBuf;
 /// Arguments of `ist view`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Tree file of body A (fixed, at the identity pose); with B, or --demo.
+    /// Tree file of body A (fixed, at the identity pose), or its mesh (built with --preset,
+    /// cached, and drawn); with B, or --demo.
     a: Option<PathBuf>,
-    /// Tree file of body B (moved).
+    /// Tree file or mesh of body B (moved).
     b: Option<PathBuf>,
+    /// How a mesh given for A or B becomes its tree.
+    #[command(flatten)]
+    body: crate::bodies::BodyArgs,
     /// Body A's mesh, to draw its surface (without meshes the inner spheres are the picture).
     #[arg(long)]
     mesh_a: Option<PathBuf>,
@@ -82,11 +86,17 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 .map(|p| crate::files::load_mesh(p).with_context(|| format!("loading {which}")))
                 .transpose()
         };
+        // A body given as a mesh is also its drawn surface (unless --mesh-a/-b say otherwise).
+        let drawn = |given: &Option<PathBuf>, body: &PathBuf| {
+            given
+                .clone()
+                .or_else(|| crate::bodies::is_mesh(body).then(|| body.clone()))
+        };
         Scene {
-            a: SharedTree::new(crate::files::load_tree(a)?),
-            b: SharedTree::new(crate::files::load_tree(b)?),
-            mesh_a: mesh(&args.mesh_a, "--mesh-a")?,
-            mesh_b: mesh(&args.mesh_b, "--mesh-b")?,
+            a: SharedTree::new(crate::bodies::load(a, &args.body)?),
+            b: SharedTree::new(crate::bodies::load(b, &args.body)?),
+            mesh_a: mesh(&drawn(&args.mesh_a, a), "--mesh-a")?,
+            mesh_b: mesh(&drawn(&args.mesh_b, b), "--mesh-b")?,
             motion: args
                 .motion
                 .as_ref()

@@ -250,9 +250,9 @@ fn a_mesh_where_a_tree_belongs_and_a_tree_where_a_mesh_belongs_say_so() {
     let dir = fixture("hints");
     let (box_stl, box_ist) = (dir.path("box.stl"), dir.path("box.ist"));
     // A mesh given as a tree, in every subcommand that reads trees.
+    // (`query`, `replay`, `haptic`, `occlude` and `view` take meshes too: see
+    // `meshes_open_directly_through_the_build_cache`.)
     for args in [
-        vec!["query", s(&box_stl), s(&box_ist)],
-        vec!["query", s(&box_ist), s(&box_stl)],
         vec!["check", s(&box_stl), "--mesh", s(&box_stl)],
         vec!["export", s(&box_stl)],
     ] {
@@ -1137,4 +1137,151 @@ fn splint_writes_a_closed_wafer_and_refuses_bad_input() {
         assert_eq!(code(&o), 2, "{bad:?}: {}", stdout(&o));
         assert!(stderr(&o).starts_with("error: "), "{bad:?}: {}", stderr(&o));
     }
+}
+
+/// A mesh where a tree is expected (`query`, `replay`): built with the preset and cached in
+/// $IST_CACHE; the same answer as the tree `ist build` makes; a second run reads the cache; a
+/// truncated entry is rebuilt, never trusted; `--no-cache` writes nothing; two processes
+/// building the same meshes at once both succeed and leave one entry per mesh.
+#[test]
+fn meshes_open_directly_through_the_build_cache() {
+    use std::process::Command;
+    let dir = fixture("bodies");
+    let (box_stl, ball_obj) = (dir.path("box.stl"), dir.path("ball.obj"));
+    let (box_t, ball_t) = (dir.path("box-fast.ist"), dir.path("ball-fast.ist"));
+    for (m, t) in [(&box_stl, &box_t), (&ball_obj, &ball_t)] {
+        ist_json(
+            &["build", s(m), "-o", s(t), "--preset", "fast", "--json"],
+            0,
+        );
+    }
+    let cache = dir.path("cache");
+    let run = |args: &[&str], cache: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_ist"))
+            .args(args)
+            .env("IST_CACHE", cache)
+            .output()
+            .expect("ist runs")
+    };
+    let pose = "2.5 0.1 0 1 0 0 0";
+    let query = |a: &Path, b: &Path, extra: &[&str]| {
+        let mut v = vec!["query", s(a), s(b), "--pose-b", pose, "--json"];
+        v.extend_from_slice(extra);
+        v.into_iter().map(str::to_string).collect::<Vec<_>>()
+    };
+    fn args(v: &[String]) -> Vec<&str> {
+        v.iter().map(String::as_str).collect()
+    }
+    let want = ist_json(&args(&query(&box_t, &ball_t, &[])), 0)["distance"].clone();
+    let by_mesh = query(&box_stl, &ball_obj, &["--preset", "fast"]);
+    let entries = |c: &Path| {
+        let mut v: Vec<String> = std::fs::read_dir(c)
+            .map(|r| {
+                r.filter_map(|e| e.ok())
+                    .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .collect()
+            })
+            .unwrap_or_default();
+        v.sort();
+        v
+    };
+    for (round, says) in [(0, "built"), (1, "read from the cache")] {
+        let out = run(&args(&by_mesh), &cache);
+        assert_eq!(code(&out), 0, "{}", stderr(&out));
+        let err = stderr(&out);
+        assert_eq!(err.matches(says).count(), 2, "round {round}: {err}");
+        assert!(err.contains("preset fast"), "{err}");
+        let r: Value = serde_json::from_str(&stdout(&out)).unwrap();
+        assert_eq!(r["distance"], want, "round {round}");
+    }
+    assert_eq!(entries(&cache).len(), 2);
+    // A mesh and a tree mixed.
+    let out = run(
+        &args(&query(&box_t, &ball_obj, &["--preset", "fast"])),
+        &cache,
+    );
+    let r: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(r["distance"], want);
+    // Truncated entries are rebuilt, and the answer stays.
+    for e in entries(&cache) {
+        let p = cache.join(e);
+        let bytes = std::fs::read(&p).unwrap();
+        std::fs::write(&p, &bytes[..bytes.len() / 3]).unwrap();
+    }
+    let out = run(&args(&by_mesh), &cache);
+    assert_eq!(
+        stderr(&out).matches("failed its checks").count(),
+        2,
+        "{}",
+        stderr(&out)
+    );
+    let r: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(r["distance"], want);
+    // Without the recommendation's preset: it says which it chose and why.
+    let out = run(&args(&query(&box_stl, &ball_obj, &[])), &cache);
+    assert_eq!(code(&out), 0);
+    assert!(
+        stderr(&out).contains("preset fine, the recommendation"),
+        "{}",
+        stderr(&out)
+    );
+    // --no-cache writes nothing.
+    let none = dir.path("none");
+    let out = run(
+        &args(&query(
+            &box_stl,
+            &ball_obj,
+            &["--preset", "fast", "--no-cache"],
+        )),
+        &none,
+    );
+    assert_eq!(code(&out), 0);
+    assert!(!none.exists());
+    // Two processes at once on an empty cache: both succeed, one entry per mesh.
+    let racing = dir.path("racing");
+    let children: Vec<_> = (0..2)
+        .map(|_| {
+            Command::new(env!("CARGO_BIN_EXE_ist"))
+                .args(args(&by_mesh))
+                .env("IST_CACHE", &racing)
+                .stdout(std::process::Stdio::piped())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for c in children {
+        let out = c.wait_with_output().unwrap();
+        assert_eq!(code(&out), 0, "{}", stderr(&out));
+        let r: Value = serde_json::from_str(&stdout(&out)).unwrap();
+        assert_eq!(r["distance"], want);
+    }
+    assert_eq!(entries(&racing).len(), 2, "{:?}", entries(&racing));
+    assert!(entries(&racing)
+        .iter()
+        .all(|e| e.ends_with(".ist") && !e.starts_with('.')));
+    // replay takes meshes too.
+    let motion = dir.path("m.csv");
+    std::fs::write(
+        &motion,
+        "t,tx,ty,tz,qw,qx,qy,qz\n0,2.5,0.1,0,1,0,0,0\n0.001,2.4,0.1,0,1,0,0,0\n",
+    )
+    .unwrap();
+    let out = run(
+        &[
+            "replay",
+            s(&box_stl),
+            s(&ball_obj),
+            "--preset",
+            "fast",
+            "--motion",
+            s(&motion),
+            "--query",
+            "distance",
+            "--json",
+        ],
+        &cache,
+    );
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    assert!(stderr(&out).contains("read from the cache"));
 }

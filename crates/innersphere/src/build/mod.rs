@@ -10,12 +10,14 @@
 //! ([`BuildOptions::preset`], [`BuildOptions::recommended_for`]), which are functions of the
 //! mesh because a fixed voxel size only makes sense for a known unit and scale.
 
+pub mod cache;
 mod mass;
 mod options;
 mod pipeline;
 mod preset;
 mod verdict;
 
+pub use cache::{BuildCache, CacheOutcome};
 pub use options::{validate_options, BuildOptions, Resolution};
 pub use pipeline::{build_tree, BuildReport, StageSeconds, MIN_EXTENT};
 pub use preset::{

@@ -1,0 +1,89 @@
+//! A body given as a tree file or as a mesh: a mesh is built into a tree with a preset and
+//! kept in the build cache ([`innersphere::build::BuildCache`]), so that the subcommands that
+//! take two bodies open scans directly and a second run starts at once.
+
+use crate::build::PresetArg;
+use crate::progress::Bars;
+use innersphere::build::{BuildCache, BuildOptions, CacheOutcome, Preset};
+use innersphere::SphereTree;
+use std::path::{Path, PathBuf};
+
+/// How a mesh given for a body becomes its tree.
+#[derive(clap::Args, Debug, Clone)]
+pub struct BodyArgs {
+    /// For a mesh given instead of a tree: its build preset (default: the library's
+    /// recommendation for a mesh of unknown unit, `fine`; `jaw` for dental scans in mm).
+    #[arg(long, value_enum)]
+    pub preset: Option<PresetArg>,
+    /// Folder of the trees built from meshes, keyed by the mesh's content, the options and
+    /// the library's version; bounded to 2 GiB, least recently used first out (default:
+    /// $IST_CACHE, else the platform's cache folder, e.g. ~/.cache/innersphere).
+    #[arg(long, env = "IST_CACHE")]
+    pub cache: Option<PathBuf>,
+    /// Build meshes without reading or writing the cache.
+    #[arg(long)]
+    pub no_cache: bool,
+}
+
+/// Whether `path` names a mesh (by its extension) rather than a tree file.
+pub fn is_mesh(path: &Path) -> bool {
+    !crate::files::is_tree_file(path) && innersphere::mesh::Format::from_path(path).is_ok()
+}
+
+/// The tree of a body: a tree file as it is, a mesh built (or read from the cache) with
+/// `args`, saying on stderr which preset it chose and where the tree came from.
+pub fn load(path: &Path, args: &BodyArgs) -> anyhow::Result<SphereTree> {
+    if !is_mesh(path) {
+        let tree = crate::files::load_tree(path)?;
+        crate::files::warn_if_stale(path, &tree);
+        return Ok(tree);
+    }
+    let mesh = crate::files::load_mesh(path)?;
+    let (opts, why) = match args.preset {
+        Some(p) => (
+            BuildOptions::preset(p.into(), &mesh)?,
+            format!("preset {}", Preset::from(p).name()),
+        ),
+        None => (
+            BuildOptions::recommended_for(&mesh)?,
+            "preset fine, the recommendation for a mesh of unknown unit (voxel = longest side / 384; --preset jaw for dental scans in mm)".to_string(),
+        ),
+    };
+    let bars = Bars::new(false);
+    let t0 = std::time::Instant::now();
+    let dir = match (&args.cache, args.no_cache) {
+        (_, true) => None,
+        (Some(d), false) => Some(d.clone()),
+        (None, false) => BuildCache::default_dir(),
+    };
+    let Some(dir) = dir else {
+        eprintln!(
+            "{}: a mesh; building its tree with {why}, not cached",
+            path.display()
+        );
+        let (tree, _) = SphereTree::build_with_progress(&mesh, &opts, &bars)?;
+        return Ok(tree);
+    };
+    let cache = BuildCache::new(dir, innersphere::build::cache::DEFAULT_MAX_BYTES);
+    eprintln!("{}: a mesh; its tree with {why}", path.display());
+    let (tree, outcome) = cache.get_or_build(&mesh, &opts, &bars)?;
+    let secs = t0.elapsed().as_secs_f64();
+    match outcome {
+        CacheOutcome::Hit => eprintln!(
+            "{}: tree read from the cache {} in {secs:.2} s",
+            path.display(),
+            cache.dir().display()
+        ),
+        CacheOutcome::Built | CacheOutcome::Rebuilt => eprintln!(
+            "{}: tree built in {secs:.1} s{} and cached in {}",
+            path.display(),
+            if outcome == CacheOutcome::Rebuilt {
+                " (the cached entry failed its checks)"
+            } else {
+                ""
+            },
+            cache.dir().display()
+        ),
+    }
+    Ok(tree)
+}

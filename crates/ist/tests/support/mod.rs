@@ -37,10 +37,15 @@ impl Drop for TempDir {
     }
 }
 
-/// Runs `ist` with `args`.
+/// Runs `ist` with `args`; trees built from meshes go to a cache folder of this test process,
+/// never the user's.
 pub fn ist(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_ist"))
         .args(args)
+        .env(
+            "IST_CACHE",
+            std::env::temp_dir().join(format!("ist-test-cache-{}", std::process::id())),
+        )
         .output()
         .expect("ist runs")
 }

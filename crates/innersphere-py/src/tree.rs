@@ -1,7 +1,8 @@
 //! `innersphere.Tree`: build, load, save and look at an Inner Sphere Tree.
 
 use crate::convert::{self, error, float_array};
-use innersphere::build::{build_tree, Preset};
+use innersphere::build::cache::DEFAULT_MAX_BYTES;
+use innersphere::build::{build_tree, BuildCache, Preset};
 use innersphere::glam::DVec3;
 use innersphere::progress::{Progress, Silent};
 use innersphere::tree::file;
@@ -264,7 +265,7 @@ impl Tree {
     /// OSError when the file cannot be read. Runs with the interpreter released (a jaw arch
     /// at 0.1 mm takes about half a minute).
     #[staticmethod]
-    #[pyo3(signature = (path_or_mesh, *, voxel_size=None, resolution=None, min_radius=0.0, refine_steps=0, fanout=4, progress=false, preset=None))]
+    #[pyo3(signature = (path_or_mesh, *, voxel_size=None, resolution=None, min_radius=0.0, refine_steps=0, fanout=4, progress=false, preset=None, cache=None))]
     #[allow(clippy::too_many_arguments)]
     fn build(
         py: Python<'_>,
@@ -276,7 +277,9 @@ impl Tree {
         fanout: i64,
         progress: bool,
         preset: Option<&str>,
+        cache: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Tree> {
+        let cache = build_cache(cache)?;
         let mesh = mesh_like(py, path_or_mesh, "path_or_mesh", true)?;
         let mut opts = match preset {
             Some(name) => {
@@ -309,16 +312,25 @@ impl Tree {
         let printer = StderrProgress {
             state: Mutex::new((String::new(), 0, 0, 0)),
         };
-        let (tree, report) = py
+        let (tree, report, outcome) = py
             .detach(|| {
                 let sink: &dyn Progress = if progress { &printer } else { &Silent };
-                build_tree(&mesh, &opts, sink)
+                match &cache {
+                    Some(c) => c
+                        .get_or_build(&mesh, &opts, sink)
+                        .map(|(t, o, r)| (t, r, Some(o))),
+                    None => build_tree(&mesh, &opts, sink).map(|(t, r)| (t, Some(r), None)),
+                }
             })
             .map_err(error)?;
-        for w in &report.warnings {
+        for w in report.iter().flat_map(|r| &r.warnings) {
             warn(py, &format!("Tree.build: {w}"))?;
         }
-        let report = serde_json::to_value(&report).ok();
+        let mut report = report.and_then(|r| serde_json::to_value(&r).ok());
+        if let (Some(o), Some(c)) = (outcome, &cache) {
+            let r = report.get_or_insert_with(|| serde_json::json!({}));
+            r["cache"] = serde_json::json!({"outcome": o, "dir": c.dir().to_string_lossy()});
+        }
         Ok(Tree::new(tree, report))
     }
 
@@ -446,4 +458,24 @@ fn sphere_array(py: Python<'_>, rows: Vec<[f64; 4]>) -> Bound<'_, PyArray2<f64>>
     numpy::ndarray::Array2::from_shape_vec((n, 4), flat)
         .map(|a| PyArray2::from_owned_array(py, a))
         .expect("n rows of 4")
+}
+
+/// The build cache of `Tree.build(cache=...)`: None or False (none), True (the platform's
+/// cache folder), or a folder.
+fn build_cache(cache: Option<&Bound<'_, PyAny>>) -> PyResult<Option<BuildCache>> {
+    let Some(c) = cache.filter(|c| !c.is_none()) else {
+        return Ok(None);
+    };
+    if let Ok(b) = c.extract::<bool>() {
+        if !b {
+            return Ok(None);
+        }
+        return match BuildCache::default_dir() {
+            Some(d) => Ok(Some(BuildCache::new(d, DEFAULT_MAX_BYTES))),
+            None => Err(PyValueError::new_err(
+                "cache=True: this platform has no cache folder; give one (cache=\"/path\")",
+            )),
+        };
+    }
+    Ok(Some(BuildCache::new(convert::path(c)?, DEFAULT_MAX_BYTES)))
 }

@@ -155,3 +155,21 @@ def test_progress_goes_to_stderr(meshes, capfd):
     assert "done" in err
     innersphere.Tree.build(meshes["box"], resolution=16)
     assert capfd.readouterr().err == ""
+
+
+def test_build_with_a_cache_reads_the_same_tree_back(meshes, tmp_path):
+    """cache=folder: built once, then read back bit for bit; a corrupt entry is rebuilt."""
+    want = innersphere.Tree.build(meshes["box"], preset="fast").to_bytes()
+    first = innersphere.Tree.build(meshes["box"], preset="fast", cache=tmp_path)
+    again = innersphere.Tree.build(meshes["box"], preset="fast", cache=str(tmp_path))
+    assert first.report["cache"]["outcome"] == "built"
+    assert again.report["cache"]["outcome"] == "hit"
+    assert first.to_bytes() == again.to_bytes() == want
+    (entry,) = list(tmp_path.glob("*.ist"))
+    entry.write_bytes(entry.read_bytes()[:100])
+    fixed = innersphere.Tree.build(meshes["box"], preset="fast", cache=tmp_path)
+    assert fixed.report["cache"]["outcome"] == "rebuilt" and fixed.to_bytes() == want
+    # Other options: another entry.
+    innersphere.Tree.build(meshes["box"], preset="default", cache=tmp_path)
+    assert len(list(tmp_path.glob("*.ist"))) == 2
+    assert innersphere.Tree.build(meshes["box"], preset="fast", cache=False).report.get("cache") is None

@@ -33,15 +33,15 @@ fn a_second_build_is_read_back_and_other_options_are_another_entry() {
     let cache = BuildCache::new(dir.path().join("cache"), u64::MAX);
     let mesh = shapes::molar(3, 0.2);
     let fresh = SphereTree::build(&mesh, &fast(&mesh)).unwrap();
-    let (t1, o1) = cache.get_or_build(&mesh, &fast(&mesh), &Silent).unwrap();
-    let (t2, o2) = cache.get_or_build(&mesh, &fast(&mesh), &Silent).unwrap();
+    let (t1, o1, _) = cache.get_or_build(&mesh, &fast(&mesh), &Silent).unwrap();
+    let (t2, o2, _) = cache.get_or_build(&mesh, &fast(&mesh), &Silent).unwrap();
     assert_eq!((o1, o2), (CacheOutcome::Built, CacheOutcome::Hit));
     assert_eq!(bytes(&t1), bytes(&fresh));
     assert_eq!(bytes(&t2), bytes(&fresh));
     assert_eq!(entries(cache.dir()).len(), 1);
     // Other options: another key, another entry, the tree those options build.
     let other = BuildOptions::preset(Preset::Default, &mesh).unwrap();
-    let (t3, o3) = cache.get_or_build(&mesh, &other, &Silent).unwrap();
+    let (t3, o3, _) = cache.get_or_build(&mesh, &other, &Silent).unwrap();
     assert_eq!(o3, CacheOutcome::Built);
     assert_eq!(
         bytes(&t3),
@@ -63,7 +63,7 @@ fn truncated_or_corrupt_entries_are_rebuilt() {
     let cache = BuildCache::new(dir.path(), u64::MAX);
     let mesh = shapes::ellipsoid(glam::DVec3::new(1.0, 0.7, 0.5), 3);
     let opts = fast(&mesh);
-    let (good, _) = cache.get_or_build(&mesh, &opts, &Silent).unwrap();
+    let (good, _, _) = cache.get_or_build(&mesh, &opts, &Silent).unwrap();
     let entry = cache.entry(&BuildCache::key(&mesh, &opts));
     let full = std::fs::read(&entry).unwrap();
     let mut flipped = full.clone();
@@ -71,7 +71,7 @@ fn truncated_or_corrupt_entries_are_rebuilt() {
     flipped[mid] ^= 0x10;
     for damaged in [full[..full.len() / 2].to_vec(), flipped, Vec::new()] {
         std::fs::write(&entry, &damaged).unwrap();
-        let (t, o) = cache.get_or_build(&mesh, &opts, &Silent).unwrap();
+        let (t, o, _) = cache.get_or_build(&mesh, &opts, &Silent).unwrap();
         assert_eq!(o, CacheOutcome::Rebuilt);
         assert_eq!(bytes(&t), bytes(&good));
         assert_eq!(std::fs::read(&entry).unwrap(), full);
@@ -122,7 +122,7 @@ fn eviction_keeps_the_folder_under_its_bound_least_recently_used_first() {
         .unwrap();
     std::thread::sleep(std::time::Duration::from_millis(20));
     // A hit makes mesh 0 the most recently used.
-    let (_, o) = cache
+    let (_, o, _) = cache
         .get_or_build(&meshes[0], &fast(&meshes[0]), &Silent)
         .unwrap();
     assert_eq!(o, CacheOutcome::Hit);

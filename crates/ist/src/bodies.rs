@@ -61,12 +61,18 @@ pub fn load(path: &Path, args: &BodyArgs) -> anyhow::Result<SphereTree> {
             "{}: a mesh; building its tree with {why}, not cached",
             path.display()
         );
-        let (tree, _) = SphereTree::build_with_progress(&mesh, &opts, &bars)?;
+        let (tree, report) = SphereTree::build_with_progress(&mesh, &opts, &bars)?;
+        for w in &report.warnings {
+            eprintln!("warning: {}: {w}", path.display());
+        }
         return Ok(tree);
     };
     let cache = BuildCache::new(dir, innersphere::build::cache::DEFAULT_MAX_BYTES);
     eprintln!("{}: a mesh; its tree with {why}", path.display());
-    let (tree, outcome) = cache.get_or_build(&mesh, &opts, &bars)?;
+    let (tree, outcome, report) = cache.get_or_build(&mesh, &opts, &bars)?;
+    for w in report.iter().flat_map(|r| &r.warnings) {
+        eprintln!("warning: {}: {w}", path.display());
+    }
     let secs = t0.elapsed().as_secs_f64();
     match outcome {
         CacheOutcome::Hit => eprintln!(

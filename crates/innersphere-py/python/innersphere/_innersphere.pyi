@@ -54,6 +54,7 @@ class Tree:
         fanout: int = 4,
         progress: bool = False,
         preset: Optional[str] = None,
+        cache: Union[None, bool, _PathLike] = None,
     ) -> "Tree":
         """Builds the Inner Sphere Tree of a closed triangle mesh.
 
@@ -72,6 +73,13 @@ class Tree:
         preset: start from ``ist build --preset NAME``: "fast", "default", "fine", "jaw"
             (0.1 mm voxels, 0.05 mm minimum radius, 8 steps; jaw scans in mm) or
             "jaw-fast"; options given (or differing from their defaults) override it.
+
+        cache: None or False (build), True (the platform's cache folder, e.g.
+            ~/.cache/innersphere) or a folder: a tree built before from the same mesh with
+            the same options and library is read back instead (checked; a corrupt entry is
+            rebuilt); ``tree.report["cache"]`` says ``{"outcome": "hit" | "built" |
+            "rebuilt", "dir": ...}``. The folder is bounded to 2 GiB, least recently used
+            first out.
 
         Warnings of the build (open mesh, flipped faces, ...) are issued as UserWarnings
         and kept in ``tree.report``. Raises ValueError for a bad option or mesh, OSError

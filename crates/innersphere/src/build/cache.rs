@@ -15,7 +15,7 @@
 //!   are removed until the folder's entries fit `max_bytes` (the entry just written is kept
 //!   even when it alone is larger).
 
-use super::{build_tree, BuildOptions};
+use super::{build_tree, BuildOptions, BuildReport};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
@@ -73,18 +73,7 @@ impl BuildCache {
         h.update(&crate::tree::BUILD_REVISION.to_le_bytes());
         h.update(&crate::tree::file::VERSION.to_le_bytes());
         h.update(format!("{opts:?}").as_bytes());
-        h.update(&(mesh.vertices.len() as u64).to_le_bytes());
-        for v in &mesh.vertices {
-            for x in v.to_array() {
-                h.update(&x.to_bits().to_le_bytes());
-            }
-        }
-        h.update(&(mesh.triangles.len() as u64).to_le_bytes());
-        for t in &mesh.triangles {
-            for i in t {
-                h.update(&i.to_le_bytes());
-            }
-        }
+        h.update(mesh.content_hash().as_bytes());
         h.finalize().to_hex().to_string()
     }
 
@@ -94,19 +83,20 @@ impl BuildCache {
     }
 
     /// The tree of `mesh` built with `opts`: read from the cache when a valid entry is there,
-    /// else built (reporting to `progress`) and stored. Fails when the build fails or the
-    /// entry cannot be written (the folder is not writable, the disk is full).
+    /// else built (reporting to `progress`) and stored, with the build's report (its
+    /// warnings). Fails when the build fails or the entry cannot be written (the folder is not
+    /// writable, the disk is full).
     pub fn get_or_build(
         &self,
         mesh: &Mesh,
         opts: &BuildOptions,
         progress: &dyn Progress,
-    ) -> Result<(SphereTree, CacheOutcome)> {
+    ) -> Result<(SphereTree, CacheOutcome, Option<BuildReport>)> {
         let path = self.entry(&Self::key(mesh, opts));
         let outcome = match crate::tree::file::load(&path) {
             Ok(tree) => {
                 touch(&path);
-                return Ok((tree, CacheOutcome::Hit));
+                return Ok((tree, CacheOutcome::Hit, None));
             }
             Err(Error::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
                 CacheOutcome::Built
@@ -117,11 +107,11 @@ impl BuildCache {
                 CacheOutcome::Rebuilt
             }
         };
-        let (tree, _) = build_tree(mesh, opts, progress)?;
+        let (tree, report) = build_tree(mesh, opts, progress)?;
         std::fs::create_dir_all(&self.dir).map_err(|e| Error::io(&self.dir, e))?;
         crate::tree::file::save(&tree, &path)?;
         self.evict(&path);
-        Ok((tree, outcome))
+        Ok((tree, outcome, Some(report)))
     }
 
     /// Removes the least recently used entries until the entries fit the bound, keeping
@@ -168,7 +158,7 @@ impl SphereTree {
         opts: &BuildOptions,
         cache: &BuildCache,
         progress: &dyn Progress,
-    ) -> Result<(SphereTree, CacheOutcome)> {
+    ) -> Result<(SphereTree, CacheOutcome, Option<BuildReport>)> {
         cache.get_or_build(mesh, opts, progress)
     }
 }

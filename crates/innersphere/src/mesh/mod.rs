@@ -59,6 +59,26 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// The BLAKE3 hash of the mesh as loaded (vertex coordinates' bits, then triangle
+    /// indices), 64 hex digits: what a tree remembers of the mesh it was built from, and
+    /// part of a build cache key.
+    pub fn content_hash(&self) -> String {
+        let mut h = blake3::Hasher::new();
+        h.update(&(self.vertices.len() as u64).to_le_bytes());
+        for v in &self.vertices {
+            for x in v.to_array() {
+                h.update(&x.to_bits().to_le_bytes());
+            }
+        }
+        h.update(&(self.triangles.len() as u64).to_le_bytes());
+        for t in &self.triangles {
+            for i in t {
+                h.update(&i.to_le_bytes());
+            }
+        }
+        h.finalize().to_hex().to_string()
+    }
+
     /// Loads a mesh file: STL (binary or ASCII), OBJ, PLY or OFF by its extension, optionally
     /// gzip-compressed (`.stl.gz`, ...); welded and validated (see [`io::load`]). Coordinates
     /// are kept in the file's own unit (the library is unit-agnostic).

@@ -56,6 +56,18 @@ pub fn load(path: &Path, args: &BodyArgs) -> anyhow::Result<SphereTree> {
         (Some(d), false) => Some(d.clone()),
         (None, false) => BuildCache::default_dir(),
     };
+    // A cache folder that cannot be made (a file in its way, no permission) costs the
+    // cache, not the command.
+    let dir = dir.filter(|d| match std::fs::create_dir_all(d) {
+        Ok(()) => true,
+        Err(e) => {
+            eprintln!(
+                "warning: the build cache folder {} cannot be used ({e}): building without it",
+                d.display()
+            );
+            false
+        }
+    });
     let Some(dir) = dir else {
         eprintln!(
             "{}: a mesh; building its tree with {why}, not cached",

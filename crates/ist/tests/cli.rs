@@ -1260,6 +1260,13 @@ fn meshes_open_directly_through_the_build_cache() {
     assert!(entries(&racing)
         .iter()
         .all(|e| e.ends_with(".ist") && !e.starts_with('.')));
+    // A cache folder that cannot be made: the command still answers, and says why.
+    let blocked = dir.path("box.stl").join("cache");
+    let out = run(&args(&by_mesh), &blocked);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    assert!(stderr(&out).contains("cannot be used"), "{}", stderr(&out));
+    let r: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(r["distance"], want);
     // replay takes meshes too.
     let motion = dir.path("m.csv");
     std::fs::write(

@@ -33,10 +33,18 @@ pub fn is_mesh(path: &Path) -> bool {
 /// The tree of a body: a tree file as it is, a mesh built (or read from the cache) with
 /// `args`, saying on stderr which preset it chose and where the tree came from.
 pub fn load(path: &Path, args: &BodyArgs) -> anyhow::Result<SphereTree> {
+    load_body(path, args).map(|(tree, _)| tree)
+}
+
+/// [`load`], and the mesh when the body was given as one (for drawing it).
+pub fn load_body(
+    path: &Path,
+    args: &BodyArgs,
+) -> anyhow::Result<(SphereTree, Option<innersphere::Mesh>)> {
     if !is_mesh(path) {
         let tree = crate::files::load_tree(path)?;
         crate::files::warn_if_stale(path, &tree);
-        return Ok(tree);
+        return Ok((tree, None));
     }
     let mesh = crate::files::load_mesh(path)?;
     let (opts, why) = match args.preset {
@@ -77,7 +85,7 @@ pub fn load(path: &Path, args: &BodyArgs) -> anyhow::Result<SphereTree> {
         for w in &report.warnings {
             eprintln!("warning: {}: {w}", path.display());
         }
-        return Ok(tree);
+        return Ok((tree, Some(mesh)));
     };
     let cache = BuildCache::new(dir, innersphere::build::cache::DEFAULT_MAX_BYTES);
     eprintln!("{}: a mesh; its tree with {why}", path.display());
@@ -103,5 +111,5 @@ pub fn load(path: &Path, args: &BodyArgs) -> anyhow::Result<SphereTree> {
             cache.dir().display()
         ),
     }
-    Ok(tree)
+    Ok((tree, Some(mesh)))
 }

@@ -87,16 +87,13 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 .transpose()
         };
         // A body given as a mesh is also its drawn surface (unless --mesh-a/-b say otherwise).
-        let drawn = |given: &Option<PathBuf>, body: &PathBuf| {
-            given
-                .clone()
-                .or_else(|| crate::bodies::is_mesh(body).then(|| body.clone()))
-        };
+        let (tree_a, body_a) = crate::bodies::load_body(a, &args.body)?;
+        let (tree_b, body_b) = crate::bodies::load_body(b, &args.body)?;
         Scene {
-            a: SharedTree::new(crate::bodies::load(a, &args.body)?),
-            b: SharedTree::new(crate::bodies::load(b, &args.body)?),
-            mesh_a: mesh(&drawn(&args.mesh_a, a), "--mesh-a")?,
-            mesh_b: mesh(&drawn(&args.mesh_b, b), "--mesh-b")?,
+            a: SharedTree::new(tree_a),
+            b: SharedTree::new(tree_b),
+            mesh_a: mesh(&args.mesh_a, "--mesh-a")?.or(body_a),
+            mesh_b: mesh(&args.mesh_b, "--mesh-b")?.or(body_b),
             motion: args
                 .motion
                 .as_ref()

@@ -19,7 +19,7 @@
 //!
 //! Measured on the real jaw pair from 24 random open starts (1–4 mm open, ±1.5 mm sideways
 //! and forwards, ±3° yaw, ±2° roll and pitch; three seeds): every run chose the same pose,
-//! 0.39 mm from the scanned bite at the worst crown centre, in 2–4 s on 2 cores
+//! 0.39–0.41 mm from the scanned bite at the worst crown centre, in 1–4 s on 2 cores
 //! (docs/OCCLUSION.md).
 
 use super::occlusion::{occlude, Occlusion, OcclusionOptions};

@@ -312,7 +312,15 @@ impl Tree {
         let printer = StderrProgress {
             state: Mutex::new((String::new(), 0, 0, 0)),
         };
-        let (tree, report, outcome) = py
+        let source = if is_path(path_or_mesh)? {
+            Some(innersphere::tree::MeshSource::of(
+                &convert::path(path_or_mesh)?,
+                &mesh,
+            ))
+        } else {
+            None
+        };
+        let (mut tree, report, outcome) = py
             .detach(|| {
                 let sink: &dyn Progress = if progress { &printer } else { &Silent };
                 match &cache {
@@ -326,6 +334,8 @@ impl Tree {
         for w in report.iter().flat_map(|r| &r.warnings) {
             warn(py, &format!("Tree.build: {w}"))?;
         }
+        // A tree built from a file remembers it (as `ist build` does).
+        tree.meta.source = source;
         let mut report = report.and_then(|r| serde_json::to_value(&r).ok());
         if let (Some(o), Some(c)) = (outcome, &cache) {
             let r = report.get_or_insert_with(|| serde_json::json!({}));

@@ -11,6 +11,15 @@ import innersphere
 from helpers import box_mesh, icosphere, write_obj
 
 
+
+def same_tree(a, b):
+    """The same spheres, nodes and meta, whatever file each remembers (meta's "source")."""
+    ma, mb = dict(a.meta), dict(b.meta)
+    ma.pop("source", None)
+    mb.pop("source", None)
+    return (np.array_equal(a.spheres, b.spheres) and np.array_equal(a.nodes, b.nodes)
+            and ma == mb)
+
 def test_build_from_arrays_equals_file_and_cli(meshes, ist, tmp_path):
     v, f = meshes["sphere"]
     obj = tmp_path / "sphere.obj"
@@ -23,9 +32,13 @@ def test_build_from_arrays_equals_file_and_cli(meshes, ist, tmp_path):
     ist.run("build", obj, "-o", cli, "-q", "--resolution", 20, "--min-radius", 0.02,
             "--refine-steps", 2, "--fanout", 6)
     want = cli.read_bytes()
-    assert from_arrays.to_bytes() == want
+    # A tree built from a file remembers the file (path and content hash), as `ist build`'s
+    # does: the same bytes. From arrays there is no file: the same tree otherwise.
     assert from_file.to_bytes() == want
     assert from_str.to_bytes() == want
+    assert from_file.meta["source"]["path"] == str(obj.resolve())
+    assert "source" not in from_arrays.meta
+    assert same_tree(from_arrays, innersphere.Tree.from_bytes(want))
 
 
 def test_build_with_voxel_size_and_preset_equals_cli(ist, tmp_path):
@@ -34,10 +47,10 @@ def test_build_with_voxel_size_and_preset_equals_cli(ist, tmp_path):
     write_obj(obj, v, f)
     cli = tmp_path / "cli.ist"
     ist.run("build", obj, "-o", cli, "-q", "--voxel-size", 0.4)
-    assert innersphere.Tree.build((v, f), voxel_size=0.4).to_bytes() == cli.read_bytes()
+    assert same_tree(innersphere.Tree.build((v, f), voxel_size=0.4), innersphere.Tree.load(cli))
     ist.run("build", obj, "-o", cli, "-q", "--preset", "jaw-fast", "--voxel-size", 0.5)
     t = innersphere.Tree.build((v, f), preset="jaw-fast", voxel_size=0.5)
-    assert t.to_bytes() == cli.read_bytes()
+    assert same_tree(t, innersphere.Tree.load(cli))
     assert t.meta["min_radius"] == 0.05 and t.meta["built_by"]["refine_steps"] == 8
 
 

@@ -138,8 +138,9 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         None => args.opts.options(),
     };
     innersphere::build::validate_options(&opts)?;
-    let (tree, report) = SphereTree::build_with_progress(&mesh, &opts, &bars)
+    let (mut tree, report) = SphereTree::build_with_progress(&mesh, &opts, &bars)
         .with_context(|| format!("building the tree of {}", args.mesh.display()))?;
+    tree.meta.source = Some(innersphere::tree::MeshSource::of(&args.mesh, &mesh));
     let t1 = Instant::now();
     // Through a temporary file renamed into place: a failed write leaves no partial tree.
     let bytes = innersphere::tree::file::to_bytes(&tree);

@@ -87,13 +87,38 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 .transpose()
         };
         // A body given as a mesh is also its drawn surface (unless --mesh-a/-b say otherwise).
+        // A tree built from a file draws that file's mesh while it still holds it.
         let (tree_a, body_a) = crate::bodies::load_body(a, &args.body)?;
         let (tree_b, body_b) = crate::bodies::load_body(b, &args.body)?;
+        let remembered = |tree: &innersphere::SphereTree, which: &str, flag: &str| {
+            let source = tree.meta.source.as_ref()?;
+            match source.load() {
+                Ok(m) => {
+                    eprintln!(
+                        "{which}: drawing {} (the mesh its tree was built from)",
+                        source.path
+                    );
+                    Some(m)
+                }
+                Err(e) => {
+                    eprintln!("{which}: not drawing its surface ({e}); give {flag}");
+                    None
+                }
+            }
+        };
+        let mesh_a = match (mesh(&args.mesh_a, "--mesh-a")?, body_a) {
+            (Some(m), _) | (None, Some(m)) => Some(m),
+            (None, None) => remembered(&tree_a, "A", "--mesh-a"),
+        };
+        let mesh_b = match (mesh(&args.mesh_b, "--mesh-b")?, body_b) {
+            (Some(m), _) | (None, Some(m)) => Some(m),
+            (None, None) => remembered(&tree_b, "B", "--mesh-b"),
+        };
         Scene {
             a: SharedTree::new(tree_a),
             b: SharedTree::new(tree_b),
-            mesh_a: mesh(&args.mesh_a, "--mesh-a")?.or(body_a),
-            mesh_b: mesh(&args.mesh_b, "--mesh-b")?.or(body_b),
+            mesh_a,
+            mesh_b,
             motion: args
                 .motion
                 .as_ref()

@@ -1267,6 +1267,42 @@ fn meshes_open_directly_through_the_build_cache() {
     assert!(stderr(&out).contains("cannot be used"), "{}", stderr(&out));
     let r: Value = serde_json::from_str(&stdout(&out)).unwrap();
     assert_eq!(r["distance"], want);
+    // A tree `ist build` writes remembers its mesh (path and content hash); a changed file
+    // is told apart.
+    let copy = dir.path("copy.stl");
+    std::fs::copy(&box_stl, &copy).unwrap();
+    let copy_t = dir.path("copy.ist");
+    ist_json(
+        &[
+            "build",
+            s(&copy),
+            "-o",
+            s(&copy_t),
+            "--preset",
+            "fast",
+            "--json",
+        ],
+        0,
+    );
+    let src = innersphere::tree::file::load(&copy_t)
+        .unwrap()
+        .meta
+        .source
+        .expect("remembered");
+    assert_eq!(Path::new(&src.path), copy.canonicalize().unwrap());
+    assert_eq!(
+        src.hash,
+        innersphere::Mesh::load(&copy).unwrap().content_hash()
+    );
+    assert!(src.load().is_ok());
+    std::fs::write(
+        &copy,
+        std::fs::read_to_string(&box_stl)
+            .unwrap()
+            .replace("0.6", "0.7"),
+    )
+    .unwrap();
+    assert!(src.load().unwrap_err().to_string().contains("another mesh"));
     // replay takes meshes too.
     let motion = dir.path("m.csv");
     std::fs::write(

@@ -272,6 +272,7 @@ pub fn build_tree(
         mesh_closed: closed,
         built_by: Some(BuildStamp::current(opts.packing.refine_steps)),
         inertia,
+        source: None,
     };
     let (tree, hstats) = hierarchy::build(&spheres, &opts.hierarchy, meta, progress)?;
     // The tree must read back from its file: never hand out one that `save` would refuse.

@@ -38,6 +38,45 @@ pub struct TreeMeta {
     /// in files written before it was stored.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub inertia: Option<[f64; 6]>,
+    /// The mesh file the tree was built from, when the builder was given a file (`ist build`,
+    /// Python's `Tree.build(path)`): so that a viewer draws its surface without being told,
+    /// and can tell whether the file still holds that mesh. `None` for trees built from
+    /// arrays and in files written before it was stored.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<MeshSource>,
+}
+
+/// The mesh file a tree was built from ([`TreeMeta::source`]).
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct MeshSource {
+    /// Its path, absolute where it could be resolved.
+    pub path: String,
+    /// [`Mesh::content_hash`](crate::mesh::Mesh::content_hash) of the mesh as loaded.
+    pub hash: String,
+}
+
+impl MeshSource {
+    /// The record of `mesh`, loaded from `path`.
+    pub fn of(path: &std::path::Path, mesh: &crate::mesh::Mesh) -> MeshSource {
+        let abs = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+        MeshSource {
+            path: abs.to_string_lossy().into_owned(),
+            hash: mesh.content_hash(),
+        }
+    }
+
+    /// The mesh at [`path`](Self::path) when it still is the one the tree was built from;
+    /// otherwise an error that says which (missing, unreadable, another mesh now).
+    pub fn load(&self) -> crate::error::Result<crate::mesh::Mesh> {
+        let mesh = crate::mesh::Mesh::load(&self.path)?;
+        if mesh.content_hash() != self.hash {
+            return Err(crate::error::Error::InvalidMesh(format!(
+                "{} holds another mesh than the tree was built from",
+                self.path
+            )));
+        }
+        Ok(mesh)
+    }
 }
 
 impl TreeMeta {
@@ -63,6 +102,7 @@ impl TreeMeta {
             mesh_closed: true,
             built_by: None,
             inertia: None,
+            source: None,
         }
     }
 }

@@ -243,15 +243,7 @@ pub unsafe extern "C" fn ist_penetration_with_stiffness(
         };
         opts.check()?;
         let p = pair.penetration_with(&a, &b, &opts);
-        *out = ist_penetration_result {
-            volume: p.volume,
-            max_depth: p.max_depth,
-            normal: p.normal.to_array(),
-            force: p.force.to_array(),
-            torque_a: p.torque_a.to_array(),
-            torque_b: p.torque_b.to_array(),
-            patch_count: p.patch_count,
-        };
+        *out = ist_penetration_result::from(&p);
         Ok(())
     })
 }

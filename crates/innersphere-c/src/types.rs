@@ -141,3 +141,17 @@ pub struct ist_contact_point {
     /// Leaf (node index) of tree B.
     pub leaf_b: u32,
 }
+
+impl From<&innersphere::Penetration> for ist_penetration_result {
+    fn from(p: &innersphere::Penetration) -> Self {
+        ist_penetration_result {
+            volume: p.volume,
+            max_depth: p.max_depth,
+            normal: p.normal.to_array(),
+            force: p.force.to_array(),
+            torque_a: p.torque_a.to_array(),
+            torque_b: p.torque_b.to_array(),
+            patch_count: p.patch_count,
+        }
+    }
+}

@@ -44,6 +44,15 @@ fn assert_packing_invariants(spheres: &[Sphere], sdf: &dyn Fn(DVec3) -> f64) {
     }
 }
 
+/// `f` on a rayon pool of `threads` threads.
+fn on(threads: usize, f: &(dyn Fn() -> Vec<Sphere> + Sync)) -> Vec<Sphere> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
 fn assert_tree_invariants(tree: &SphereTree, spheres: &[Sphere]) {
     tree.validate_structure().unwrap();
     assert_eq!(
@@ -328,13 +337,6 @@ fn parallel_packing_is_valid_thread_independent_and_as_full_as_the_global_order(
         shapes::torus(1.0, 0.35, 48, 24),
         shapes::ellipsoid(DVec3::new(1.0, 0.6, 0.4), 3),
     ];
-    let on = |threads: usize, f: &(dyn Fn() -> Vec<Sphere> + Sync)| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(f)
-    };
     for mesh in &meshes {
         let (lo, hi) = mesh.bbox();
         let grid = VoxelGrid::with_resolution(lo, hi, 48).unwrap();
@@ -409,15 +411,9 @@ proptest! {
             refine_steps: if refine { 8 } else { 0 },
             ..Default::default()
         };
-        let on = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| packing::pack_parallel(&bounds, &bvh, &opts, &Silent))
-        };
-        let one = on(1);
-        prop_assert_eq!(&one, &on(3));
+        let run = || packing::pack_parallel(&bounds, &bvh, &opts, &Silent);
+        let one = on(1, &run);
+        prop_assert_eq!(&one, &on(3, &run));
         prop_assert!(!one.is_empty());
         assert_packing_invariants(&one, &|p| bvh.closest_point(p, f64::INFINITY).unwrap().dist_sq.sqrt());
     }

@@ -100,7 +100,8 @@ pub(super) fn pack(
             })
             .collect();
         entries.par_sort_unstable_by_key(|e| e.0);
-        let mut blocks: Vec<&[(u64, Entry)]> = entries.chunk_by(|a, b| a.0 == b.0).collect();
+        let all: Vec<&[(u64, Entry)]> = entries.chunk_by(|a, b| a.0 == b.0).collect();
+        let mut blocks: &[&[(u64, Entry)]] = &all;
         let mut covered = 0u64;
         for colour in 0..8u64 {
             let n = blocks.partition_point(|b| b[0].0 >> 60 <= colour);
@@ -120,7 +121,7 @@ pub(super) fn pack(
             };
             let placed: Vec<(Vec<Sphere>, u64)> =
                 these.par_iter().map(|b| band.block(b, &spheres)).collect();
-            blocks = rest.to_vec();
+            blocks = rest;
             for (local, c) in placed {
                 covered += c;
                 for s in local {

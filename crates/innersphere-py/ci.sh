@@ -52,7 +52,8 @@ echo "== type stubs match the module (mypy stubtest)"
 
 echo "== pytest"
 set +e
-(cd "$TMP" && "$PY" -m pytest -p no:cacheprovider -q "$REPO/crates/innersphere-py/tests" 2>&1) | tee "$TMP/pytest.log"
+# Each test has a time limit (conftest.py); the whole run has one more, as a last guard.
+(cd "$TMP" && timeout -k 30 1500 "$PY" -m pytest -p no:cacheprovider -q -rs "$REPO/crates/innersphere-py/tests" 2>&1) | tee "$TMP/pytest.log"
 rc=${PIPESTATUS[0]}
 set -e
 if [ "$rc" -eq 5 ]; then

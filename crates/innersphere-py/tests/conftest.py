@@ -1,11 +1,45 @@
 """Shared fixtures: generated meshes and trees (no data files needed), the `ist` CLI."""
 
+import faulthandler
 import os
+import sys
 
 import pytest
 
 import innersphere
 from helpers import Ist, box_mesh, find_ist, icosphere
+
+
+# --- a time limit per test ------------------------------------------------------------------
+
+#: Seconds a test (setup, call and teardown) may take unless marked ``time_limit(seconds)``.
+DEFAULT_TIME_LIMIT = 600
+
+
+_STDERR = None
+
+
+def pytest_configure(config):
+    # The terminal's stderr, kept before a test's output capture takes over fd 2 (the
+    # stacks must reach the log, not the captured output that an exit discards).
+    global _STDERR
+    _STDERR = os.dup(2)
+    config.addinivalue_line(
+        "markers", "time_limit(seconds): the test fails (the run stops, every thread's stack "
+        "printed) when it takes longer"
+    )
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    """A hung test ends the run with every thread's stack instead of hanging the CI."""
+    mark = item.get_closest_marker("time_limit")
+    seconds = mark.args[0] if mark else DEFAULT_TIME_LIMIT
+    faulthandler.dump_traceback_later(seconds, exit=True, file=_STDERR if _STDERR is not None else sys.stderr)
+    try:
+        yield
+    finally:
+        faulthandler.cancel_dump_traceback_later()
 
 
 # --- fixtures ------------------------------------------------------------------------------

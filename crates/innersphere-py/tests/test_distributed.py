@@ -38,6 +38,7 @@ def client():
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
     )
     c = distributed.Client(cluster)
+    c.wait_for_workers(2, timeout=120)
     yield c
     c.close()
     cluster.close()
@@ -86,6 +87,21 @@ def test_sweep_equals_the_local_batch(client, trees, tree_files, query):
     local = getattr(innersphere.Pair(*trees), isd.QUERIES[query])(poses, pose_a=pa, chunk=64)
     got = isd.sweep(client, *tree_files, poses, query=query, chunk=1280, batch_chunk=64, pose_a=pa)
     assert same(got, local)
+
+
+@pytest.mark.time_limit(120)
+def test_sweeps_of_the_same_trees_one_after_another(client, trees):
+    # Each sweep scatters the trees anew: a content-keyed scatter raced the release of the
+    # previous sweep's copy, and a sweep failed with lost data or waited forever.
+    poses = random_poses(400, 8)
+    local = innersphere.Pair(*trees).distance_many(poses)
+    for _ in range(25):
+        assert same(isd.sweep(client, *trees, poses, chunk=40), local)
+    # Trees scattered once by the caller serve many sweeps.
+    fa, fb = client.scatter(list(trees), broadcast=True)
+    for _ in range(5):
+        assert same(isd.sweep(client, fa, fb, poses, chunk=40), local)
+    assert same(isd.sweep(client, fa, fb, poses[:0]), local[:0])
 
 
 def test_sweep_refuses_bad_input(client, trees):

@@ -15,9 +15,12 @@ brings its own object store and runtime to install for what is a map over chunks
 - ``contact_map_many(client, pairs)``: the occlusion map (``contact_map``) of many arch
   pairs.
 
-Trees are sent once per worker (``client.scatter(..., broadcast=True, hash=True)``; a
-``Tree`` pickles as its file's bytes, and the content key makes a later sweep of the same
-trees send nothing) and stay in the worker's memory for every chunk. Meshes and output
+A sweep sends its trees once to every worker (``client.scatter(..., broadcast=True)``; a
+``Tree`` pickles as its file's bytes), where they stay for all its chunks. To send them once
+for many sweeps, scatter them yourself and pass the futures:
+``fa, fb = client.scatter([tree_a, tree_b], broadcast=True)``. (Content-keyed scatters,
+``hash=True``, are not used: a later sweep re-scattering the key while the scheduler releases
+the earlier sweep's copy loses the data, and the tasks fail or wait forever.) Meshes and output
 folders of ``build_many`` / ``contact_map_many`` are paths every worker can read and write (a
 shared file system), as in a cohort study's data folder.
 """
@@ -50,11 +53,11 @@ QUERIES = {
     "penetration": "penetration_many",
 }
 
-_TreeLike = Union[Tree, str, "os.PathLike[str]"]
+_TreeLike = Union[Tree, str, "os.PathLike[str]", Future]
 
 
-def _tree(t: _TreeLike) -> Tree:
-    if isinstance(t, Tree):
+def _tree(t: _TreeLike) -> Union[Tree, Future]:
+    if isinstance(t, (Tree, Future)):
         return t
     if isinstance(t, (str, os.PathLike)):
         return Tree.load(t)
@@ -105,7 +108,8 @@ def sweep(
     the cluster of ``client``, the same arrays bit for bit and in input order.
 
     tree_a, tree_b: ``Tree`` objects or paths of ``.ist`` files (read here, then sent once to
-        every worker).
+        every worker), or futures of trees already scattered to the cluster (sent by the
+        caller once for many sweeps).
     poses: B's poses, ``(N, 7)`` or ``(N, 4, 4)``. pose_a: None, one pose, or N poses.
     query: "distance" (float64 (N,)), "contact" (bool (N,)) or "penetration" (a dict of
         arrays, as ``Pair.penetration_many``; ``stiffness`` applies).
@@ -148,10 +152,14 @@ def sweep(
         kwargs["stiffness"] = stiffness
     method = QUERIES[query]
     if n == 0:
-        return getattr(Pair(ta, tb), method)(b, pose_a=a_one, **kwargs)
-    # Keyed by content (a Tree pickles as its file's bytes): a tree already on the workers
-    # from an earlier sweep is not sent again.
-    fa, fb = client.scatter([ta, tb], broadcast=True, hash=True)
+        ea = ta.result() if isinstance(ta, Future) else ta
+        eb = tb.result() if isinstance(tb, Future) else tb
+        return getattr(Pair(ea, eb), method)(b, pose_a=a_one, **kwargs)
+    # Fresh keys per sweep (hash=False): see the module's note on content-keyed scatters.
+    fa, fb = (
+        t if isinstance(t, Future) else client.scatter(t, broadcast=True, hash=False)
+        for t in (ta, tb)
+    )
     futures = []
     for start in range(0, n, chunk):
         part = b[start : start + chunk]

@@ -1,0 +1,328 @@
+//! The servo step alone (`Servo::tick`, no query, no clock in its answers), deterministic:
+//! the force and torque sent never pass the device's limits and saturate along the pull;
+//! the energy to the user is the work of the held force and torque on the device's motion;
+//! a device quaternion q or −q, a rigid re-framing of the whole scene, and interleaving with
+//! another servo change nothing; a held device converges to the static force of a contact
+//! model.
+
+use glam::{DMat3, DQuat, DVec3};
+use innersphere::haptic::{ContactModel, DeviceClass, HapticOptions, RigidBody, Servo, Tick};
+use innersphere::Pose;
+use proptest::prelude::*;
+
+const RATE: f64 = 1000.0;
+
+fn body(mass: f64, com: DVec3) -> RigidBody {
+    // A 10 × 6 × 4 mm box's inertia about its centre.
+    let (a, b, c) = (10.0f64, 6.0f64, 4.0f64);
+    let i = DVec3::new(b * b + c * c, a * a + c * c, a * a + b * b) * (mass / 12.0);
+    RigidBody {
+        mass,
+        center_of_mass: com,
+        inertia: DMat3::from_diagonal(i),
+    }
+}
+
+/// Omega-class options with a device that renders torque too (50 N·mm), so that both
+/// halves of the wrench reach the hand.
+fn options() -> HapticOptions {
+    let mut o = HapticOptions::for_device(DeviceClass::Omega);
+    o.device.max_torque = 50.0;
+    o
+}
+
+/// A smooth device path from `start` at rest: `amp` mm along `dir` and `turn` rad about
+/// `axis`, as `1 − cos` of angular frequency `w`, slow enough that the loop takes every pose
+/// as read (within its speed and acceleration limits).
+fn path(start: Pose, dir: DVec3, axis: DVec3, amp: f64, turn: f64, w: f64, n: usize) -> Vec<Pose> {
+    (1..=n)
+        .map(|k| {
+            let s = 1.0 - (w * k as f64 / RATE).cos();
+            Pose {
+                rotation: (DQuat::from_axis_angle(axis.normalize(), turn * s) * start.rotation)
+                    .normalize(),
+                translation: start.translation + dir.normalize() * (amp * s),
+            }
+        })
+        .collect()
+}
+
+fn run(servo: &mut Servo, poses: &[Pose], model: Option<&ContactModel>) -> Vec<Tick> {
+    poses
+        .iter()
+        .enumerate()
+        .map(|(k, p)| servo.tick(p, 1.0 / RATE, if k == 0 { model } else { None }))
+        .collect()
+}
+
+/// The rotation vector from `a` to `b`, the shorter way round.
+fn turn(a: DQuat, b: DQuat) -> DVec3 {
+    let mut d = b * a.conjugate();
+    if d.w < 0.0 {
+        d = -d;
+    }
+    d.to_scaled_axis()
+}
+
+fn close(a: DVec3, b: DVec3, tol: f64) -> bool {
+    (a - b).length() <= tol * (1.0 + a.length().max(b.length()))
+}
+
+fn same_rotation(a: DQuat, b: DQuat, tol: f64) -> bool {
+    a.dot(b).abs() >= 1.0 - tol
+}
+
+fn unit() -> impl Strategy<Value = DVec3> {
+    (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64)
+        .prop_filter("a direction", |(x, y, z)| x * x + y * y + z * z > 0.05)
+        .prop_map(|(x, y, z)| DVec3::new(x, y, z).normalize())
+}
+
+fn start() -> impl Strategy<Value = Pose> {
+    (
+        unit(),
+        -1.0..1.0f64,
+        (-5.0..5.0f64, -5.0..5.0f64, -5.0..5.0f64),
+    )
+        .prop_map(|(axis, angle, (x, y, z))| Pose {
+            rotation: DQuat::from_axis_angle(axis, angle),
+            translation: DVec3::new(x, y, z),
+        })
+}
+
+#[test]
+fn the_force_and_torque_sent_saturate_at_the_device_limits_along_the_pull() {
+    // A heavy tool (2 kg, 1000 kg·mm²) lags a device that moves 3 mm and turns 0.3 rad in
+    // 0.3 s: the
+    // coupling stretches far past what the device renders.
+    let mut o = options();
+    o.device.max_force = 0.1;
+    o.device.max_torque = 2.0;
+    let com = DVec3::new(0.5, -0.3, 0.2);
+    let s0 = Pose::IDENTITY;
+    let heavy = RigidBody {
+        inertia: DMat3::from_diagonal(DVec3::splat(1000.0)),
+        ..body(2.0, com)
+    };
+    let mut servo = Servo::new(heavy, s0, o).unwrap();
+    let poses = path(s0, DVec3::X, DVec3::Z, 1.5, 0.15, 10.0, 300);
+    let (mut force_at_limit, mut torque_at_limit) = (0, 0);
+    for p in &poses {
+        let t = servo.tick(p, 1.0 / RATE, None);
+        let (f, tau) = (t.force.length(), t.torque.length());
+        assert!(f <= 0.1 * (1.0 + 1e-12), "{f} N sent to a 0.1 N device");
+        assert!(
+            tau <= 2.0 * (1.0 + 1e-12),
+            "{tau} N·mm sent to a 2 N·mm device"
+        );
+        // The coupling's pull (before the clamp): towards the tool, from the device.
+        let stretch = p.transform_point(com) - t.tool.transform_point(com);
+        let twist = turn(t.tool.rotation, p.rotation);
+        if f >= 0.1 * (1.0 - 1e-12) {
+            force_at_limit += 1;
+            assert!(t.force.dot(stretch) < -0.9 * f * stretch.length(), "{t:?}");
+        }
+        if tau >= 2.0 * (1.0 - 1e-12) {
+            torque_at_limit += 1;
+            assert!(t.torque.dot(twist) < -0.9 * tau * twist.length(), "{t:?}");
+        }
+    }
+    assert!(
+        force_at_limit > 50 && torque_at_limit > 50,
+        "{force_at_limit} {torque_at_limit}"
+    );
+}
+
+#[test]
+fn a_device_that_renders_no_torque_gets_none() {
+    let mut o = options();
+    o.device.max_torque = 0.0;
+    let s0 = Pose::IDENTITY;
+    let mut servo = Servo::new(body(0.05, DVec3::ZERO), s0, o).unwrap();
+    for t in run(
+        &mut servo,
+        &path(s0, DVec3::Y, DVec3::X, 1.0, 0.5, 8.0, 200),
+        None,
+    ) {
+        assert_eq!(t.torque, DVec3::ZERO);
+        assert!(t.force.is_finite());
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    #[test]
+    fn the_energy_to_the_user_is_the_work_of_the_held_force_and_torque(
+        s0 in start(), dir in unit(), axis in unit(),
+        amp in 0.2..2.0f64, rot in 0.02..0.3f64, w in 2.0..12.0f64, mass in 0.01..0.5f64,
+        (cx, cy, cz) in (-2.0..2.0f64, -2.0..2.0f64, -2.0..2.0f64),
+    ) {
+        let com = DVec3::new(cx, cy, cz);
+        let mut servo = Servo::new(body(mass, com), s0, options()).unwrap();
+        let poses = path(s0, dir, axis, amp, rot, w, 400);
+        let (mut held, mut last) = ((DVec3::ZERO, DVec3::ZERO), s0);
+        let (mut energy, mut top, mut torque_work) = (0.0f64, 0.0f64, 0.0f64);
+        for p in &poses {
+            let t = servo.tick(p, 1.0 / RATE, None);
+            // Zero-order hold: last tick's force and torque over this tick's device motion.
+            let dx = p.transform_point(com) - last.transform_point(com);
+            let dth = turn(last.rotation, p.rotation);
+            energy += (held.0.dot(dx) + held.1.dot(dth)) * 1e-3;
+            torque_work += (held.1.dot(dth) * 1e-3).abs();
+            top = top.max(energy);
+            prop_assert!((servo.energy_to_user() - energy).abs() <= 1e-12 + 1e-9 * energy.abs(),
+                "{} vs {energy}", servo.energy_to_user());
+            prop_assert!((servo.energy_to_user_max() - top).abs() <= 1e-12 + 1e-9 * top.abs());
+            held = (t.force, t.torque);
+            last = *p;
+        }
+        // The torque's share is there to be counted.
+        prop_assert!(torque_work > 1e-9, "{torque_work}");
+    }
+
+    #[test]
+    fn a_device_quaternion_q_or_minus_q_is_the_same_pose(
+        s0 in start(), dir in unit(), axis in unit(),
+        amp in 0.2..2.0f64, rot in 0.02..0.5f64, w in 2.0..12.0f64,
+    ) {
+        let poses = path(s0, dir, axis, amp, rot, w, 300);
+        let flipped: Vec<Pose> = poses
+            .iter()
+            .enumerate()
+            .map(|(k, p)| Pose { rotation: if k % 2 == 1 { -p.rotation } else { p.rotation }, ..*p })
+            .collect();
+        let b = body(0.05, DVec3::new(1.0, 0.5, -0.5));
+        let mut one = Servo::new(b, s0, options()).unwrap();
+        let mut two = Servo::new(b, s0, options()).unwrap();
+        for (p, q) in poses.iter().zip(&flipped) {
+            let (t, u) = (one.tick(p, 1.0 / RATE, None), two.tick(q, 1.0 / RATE, None));
+            prop_assert!(close(t.force, u.force, 1e-9) && close(t.torque, u.torque, 1e-9),
+                "{t:?} vs {u:?}");
+            prop_assert!(close(t.tool.translation, u.tool.translation, 1e-9));
+            prop_assert!(same_rotation(t.tool.rotation, u.tool.rotation, 1e-12));
+        }
+        prop_assert!((one.energy_to_user() - two.energy_to_user()).abs() <= 1e-12);
+    }
+
+    #[test]
+    fn a_rigid_reframing_of_the_scene_reframes_the_answers(
+        s0 in start(), frame in start(), dir in unit(), axis in unit(), push in unit(),
+        amp in 0.2..1.5f64, rot in 0.02..0.3f64, w in 2.0..12.0f64,
+        (kx, ky, kz, kr) in (0.5..5.0f64, 0.5..5.0f64, 0.5..5.0f64, 1.0..50.0f64),
+    ) {
+        // A contact model at the start: a push of 2 N along `push`, a torque, an
+        // anisotropic stiffness; in the re-framed scene, the same model rotated.
+        let r = DMat3::from_quat(frame.rotation);
+        let mut k = [[0.0; 6]; 6];
+        for (i, v) in [kx, ky, kz, kr, kr, kr].into_iter().enumerate() {
+            k[i][i] = v;
+        }
+        let model = ContactModel {
+            force: push * 2.0,
+            torque: DVec3::new(0.3, -0.2, 0.1),
+            stiffness: k,
+            volume: 0.04,
+            ..ContactModel::none(s0)
+        };
+        let mut k2 = [[0.0; 6]; 6];
+        let rb = |i: usize, j: usize| if i / 3 == j / 3 { r.col(j % 3)[i % 3] } else { 0.0 };
+        for (i, row) in k2.iter_mut().enumerate() {
+            for (j, v) in row.iter_mut().enumerate() {
+                // R_b · K · R_bᵀ, R_b = diag(R, R).
+                *v = (0..6).flat_map(|a| (0..6).map(move |b| (a, b)))
+                    .map(|(a, b)| rb(i, a) * k[a][b] * rb(j, b))
+                    .sum();
+            }
+        }
+        let moved = ContactModel {
+            pose: frame.then(&s0),
+            force: r * model.force,
+            torque: r * model.torque,
+            stiffness: k2,
+            ..model
+        };
+        let b = body(0.05, DVec3::new(0.7, -0.4, 0.3));
+        let poses = path(s0, dir, axis, amp, rot, w, 300);
+        let mut one = Servo::new(b, s0, options()).unwrap();
+        let mut two = Servo::new(b, frame.then(&s0), options()).unwrap();
+        for (k, p) in poses.iter().enumerate() {
+            let m = |x| if k == 0 { Some(x) } else { None };
+            let t = one.tick(p, 1.0 / RATE, m(&model));
+            let u = two.tick(&frame.then(p), 1.0 / RATE, m(&moved));
+            prop_assert!(close(r * t.force, u.force, 1e-8), "{k}: {t:?} vs {u:?}");
+            prop_assert!(close(r * t.torque, u.torque, 1e-8));
+            prop_assert!(close(r * t.contact_force, u.contact_force, 1e-8));
+            let back = frame.then(&t.tool);
+            prop_assert!(close(back.translation, u.tool.translation, 1e-8));
+            prop_assert!(same_rotation(back.rotation, u.tool.rotation, 1e-12));
+        }
+        prop_assert!((one.energy_to_user() - two.energy_to_user()).abs() <= 1e-10);
+    }
+
+    #[test]
+    fn servos_share_nothing_whatever_the_order_of_their_ticks(
+        s0 in start(), dir in unit(), axis in unit(), amp in 0.2..2.0f64, w in 2.0..12.0f64,
+    ) {
+        let b = body(0.05, DVec3::new(0.2, 0.1, 0.0));
+        let (p, q) = (path(s0, dir, axis, amp, 0.2, w, 200), path(s0, axis, dir, amp, 0.1, w, 200));
+        let alone = |poses: &[Pose]| {
+            let mut s = Servo::new(b, s0, options()).unwrap();
+            run(&mut s, poses, None)
+        };
+        let (ta, tb) = (alone(&p), alone(&q));
+        let mut one = Servo::new(b, s0, options()).unwrap();
+        let mut two = Servo::new(b, s0, options()).unwrap();
+        for k in 0..p.len() {
+            // B's tick first on even ticks, A's first on odd ones.
+            let (x, y) = if k % 2 == 0 {
+                let y = two.tick(&q[k], 1.0 / RATE, None);
+                (one.tick(&p[k], 1.0 / RATE, None), y)
+            } else {
+                let x = one.tick(&p[k], 1.0 / RATE, None);
+                (x, two.tick(&q[k], 1.0 / RATE, None))
+            };
+            prop_assert_eq!((x.force, x.torque, x.tool), (ta[k].force, ta[k].torque, ta[k].tool));
+            prop_assert_eq!((y.force, y.torque, y.tool), (tb[k].force, tb[k].torque, tb[k].tool));
+        }
+    }
+
+    #[test]
+    fn a_held_device_converges_to_the_static_force_of_the_contact(
+        s0 in start(), push in unit(), f0 in 0.5..4.0f64, into in 0.2..1.5f64,
+        (kx, ky, kz) in (1.0..20.0f64, 1.0..20.0f64, 1.0..20.0f64),
+    ) {
+        // A linear contact at the start pose pushing along `push`; the device held `into`
+        // mm against it. At rest the spring's pull equals the contact's push, which is
+        // what the hand feels, and the tool sits where the two balance.
+        let o = options();
+        let mut k = [[0.0; 6]; 6];
+        for (i, v) in [kx, ky, kz, 5.0, 5.0, 5.0].into_iter().enumerate() {
+            k[i][i] = v;
+        }
+        let model = ContactModel {
+            force: push * f0,
+            stiffness: k,
+            volume: 0.1,
+            ..ContactModel::none(s0)
+        };
+        let com = DVec3::new(0.3, 0.2, -0.1);
+        let mut servo = Servo::new(body(0.02, com), s0, o).unwrap();
+        let held = Pose { translation: s0.translation - push * into, ..s0 };
+        let mut t = servo.tick(&held, 1.0 / RATE, Some(&model));
+        for _ in 0..3000 {
+            t = servo.tick(&held, 1.0 / RATE, None);
+        }
+        let c = t.contact_force.length();
+        prop_assert!(c > 0.25 * f0, "{t:?}");
+        prop_assert!((t.force - t.contact_force).length() <= 1e-3 * c, "{t:?}");
+        prop_assert!(servo.state().velocity.length() < 1e-3, "{:?}", servo.state());
+        // The balance: kc·(x_device − x_tool) = f0·n − K·(x_tool − x_start), per axis.
+        let kc = o.coupling.stiffness;
+        let (xd, x0) = (held.transform_point(com), s0.transform_point(com));
+        let kv = DVec3::new(kx, ky, kz);
+        let want = (xd * kc + push * f0 + kv * x0) / (kv + kc);
+        prop_assert!(close(t.tool.transform_point(com), want, 1e-4), "{:?} vs {want}", t.tool);
+        prop_assert!(servo.energy_to_user_max() <= 1e-9, "{}", servo.energy_to_user_max());
+    }
+}

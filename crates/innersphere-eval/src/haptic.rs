@@ -3,11 +3,11 @@
 //! loop kept its deadline, stayed passive and rendered a smooth force.
 
 use crate::histogram::Histogram;
-use crate::motion::{AnatomicalFrame, Motion};
+use crate::motion::Motion;
 use innersphere::error::num;
 use innersphere::glam::DVec3;
 use innersphere::haptic::{
-    CollisionOptions, CollisionStats, HapticLoop, HapticOptions, Joints, MultirateLoop, Tick,
+    CollisionOptions, CollisionStats, HapticLoop, HapticOptions, MultirateLoop, Tick,
 };
 use innersphere::{Error, Pair, Pose, Result};
 use std::fmt::Write as _;
@@ -336,27 +336,6 @@ pub fn trace_csv(run: &HapticRun) -> String {
         );
     }
     s
-}
-
-/// Half the distance between a human's condyles (mm, at the frame's scale 1).
-pub const CONDYLE_HALF_SPAN: f64 = 50.0;
-
-/// The temporomandibular joints of a lower jaw B for [`occlude`](innersphere::haptic::occlude):
-/// its condyles on the frame's hinge axis, [`CONDYLE_HALF_SPAN`] either side of the midline
-/// (times the frame's scale), held by springs of `stiffness` (N/mm) where they are when B is
-/// at `reference` (the scanned bite).
-pub fn temporomandibular_joints(
-    frame: &AnatomicalFrame,
-    reference: &Pose,
-    stiffness: f64,
-) -> Joints {
-    let half = frame.left * (CONDYLE_HALF_SPAN * frame.scale);
-    let points = [frame.hinge + half, frame.hinge - half];
-    Joints {
-        points,
-        anchors: points.map(|p| reference.transform_point(p)),
-        stiffness,
-    }
 }
 
 /// The crown centres of a teeth-axes JSON (`{"18": {"c": [x, y, z], …}, …}`, as in the

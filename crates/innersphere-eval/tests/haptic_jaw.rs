@@ -11,10 +11,10 @@ use innersphere_testkit::data as common;
 use innersphere::glam::DQuat;
 use innersphere::haptic::{
     occlude, occlude_free, CollisionOptions, DeviceClass, FreeOcclusionOptions, HapticOptions,
-    OcclusionOptions,
+    Joints, OcclusionOptions,
 };
 use innersphere::{BuildOptions, Mesh, Pair, Pose, SharedTree, SphereTree};
-use innersphere_eval::haptic::{crown_centres, run, temporomandibular_joints, Session};
+use innersphere_eval::haptic::{crown_centres, run, Session};
 use innersphere_eval::motion::{AnatomicalFrame, Motion};
 use std::sync::OnceLock;
 
@@ -205,7 +205,7 @@ fn occlusion_finds_the_scanned_bite_from_open_starts() {
     ];
     let opts = OcclusionOptions {
         axis: up,
-        joints: Some(temporomandibular_joints(&j.frame, &Pose::IDENTITY, 20.0)),
+        joints: Some(Joints::temporomandibular(&j.frame, &Pose::IDENTITY, 20.0)),
         ..Default::default()
     };
     for (open, side, yaw, roll) in starts {
@@ -235,7 +235,7 @@ fn the_final_splint_at_the_found_bite_seats_on_both_arches() {
     let j = jaw();
     let opts = OcclusionOptions {
         axis: j.frame.up,
-        joints: Some(temporomandibular_joints(&j.frame, &Pose::IDENTITY, 20.0)),
+        joints: Some(Joints::temporomandibular(&j.frame, &Pose::IDENTITY, 20.0)),
         ..Default::default()
     };
     let from = Pose::from_translation(j.frame.up * -3.0);

@@ -13,6 +13,7 @@ mod contact_map;
 mod convert;
 mod haptic;
 mod motion;
+mod occlude;
 mod pair;
 mod splint;
 mod tree;
@@ -33,5 +34,6 @@ fn _innersphere(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(motion::load_motion, m)?)?;
     m.add_function(wrap_pyfunction!(contact_map::contact_map, m)?)?;
     m.add_function(wrap_pyfunction!(splint::splint, m)?)?;
+    m.add_function(wrap_pyfunction!(occlude::occlude, m)?)?;
     Ok(())
 }

@@ -181,3 +181,24 @@ def test_contact_map_many_keeps_order_and_reports_a_bad_pair(client, tmp_path):
         want = innersphere.contact_map(str(a), str(b), pose_b=p)
         assert all(same(x, y) for x, y in zip(got, want))
     assert isinstance(res[1], OSError)
+
+
+def test_occlude_many_keeps_order_and_reports_a_bad_pair(client, tmp_path):
+    from test_occlude import START, arch
+
+    a = innersphere.Tree.build(arch(8.0, n=4), resolution=64)
+    b = innersphere.Tree.build(arch(0.0, n=4), resolution=64)
+    pa, pb = tmp_path / "a.ist", tmp_path / "b.ist"
+    a.save(pa)
+    b.save(pb)
+    lower = [0.0, 0.0, -1.0, 1.0, 0.0, 0.0, 0.0]
+    pairs = [(pa, pb), (pa, tmp_path / "none.ist"), (a, b)]
+    res = isd.occlude_many(client, pairs, [START, START, lower])
+    assert res[0] == innersphere.occlude(a, b, START)
+    assert isinstance(res[1], OSError)
+    assert res[2] == innersphere.occlude(a, b, lower)
+    # One start for all; options reach every pair.
+    free = isd.occlude_many(client, [(pa, pb)] * 2, START, free=True, starts=3)
+    assert free[0] == free[1] == innersphere.occlude(a, b, START, free=True, starts=3)
+    with pytest.raises(ValueError, match="start poses"):
+        isd.occlude_many(client, [(pa, pb)] * 3, [START, START])

@@ -3,12 +3,9 @@
 
 use anyhow::Context;
 use innersphere::glam::DVec3;
-use innersphere::haptic::{
-    occlude, occlude_free, FreeOcclusionOptions, Occlusion, OcclusionOptions,
-};
-use innersphere::{Pair, Pose, SharedTree, SphereTree};
-use innersphere_eval::haptic::{crown_centres, temporomandibular_joints};
-use innersphere_eval::motion::AnatomicalFrame;
+use innersphere::haptic::{bite, BiteOptions};
+use innersphere::{Pose, SharedTree};
+use innersphere_eval::haptic::crown_centres;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -77,10 +74,6 @@ pub struct Args {
     json: bool,
 }
 
-fn leaf_centres(t: &SphereTree) -> Vec<DVec3> {
-    t.leaves().map(|n| t.sphere(n).0.as_dvec3()).collect()
-}
-
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     let from: Pose = args
@@ -91,77 +84,30 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         .reference
         .parse()
         .with_context(|| format!("--reference \"{}\"", args.reference))?;
-    let a = crate::bodies::load(&args.a, &args.body)?;
-    let b = crate::bodies::load(&args.b, &args.body)?;
-    let frame = AnatomicalFrame::from_points(&leaf_centres(&a), &leaf_centres(&b))?;
-    let axis = match &args.axis {
-        Some(v) => DVec3::new(v[0], v[1], v[2]),
-        None => frame.up,
-    };
-    let mut landmarks = vec![("incisal".to_string(), frame.incisal)];
-    if let Some(path) = &args.landmarks {
-        landmarks.extend(crown_centres(path)?);
-    }
-    let opts = OcclusionOptions {
-        axis,
+    let a = SharedTree::new(crate::bodies::load(&args.a, &args.body)?);
+    let b = SharedTree::new(crate::bodies::load(&args.b, &args.body)?);
+    let opts = BiteOptions {
+        axis: args.axis.as_ref().map(|v| DVec3::new(v[0], v[1], v[2])),
         force: args.force,
-        contact_stiffness: args
-            .contact_stiffness
-            .unwrap_or(if args.free { 1000.0 } else { 10.0 }),
+        contact_stiffness: args.contact_stiffness,
         max_seconds: args.max_seconds,
-        joints: (!args.free)
-            .then(|| temporomandibular_joints(&frame, &reference, args.joint_stiffness)),
-        ..OcclusionOptions::default()
+        reference,
+        joint_stiffness: args.joint_stiffness,
+        free: args.free,
+        starts: args.starts,
+        spread: args.spread,
+        seed: args.seed,
+    };
+    // Read before the closing, so that a bad file fails at once.
+    let teeth = match &args.landmarks {
+        Some(path) => crown_centres(path)?,
+        None => vec![],
     };
     let t0 = std::time::Instant::now();
-    let (a, b) = (SharedTree::new(a), SharedTree::new(b));
-    let mut candidates = serde_json::Value::Null;
-    let o = if args.free {
-        let fo = FreeOcclusionOptions {
-            closing: opts,
-            lateral: frame.left,
-            starts: args.starts,
-            spread: args.spread,
-            spread_angle: (2.0 * args.spread).to_radians(),
-            seed: args.seed,
-            ..FreeOcclusionOptions::default()
-        };
-        let f = occlude_free(&a, &b, &Pose::IDENTITY, &from, &fo)?;
-        candidates = json!(f
-            .candidates
-            .iter()
-            .map(|c| json!({
-                "pose": c.pose.to_array(),
-                "starts": c.starts,
-                "converged": c.converged,
-                "contacts": c.contacts,
-                "contacts_left": c.lateral_side,
-                "contacts_right": c.other_side,
-                "contact_area": c.contact_area,
-                "volume": c.volume,
-                "lateral_stiffness": c.lateral_stiffness,
-                "landmark_error_max": landmarks
-                    .iter()
-                    .map(|(_, p)| (c.pose.transform_point(*p) - reference.transform_point(*p)).length())
-                    .fold(0.0, f64::max),
-            }))
-            .collect::<Vec<_>>());
-        // The chosen candidate's closing; with no closing in contact, nothing found: the
-        // start, not converged, no contact.
-        f.closing.unwrap_or(Occlusion {
-            pose: from,
-            converged: false,
-            steps: 0,
-            seconds: 0.0,
-            volume: 0.0,
-            max_depth: 0.0,
-            patches: vec![],
-            axis: opts.axis.normalize(),
-        })
-    } else {
-        let mut pair = Pair::new(&a, &b);
-        occlude(&mut pair, &Pose::IDENTITY, &from, &opts)?
-    };
+    let found = bite(&a, &b, &from, &opts)?;
+    let mut landmarks = vec![("incisal".to_string(), found.frame.incisal)];
+    landmarks.extend(teeth);
+    let o = &found.occlusion;
     let wall = t0.elapsed().as_secs_f64();
     let errors: Vec<(String, f64)> = landmarks
         .iter()
@@ -171,28 +117,27 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         })
         .collect();
     let worst = errors.iter().map(|e| e.1).fold(0.0, f64::max);
-    let patches: Vec<_> = o
-        .patches
-        .iter()
-        .map(|p| json!({"point": p.point.to_array(), "normal": p.normal.to_array(), "volume": p.volume, "depth": p.depth}))
-        .collect();
     if args.json {
-        let out = json!({
-            "pose": o.pose.to_array(),
-            "converged": o.converged,
-            "steps": o.steps,
-            "seconds": o.seconds,
-            "wall_seconds": wall,
-            "volume": o.volume,
-            "max_depth": o.max_depth,
-            "patches": patches,
-            "axis": o.axis.to_array(),
-            "force": args.force,
-            "joints": opts.joints.map(|j| json!({"points": j.points.map(|p| p.to_array()), "anchors": j.anchors.map(|p| p.to_array()), "stiffness": j.stiffness})),
-            "landmark_error_max": worst,
-            "landmark_errors": errors.iter().map(|(n, d)| json!({"landmark": n, "error": d})).collect::<Vec<_>>(),
-            "candidates": candidates,
-        });
+        // The library's answer, and what only this door knows: the wall time and the
+        // landmarks' errors.
+        let error_of = |pose: &Pose| {
+            landmarks
+                .iter()
+                .map(|(_, p)| (pose.transform_point(*p) - reference.transform_point(*p)).length())
+                .fold(0.0, f64::max)
+        };
+        let mut out = found.to_json();
+        if let Some(cands) = out["candidates"].as_array_mut() {
+            for (c, found) in cands.iter_mut().zip(&found.candidates) {
+                c["landmark_error_max"] = json!(error_of(&found.pose));
+            }
+        }
+        out["wall_seconds"] = json!(wall);
+        out["landmark_error_max"] = json!(worst);
+        out["landmark_errors"] = json!(errors
+            .iter()
+            .map(|(n, d)| json!({"landmark": n, "error": d}))
+            .collect::<Vec<_>>());
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
         let p = o.pose.to_array();

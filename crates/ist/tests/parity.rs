@@ -102,6 +102,7 @@ fn every_planning_tool_reaches_ist_and_python() {
     for (module, cmd, py) in [
         ("contact_map", "occlusion-map", "contact_map"),
         ("splint", "splint", "splint"),
+        ("haptic", "occlude", "occlude"),
     ] {
         assert!(lib.contains(&format!("pub mod {module};")), "{module}");
         assert!(help.contains(&format!("  {cmd} ")), "ist {cmd} missing");

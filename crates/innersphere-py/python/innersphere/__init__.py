@@ -8,7 +8,8 @@ and ask it with the pose of body B (and optionally A): ``distance``, ``contact``
 ``penetration_many`` that loop in Rust. A pose is a 4×4 homogeneous matrix or 7 numbers
 ``(tx, ty, tz, qw, qx, qy, qz)``. ``load_motion`` reads a motion file, ``Haptic`` runs the
 6-DOF haptic loop, ``contact_map`` gives every vertex of two meshes its signed gap to the
-other, ``splint`` makes the occlusal splint (surgical wafer) between two arches.
+other, ``splint`` makes the occlusal splint (surgical wafer) between two arches, ``occlude``
+closes a lower jaw (or a free segment) onto the upper into its bite.
 
 The numbers are the Rust library's own: a query on a new (or reset) pair answers what
 ``ist query`` prints, ``distance_many`` over a motion what ``ist replay`` prints.
@@ -37,6 +38,7 @@ from ._innersphere import (
     __version__,
     contact_map,
     load_motion,
+    occlude,
     splint,
 )
 
@@ -50,5 +52,6 @@ __all__ = [
     "__version__",
     "contact_map",
     "load_motion",
+    "occlude",
     "splint",
 ]

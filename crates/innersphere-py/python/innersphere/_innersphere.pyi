@@ -17,6 +17,7 @@ __all__ = [
     "__version__",
     "contact_map",
     "load_motion",
+    "occlude",
     "splint",
 ]
 
@@ -427,3 +428,33 @@ def splint(
     as in ``ist splint`` (mm: clearance 0.1, coverage 2, min_thickness 1, rim 1.5, voxel
     0.1). ``out``: also write it as a binary STL there. Raises OSError for unreadable or
     unwritable files, ValueError for bad meshes, poses or options."""
+
+def occlude(
+    tree_a: Tree,
+    tree_b: Tree,
+    from_pose: _PoseLike,
+    *,
+    free: bool = False,
+    axis: Optional[Sequence[float]] = None,
+    force: Optional[float] = None,
+    contact_stiffness: Optional[float] = None,
+    max_seconds: Optional[float] = None,
+    reference: Optional[_PoseLike] = None,
+    joint_stiffness: Optional[float] = None,
+    starts: Optional[int] = None,
+    spread: Optional[float] = None,
+    seed: Optional[int] = None,
+) -> Dict[str, Any]:
+    """B (``tree_b``: the lower jaw or a free cut segment, built by this version so that it
+    holds its mass properties) closed onto A (``tree_a``, fixed at the identity) from
+    ``from_pose`` (B's pose in A's frame) under ``force`` N (default 5) along ``axis``
+    (default the pair's occlusal "up"), its temporomandibular joints (``joint_stiffness``
+    N/mm, default 20) held where they are with B at ``reference`` (default the identity); or,
+    ``free=True``, no joints and ``starts`` closings (default 120) spread within ``spread``
+    mm (default 2.5; yaw twice that in degrees) from ``seed`` (default 1), the rest poses
+    ranked. ``contact_stiffness`` defaults to 10 N/mm³ with the joints, 1000 free;
+    ``max_seconds`` of simulated time to 30. Returns ``ist occlude --json``'s dict less its
+    wall time and landmarks: ``pose`` (7 numbers), ``converged``, ``steps``, ``seconds``,
+    ``volume``, ``max_depth``, ``patches``, ``axis``, ``force``, ``contact_stiffness``,
+    ``joints``, ``frame``, ``candidates``. Raises ValueError for bad options or poses, or a
+    tree B without mass properties."""

@@ -14,6 +14,7 @@ brings its own object store and runtime to install for what is a map over chunks
   every item's outcome (tree file or error) is reported.
 - ``contact_map_many(client, pairs)``: the occlusion map (``contact_map``) of many arch
   pairs.
+- ``occlude_many(client, pairs, from_poses)``: the bite (``occlude``) of many jaw pairs.
 
 A sweep sends its trees once to every worker (``client.scatter(..., broadcast=True)``; a
 ``Tree`` pickles as its file's bytes), where they stay for all its chunks. To send them once
@@ -42,9 +43,9 @@ except ImportError as e:  # pragma: no cover - exercised only without the extra
         '(or pip install "dask[distributed]")'
     ) from e
 
-from ._innersphere import Pair, Tree, contact_map
+from ._innersphere import Pair, Tree, contact_map, occlude
 
-__all__ = ["sweep", "build_many", "contact_map_many", "QUERIES"]
+__all__ = ["sweep", "build_many", "contact_map_many", "occlude_many", "QUERIES"]
 
 #: The query kinds of ``sweep`` and the batch method each one runs.
 QUERIES = {
@@ -271,6 +272,51 @@ def contact_map_many(
         raise ValueError(f"{len(poses)} poses for {len(pairs)} pairs")
     futures = [
         client.submit(_map_one, os.fspath(a), os.fspath(b), p, None, retries=retries, pure=False)
+        for (a, b), p in zip(pairs, poses)
+    ]
+    _show(futures, progress)
+    out: List[Any] = []
+    for f in futures:
+        try:
+            out.append(f.result())
+        except Exception as e:
+            out.append(e)
+    return out
+
+
+def _occlude_one(a: _TreeLike, b: _TreeLike, from_pose: Any, options: Dict[str, Any]) -> Dict[str, Any]:
+    return occlude(_tree(a), _tree(b), from_pose, **options)  # type: ignore[arg-type]
+
+
+def occlude_many(
+    client: Client,
+    pairs: Sequence[Tuple[_TreeLike, _TreeLike]],
+    from_poses: Any,
+    *,
+    retries: int = 1,
+    progress: bool = False,
+    **options: Any,
+) -> List[Any]:
+    """``occlude(a, b, from_pose, **options)`` for each jaw pair ``(a, b)`` (``Tree``
+    objects, or paths of ``.ist`` files every worker can read), across the cluster, in
+    order: per pair the bite's dict, or the exception raised for that pair (one bad pair
+    does not lose the others). ``from_poses``: one start per pair, or one pose for all.
+    ``options`` are ``occlude``'s (``free=True, starts=…`` runs each free closing on one
+    worker's cores)."""
+    one = np.asarray(from_poses, dtype=np.float64)
+    poses = [one] * len(pairs) if one.shape in ((7,), (4, 4)) else list(one)
+    if len(poses) != len(pairs):
+        raise ValueError(f"{len(poses)} start poses for {len(pairs)} pairs")
+    futures = [
+        client.submit(
+            _occlude_one,
+            a if isinstance(a, Tree) else os.fspath(a),
+            b if isinstance(b, Tree) else os.fspath(b),
+            p,
+            options,
+            retries=retries,
+            pure=False,
+        )
         for (a, b), p in zip(pairs, poses)
     ]
     _show(futures, progress)

@@ -7,11 +7,13 @@
 //! - [`device`]: device classes, their limits and default coupling;
 //! - [`body`]: the tool's mass properties and state;
 //! - [`render`]: the loop, one [`HapticLoop::tick`] per device tick, with a deadline;
-//! - [`occlusion`]: the bite found by dynamics.
+//! - [`occlusion`]: the bite found by dynamics; [`free_occlusion`]: a free segment's, from
+//!   many starts; [`bite`](mod@bite): either, set up from the jaw pair's own frame.
 //!
 //! Units: millimetres, newtons, seconds, kilograms. `docs/HAPTICS.md` explains the model,
 //! the parameters and why the loop is stable and passive.
 
+pub mod bite;
 mod blend;
 pub mod body;
 mod contact;
@@ -26,6 +28,7 @@ pub mod render;
 pub mod servo;
 mod step;
 
+pub use bite::{bite, frame_of, Bite, BiteOptions, CONDYLE_HALF_SPAN};
 pub use body::{BodyState, RigidBody, TOOTH_DENSITY};
 pub use device::{Coupling, DeviceClass, DeviceLimits};
 pub use free_occlusion::{occlude_free, Candidate, FreeOcclusion, FreeOcclusionOptions};

@@ -1,0 +1,220 @@
+//! The bite of a jaw pair as a planner asks for it: B (the lower jaw, or a free cut segment)
+//! closed onto A (fixed, at the identity) from a start, along the pair's own occlusal "up"
+//! (found from the trees' leaf spheres, as [`AnatomicalFrame`] finds it), with the
+//! temporomandibular joints held where they are in a reference pose, or free from many
+//! starts ([`occlude_free`]). What `ist occlude`, Python's `occlude` and its cluster map
+//! `occlude_many` run: one place decides the frame, the joints and the defaults.
+
+use super::free_occlusion::{occlude_free, Candidate, FreeOcclusionOptions};
+use super::occlusion::{occlude, Joints, Occlusion, OcclusionOptions};
+use crate::anatomy::AnatomicalFrame;
+use crate::error::Result;
+use crate::pose::Pose;
+use crate::query::{Pair, SharedTree};
+use crate::tree::SphereTree;
+use glam::DVec3;
+
+/// Half the distance between a human's condyles (mm, at the frame's scale 1).
+pub const CONDYLE_HALF_SPAN: f64 = 50.0;
+
+/// Settings of [`bite`]. Units: mm, N, s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BiteOptions {
+    /// Closing direction (A's frame); `None`: the pair's occlusal "up" (from B towards A).
+    pub axis: Option<DVec3>,
+    /// Closing force (N).
+    pub force: f64,
+    /// Penalty force per penetration volume (N/mm³); `None`: 10 with the joints, 1000 free
+    /// (stiff, so that a free segment's cusps do not sink into each other and slide over).
+    pub contact_stiffness: Option<f64>,
+    /// Simulated time before giving up (s).
+    pub max_seconds: f64,
+    /// Where B's condyles are held: where they are with B at this pose (the scanned bite of
+    /// a pair scanned in occlusion: the identity).
+    pub reference: Pose,
+    /// Stiffness of each temporomandibular joint (N/mm).
+    pub joint_stiffness: f64,
+    /// B is a free segment (no joints): closed from `starts` places around the start, the
+    /// rest poses ranked ([`occlude_free`]).
+    pub free: bool,
+    /// Free: closings in all.
+    pub starts: usize,
+    /// Free: how far the starts spread sideways and forwards (mm); the yaw spread is twice
+    /// this in degrees.
+    pub spread: f64,
+    /// Free: the seed of the spread.
+    pub seed: u64,
+}
+
+impl Default for BiteOptions {
+    /// `ist occlude`'s defaults: 5 N along the pair's up, 30 s, the joints at 20 N/mm held
+    /// at the identity; free: 120 starts within 2.5 mm and 5°, seed 1.
+    fn default() -> Self {
+        BiteOptions {
+            axis: None,
+            force: 5.0,
+            contact_stiffness: None,
+            max_seconds: 30.0,
+            reference: Pose::IDENTITY,
+            joint_stiffness: 20.0,
+            free: false,
+            starts: 120,
+            spread: 2.5,
+            seed: 1,
+        }
+    }
+}
+
+/// What [`bite`] found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bite {
+    /// B's rest pose and its closing (steps, volume, depth, patches). Free with no closing
+    /// in contact: the start, not converged.
+    pub occlusion: Occlusion,
+    /// The pair's anatomical frame (B at the identity) the axis and the joints came from.
+    pub frame: AnatomicalFrame,
+    /// The settings the closing ran with (the axis and stiffness chosen, the joints).
+    pub closing: OcclusionOptions,
+    /// Free: the distinct rest poses, best first (empty with the joints).
+    pub candidates: Vec<Candidate>,
+}
+
+impl Joints {
+    /// The temporomandibular joints of a lower jaw B: its condyles on the frame's hinge
+    /// axis, [`CONDYLE_HALF_SPAN`] either side of the midline (times the frame's scale),
+    /// held by springs of `stiffness` (N/mm) where they are when B is at `reference`.
+    pub fn temporomandibular(frame: &AnatomicalFrame, reference: &Pose, stiffness: f64) -> Joints {
+        let half = frame.left * (CONDYLE_HALF_SPAN * frame.scale);
+        let points = [frame.hinge + half, frame.hinge - half];
+        Joints {
+            points,
+            anchors: points.map(|p| reference.transform_point(p)),
+            stiffness,
+        }
+    }
+}
+
+/// The anatomical frame of two trees (B at the identity), from their leaf spheres' centres.
+pub fn frame_of(a: &SphereTree, b: &SphereTree) -> Result<AnatomicalFrame> {
+    let centres =
+        |t: &SphereTree| -> Vec<DVec3> { t.leaves().map(|n| t.sphere(n).0.as_dvec3()).collect() };
+    AnatomicalFrame::from_points(&centres(a), &centres(b))
+}
+
+/// B closed onto A (fixed at the identity) from `from` (B's pose in A's frame): see the
+/// [module docs](self). Fails on bad options, a B without mass properties, or a pair
+/// whose frame cannot be found (e.g. no points).
+pub fn bite(a: &SharedTree, b: &SharedTree, from: &Pose, opts: &BiteOptions) -> Result<Bite> {
+    let frame = frame_of(a, b)?;
+    let closing = OcclusionOptions {
+        axis: opts.axis.unwrap_or(frame.up),
+        force: opts.force,
+        contact_stiffness: opts
+            .contact_stiffness
+            .unwrap_or(if opts.free { 1000.0 } else { 10.0 }),
+        max_seconds: opts.max_seconds,
+        joints: (!opts.free)
+            .then(|| Joints::temporomandibular(&frame, &opts.reference, opts.joint_stiffness)),
+        ..OcclusionOptions::default()
+    };
+    if !opts.free {
+        let mut pair = Pair::new(a, b);
+        let occlusion = occlude(&mut pair, &Pose::IDENTITY, from, &closing)?;
+        return Ok(Bite {
+            occlusion,
+            frame,
+            closing,
+            candidates: vec![],
+        });
+    }
+    let fo = FreeOcclusionOptions {
+        closing,
+        lateral: frame.left,
+        starts: opts.starts,
+        spread: opts.spread,
+        spread_angle: (2.0 * opts.spread).to_radians(),
+        seed: opts.seed,
+        ..FreeOcclusionOptions::default()
+    };
+    let f = occlude_free(a, b, &Pose::IDENTITY, from, &fo)?;
+    let occlusion = f.closing.unwrap_or(Occlusion {
+        pose: *from,
+        converged: false,
+        steps: 0,
+        seconds: 0.0,
+        volume: 0.0,
+        max_depth: 0.0,
+        patches: vec![],
+        axis: closing.axis.normalize(),
+    });
+    Ok(Bite {
+        occlusion,
+        frame,
+        closing,
+        candidates: f.candidates,
+    })
+}
+
+impl Bite {
+    /// The answer as JSON, the shape every door gives (`ist occlude --json` adds the wall
+    /// time and the landmark errors): `pose` (7 numbers), `converged`, `steps`, `seconds`
+    /// (simulated), `volume`, `max_depth`, `patches` (point, normal, volume, depth), `axis`,
+    /// `force`, `contact_stiffness`, `joints` (points, anchors, stiffness; null when free),
+    /// `frame` (up, left, anterior, incisal, hinge, scale) and `candidates` (free: pose,
+    /// starts, converged, contacts, contacts_left, contacts_right, contact_area, volume,
+    /// lateral_stiffness; null with the joints).
+    pub fn to_json(&self) -> serde_json::Value {
+        use serde_json::json;
+        let o = &self.occlusion;
+        let f = &self.frame;
+        let candidates = self.closing.joints.is_none().then(|| {
+            self.candidates
+                .iter()
+                .map(|c| {
+                    json!({
+                        "pose": c.pose.to_array(),
+                        "starts": c.starts,
+                        "converged": c.converged,
+                        "contacts": c.contacts,
+                        "contacts_left": c.lateral_side,
+                        "contacts_right": c.other_side,
+                        "contact_area": c.contact_area,
+                        "volume": c.volume,
+                        "lateral_stiffness": c.lateral_stiffness,
+                    })
+                })
+                .collect::<Vec<_>>()
+        });
+        json!({
+            "pose": o.pose.to_array(),
+            "converged": o.converged,
+            "steps": o.steps,
+            "seconds": o.seconds,
+            "volume": o.volume,
+            "max_depth": o.max_depth,
+            "patches": o.patches.iter().map(|p| json!({
+                "point": p.point.to_array(),
+                "normal": p.normal.to_array(),
+                "volume": p.volume,
+                "depth": p.depth,
+            })).collect::<Vec<_>>(),
+            "axis": o.axis.to_array(),
+            "force": self.closing.force,
+            "contact_stiffness": self.closing.contact_stiffness,
+            "joints": self.closing.joints.map(|j| json!({
+                "points": j.points.map(|p| p.to_array()),
+                "anchors": j.anchors.map(|p| p.to_array()),
+                "stiffness": j.stiffness,
+            })),
+            "frame": {
+                "up": f.up.to_array(),
+                "left": f.left.to_array(),
+                "anterior": f.anterior.to_array(),
+                "incisal": f.incisal.to_array(),
+                "hinge": f.hinge.to_array(),
+                "scale": f.scale,
+            },
+            "candidates": candidates,
+        })
+    }
+}

@@ -326,3 +326,95 @@ proptest! {
         prop_assert!(servo.energy_to_user_max() <= 1e-9, "{}", servo.energy_to_user_max());
     }
 }
+
+#[test]
+fn a_body_no_integrator_can_move_is_refused() {
+    let good = body(0.05, DVec3::new(0.1, 0.2, 0.3));
+    let inertia = |cols: [[f64; 3]; 3]| RigidBody {
+        inertia: DMat3::from_cols_array_2d(&cols),
+        ..good
+    };
+    let bad = [
+        (
+            "mass infinite",
+            RigidBody {
+                mass: f64::INFINITY,
+                ..good
+            },
+        ),
+        (
+            "mass NaN",
+            RigidBody {
+                mass: f64::NAN,
+                ..good
+            },
+        ),
+        ("mass zero", RigidBody { mass: 0.0, ..good }),
+        ("mass negative", RigidBody { mass: -1.0, ..good }),
+        (
+            "centre NaN",
+            RigidBody {
+                center_of_mass: DVec3::new(0.0, f64::NAN, 0.0),
+                ..good
+            },
+        ),
+        (
+            "inertia infinite",
+            inertia([[f64::INFINITY, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]),
+        ),
+        // Each leading minor alone not positive (Sylvester's criterion): the first, the
+        // second (the first and the determinant positive), the determinant, the
+        // determinant exactly 0.
+        (
+            "first minor",
+            inertia([[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]),
+        ),
+        (
+            "second minor",
+            inertia([[0.5, -0.6, 0.0], [-0.6, 0.5, 0.0], [0.0, 0.0, -1.0]]),
+        ),
+        (
+            "determinant",
+            inertia([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]]),
+        ),
+        (
+            "singular",
+            inertia([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]),
+        ),
+    ];
+    for (what, b) in bad {
+        let e = b.check().expect_err(what).to_string();
+        assert!(e.contains("mass") && e.contains("inertia"), "{what}: {e}");
+        assert!(Servo::new(b, Pose::IDENTITY, options()).is_err(), "{what}");
+    }
+    // Positive definite with off-diagonal terms is fine.
+    assert!(inertia([[2.0, 0.5, 0.1], [0.5, 2.0, 0.2], [0.1, 0.2, 2.0]])
+        .check()
+        .is_ok());
+    assert!(good.check().is_ok());
+}
+
+#[test]
+fn a_bad_density_is_named_as_such() {
+    use innersphere::{shapes, BuildOptions, Resolution, SphereTree};
+    let o = BuildOptions {
+        resolution: Resolution::Cells(12),
+        ..Default::default()
+    };
+    let tree = SphereTree::build(&shapes::cuboid(DVec3::new(2.0, 1.0, 1.0)), &o).unwrap();
+    for d in [0.0, -1.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let e = RigidBody::from_tree(&tree, d).unwrap_err().to_string();
+        assert!(e.contains("the density must be"), "{d}: {e}");
+    }
+    // The 4 × 2 × 2 mm box: 16 mm³; about its centre, I_xx = m (2² + 2²) / 12, I_yy = I_zz =
+    // m (4² + 2²) / 12.
+    let b = RigidBody::from_tree(&tree, 2e-6).unwrap();
+    let m = 16.0 * 2e-6;
+    assert!((b.mass - m).abs() <= 1e-9 * m, "{b:?}");
+    let want = DVec3::new(8.0, 20.0, 20.0) * (m / 12.0);
+    let got = DVec3::new(b.inertia.x_axis.x, b.inertia.y_axis.y, b.inertia.z_axis.z);
+    assert!(
+        (got - want).length() <= 1e-9 * want.length(),
+        "{got} vs {want}"
+    );
+}

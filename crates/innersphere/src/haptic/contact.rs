@@ -346,5 +346,18 @@ mod tests {
             0.8 * FIRST_VISIT_COST + 0.2 * (1e-3 / 17.0),
         );
         assert!(d.per_visit > lo && d.per_visit < hi, "{}", d.per_visit);
+        // The budget is 70 % of what is left at the cost per node pair: 10 µs at 75 ns is 93
+        // node pairs, which the contact outlasts; the measured cost per pair tells how many
+        // ran.
+        let (mut d, mut p) = (deadline(93), pair());
+        d.exact = [1.0; 4];
+        let a = ask(&mut d, &mut p, 10e-6, false);
+        assert!(matches!(a, Answer::Bound { .. }), "{a:?}");
+        let per_pair = (d.per_visit - 0.8 * FIRST_VISIT_COST) / 0.2;
+        let ran = 93e-6 / per_pair;
+        assert!(
+            (90.0..=97.0).contains(&ran),
+            "{ran} node pairs for a budget of 93"
+        );
     }
 }

@@ -8,6 +8,8 @@ tolerance sweep of a million poses of the lower arch around the bite.
    up to ±2 mm and ±4° (``--poses`` of them); per pose the exact gap (``distance``) and the
    penetration volume, force and torque. Prints how much misplacement the arches tolerate
    before they collide, and the throughput.
+3. ``occlude_many``: the bite found again from several open starts (the lower arch 1 to 4 mm
+   below the scanned bite), each closing on a worker: how far each bite is from the scan's.
 
 Runs on a local cluster (``--workers`` processes, one thread each) unless ``--scheduler``
 gives the address of a running one (``dask scheduler`` / ``dask worker``, dask-jobqueue,
@@ -92,11 +94,13 @@ def main():
 
     center = np.asarray(b.meta["center_of_mass"], float)
     poses, shift, turn = perturbed(args.poses, 1, args.mm, args.deg, center)
+    # The trees sent to every worker once, for both sweeps.
+    fa, fb = client.scatter([a, b], broadcast=True)
     t0 = time.perf_counter()
-    gap = isd.sweep(client, a, b, poses, query="distance", chunk=args.chunk, progress=True)
+    gap = isd.sweep(client, fa, fb, poses, query="distance", chunk=args.chunk, progress=True)
     td = time.perf_counter() - t0
     t0 = time.perf_counter()
-    pen = isd.sweep(client, a, b, poses, query="penetration", chunk=args.chunk, progress=True)
+    pen = isd.sweep(client, fa, fb, poses, query="penetration", chunk=args.chunk, progress=True)
     tp = time.perf_counter() - t0
     print("\n%d poses: distance %.1f s (%.0f poses/s), penetration %.1f s (%.0f poses/s)"
           % (len(poses), td, len(poses) / td, tp, len(poses) / tp))
@@ -109,6 +113,22 @@ def main():
         if sel.any():
             print("  error <= %.2f mm and %.1f deg: %5.1f %% in contact, gap p50 %.3f mm (%d poses)"
                   % (lim, 2 * lim, 100 * collide[sel].mean(), np.median(gap[sel]), sel.sum()))
+
+    starts = [[0.0, 0.0, -dz, 1.0, 0.0, 0.0, 0.0] for dz in (1.0, 2.0, 3.0, 4.0)]
+    t0 = time.perf_counter()
+    bites = isd.occlude_many(client, [(built[0]["tree"], built[1]["tree"])] * len(starts), starts)
+    print("\n%d bites in %.1f s" % (len(bites), time.perf_counter() - t0))
+    for s, r in zip(starts, bites):
+        if isinstance(r, Exception):
+            print("  from %.0f mm below: %s" % (-s[2], r))
+            continue
+        incisal = np.asarray(r["frame"]["incisal"])
+        p = np.asarray(r["pose"])
+        w, v = p[3], p[4:]
+        moved = incisal + 2 * w * np.cross(v, incisal) + 2 * np.cross(v, np.cross(v, incisal)) + p[:3]
+        print("  from %.0f mm below: %s, incisal point %.3f mm from the scanned bite, %d contacts"
+              % (-s[2], "at rest" if r["converged"] else "NOT at rest", np.linalg.norm(moved - incisal),
+                 len(r["patches"])))
     client.close()
 
 

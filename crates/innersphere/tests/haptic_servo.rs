@@ -418,3 +418,48 @@ fn a_bad_density_is_named_as_such() {
         "{got} vs {want}"
     );
 }
+
+#[test]
+fn device_classes_round_trip_their_names_and_couple_passively_at_every_rate() {
+    use innersphere::haptic::DeviceClass;
+    for c in DeviceClass::ALL {
+        assert_eq!(c.name().parse::<DeviceClass>().unwrap(), c);
+        assert_eq!(c.to_string(), c.name());
+        assert_eq!(
+            format!(" {} ", c.name().to_uppercase())
+                .parse::<DeviceClass>()
+                .unwrap(),
+            c
+        );
+        assert_eq!(c.coupling(), c.coupling_at(1000.0));
+        let l = c.limits();
+        for rate in [100.0, 250.0, 500.0, 1000.0, 4000.0, 10000.0] {
+            let k = c.coupling_at(rate);
+            // Passive with a factor of 4 (b ≥ 4·k·T/2, T at most 1 ms), within the device's
+            // stiffness and damping, the angular coupling at the 20 mm lever.
+            let period = 1.0 / f64::min(rate, 1000.0);
+            assert!(
+                k.damping >= 4.0 * k.stiffness * period / 2.0 * (1.0 - 1e-12),
+                "{c} {rate}: {k:?}"
+            );
+            assert!(
+                k.stiffness <= 0.6 * l.max_stiffness * (1.0 + 1e-12)
+                    && k.damping <= l.max_damping * (1.0 + 1e-12)
+            );
+            assert!(k.stiffness > 0.0 && k.damping > 0.0);
+            let lever2 = |x: f64| x * 20.0 * 20.0;
+            assert_eq!(
+                (k.angular_stiffness, k.angular_damping),
+                (lever2(k.stiffness), lever2(k.damping))
+            );
+        }
+        // Above 1 kHz the coupling is the 1 kHz one; below, a slower loop renders a softer one.
+        assert_eq!(c.coupling_at(10000.0), c.coupling());
+        assert!(c.coupling_at(100.0).stiffness < c.coupling().stiffness);
+    }
+    assert!("phantom"
+        .parse::<DeviceClass>()
+        .unwrap_err()
+        .to_string()
+        .contains("touch or omega"));
+}

@@ -463,3 +463,35 @@ fn device_classes_round_trip_their_names_and_couple_passively_at_every_rate() {
         .to_string()
         .contains("touch or omega"));
 }
+
+#[test]
+fn a_bounded_model_reports_its_volume_bound_and_caps_the_push() {
+    // A model of the time-critical query: its force capped at 0.5 N (a volume bound of
+    // 0.5 / stiffness), though its linearised push is 3 N.
+    let o = options();
+    let s0 = Pose::IDENTITY;
+    let model = ContactModel {
+        force: DVec3::new(0.0, 0.0, 3.0),
+        stiffness: [[0.0; 6]; 6],
+        volume: 0.3,
+        force_cap: 0.5,
+        ..ContactModel::none(s0)
+    };
+    let mut servo = Servo::new(body(0.02, DVec3::ZERO), s0, o).unwrap();
+    let mut t = servo.tick(&s0, 1.0 / RATE, Some(&model));
+    for _ in 0..200 {
+        t = servo.tick(&s0, 1.0 / RATE, None);
+        assert!(t.contact_force.length() <= 0.5 * (1.0 + 1e-12), "{t:?}");
+    }
+    assert!(t.budgeted);
+    assert_eq!(t.volume_bound, 0.5 / o.contact_stiffness);
+    assert_eq!(t.volume, 0.3);
+    assert!((t.contact_force.length() - 0.5).abs() < 1e-9, "{t:?}");
+    // An exact model: the bound is its volume.
+    let exact = ContactModel {
+        force_cap: f64::INFINITY,
+        ..model
+    };
+    let t = servo.tick(&s0, 1.0 / RATE, Some(&exact));
+    assert!(!t.budgeted && t.volume_bound == 0.3, "{t:?}");
+}

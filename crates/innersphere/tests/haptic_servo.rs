@@ -495,3 +495,57 @@ fn a_bounded_model_reports_its_volume_bound_and_caps_the_push() {
     let t = servo.tick(&s0, 1.0 / RATE, Some(&exact));
     assert!(!t.budgeted && t.volume_bound == 0.3, "{t:?}");
 }
+
+#[test]
+fn the_energy_a_contact_gives_back_reaches_the_hand_and_its_peak_is_kept() {
+    // The device presses the tool 0.5 mm into a contact pushing along +z, holds, then lets
+    // it push the hand back out past the start: the contact's stored energy flows to the
+    // hand, so the running energy to the hand rises above zero and its peak is kept.
+    let s0 = Pose::IDENTITY;
+    let mut k = [[0.0; 6]; 6];
+    for (i, v) in [5.0, 5.0, 5.0, 2.0, 2.0, 2.0].into_iter().enumerate() {
+        k[i][i] = v;
+    }
+    let model = ContactModel {
+        force: DVec3::new(0.0, 0.0, 2.0),
+        stiffness: k,
+        volume: 0.1,
+        ..ContactModel::none(s0)
+    };
+    let com = DVec3::new(0.2, 0.0, -0.1);
+    let mut servo = Servo::new(body(0.02, com), s0, options()).unwrap();
+    let z = |k: usize| {
+        let s = |a: f64, b: f64, n: f64, i: f64| {
+            a + (b - a) * 0.5 * (1.0 - (std::f64::consts::PI * i / n).cos())
+        };
+        match k {
+            0..300 => s(0.0, -0.5, 300.0, k as f64),
+            300..800 => -0.5,
+            _ => s(-0.5, 0.3, 600.0, (k - 800).min(600) as f64),
+        }
+    };
+    let (mut held, mut last, mut energy, mut top) = (DVec3::ZERO, s0, 0.0f64, 0.0f64);
+    for k in 1..1600 {
+        let p = Pose::from_translation(DVec3::new(0.0, 0.0, z(k)));
+        let t = servo.tick(&p, 1.0 / RATE, if k == 1 { Some(&model) } else { None });
+        energy += held.dot(p.transform_point(com) - last.transform_point(com)) * 1e-3;
+        top = top.max(energy);
+        assert!((servo.energy_to_user() - energy).abs() <= 1e-12 + 1e-9 * energy.abs());
+        assert!((servo.energy_to_user_max() - top).abs() <= 1e-12 + 1e-9 * top);
+        held = t.force;
+        last = p;
+    }
+    assert!(top > 1e-5, "{top} J");
+}
+
+#[test]
+fn a_tick_past_its_budget_is_late() {
+    let s0 = Pose::IDENTITY;
+    let mut o = options();
+    o.budget = 1e-12;
+    let mut servo = Servo::new(body(0.02, DVec3::ZERO), s0, o).unwrap();
+    assert!(servo.tick(&s0, 1.0 / RATE, None).late);
+    o.budget = 10.0;
+    let mut servo = Servo::new(body(0.02, DVec3::ZERO), s0, o).unwrap();
+    assert!(!servo.tick(&s0, 1.0 / RATE, None).late);
+}

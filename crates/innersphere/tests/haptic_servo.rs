@@ -549,3 +549,57 @@ fn a_tick_past_its_budget_is_late() {
     let mut servo = Servo::new(body(0.02, DVec3::ZERO), s0, o).unwrap();
     assert!(!servo.tick(&s0, 1.0 / RATE, None).late);
 }
+
+#[test]
+fn a_bad_or_long_tick_step_counts_as_one_period() {
+    let s0 = Pose::IDENTITY;
+    let poses = path(s0, DVec3::new(1.0, 0.5, 0.0), DVec3::Y, 1.0, 0.2, 8.0, 300);
+    let b = body(0.05, DVec3::new(0.3, 0.0, 0.1));
+    let run_dt = |dt: f64| {
+        let mut s = Servo::new(b, s0, options()).unwrap();
+        poses
+            .iter()
+            .map(|p| s.tick(p, dt, None))
+            .map(|t| (t.force, t.torque, t.tool))
+            .collect::<Vec<_>>()
+    };
+    let one = run_dt(1.0 / RATE);
+    for dt in [0.0, -1e-3, f64::NAN, f64::INFINITY, 10.5 / RATE] {
+        assert!(run_dt(dt) == one, "dt {dt}");
+    }
+    // Up to ten periods is taken as measured.
+    for dt in [2.0 / RATE, 10.0 / RATE] {
+        assert!(run_dt(dt) != one, "dt {dt}");
+    }
+}
+
+#[test]
+fn a_device_that_turns_at_once_is_followed_within_the_speed_and_acceleration_limits() {
+    // The device read turned by 2.5 rad about z in one tick: the loop takes it at most at
+    // max_device_acceleration / 20 mm (rad/s²) and max_device_speed / 20 mm (rad/s), so the
+    // tool (which lags it) turns no faster; a second later it is there.
+    let o = options();
+    let (wmax, amax) = (o.max_device_speed / 20.0, o.max_device_acceleration / 20.0);
+    let s0 = Pose::IDENTITY;
+    let turned = Pose {
+        rotation: DQuat::from_rotation_z(2.5),
+        ..s0
+    };
+    let mut servo = Servo::new(body(0.05, DVec3::new(1.0, 0.0, 0.0)), s0, o).unwrap();
+    let h = 1.0 / RATE;
+    let (mut bound, mut speed) = (0.0f64, 0.0f64);
+    for k in 0..3000 {
+        let t = servo.tick(&turned, h, None);
+        speed = (speed + amax * h).min(wmax);
+        bound += speed * h;
+        let angle = turn(s0.rotation, t.tool.rotation).length();
+        assert!(
+            angle <= bound + 1e-9,
+            "tick {k}: {angle} rad, at most {bound}"
+        );
+        if k == 2999 {
+            assert!((angle - 2.5).abs() < 1e-6, "{angle}");
+            assert!(t.tool.rotation.dot(turned.rotation).abs() > 1.0 - 1e-12);
+        }
+    }
+}

@@ -603,3 +603,38 @@ fn a_device_that_turns_at_once_is_followed_within_the_speed_and_acceleration_lim
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+
+    #[test]
+    fn the_wrench_sent_is_the_couplings_pull_on_the_device(
+        s0 in start(), dir in unit(), axis in unit(),
+        amp in 0.2..2.0f64, rot in 0.02..0.3f64, w in 2.0..12.0f64,
+    ) {
+        // Within the device's limits the force and torque sent are the coupling spring and
+        // damper between the device (its pose and velocity as read) and the tool after the
+        // step: −(k·(x_d − x_t) + b·(v_d − v_t)), and the same for the rotation.
+        let o = options();
+        let c = o.coupling;
+        let com = DVec3::new(0.4, -0.2, 0.1);
+        let mut servo = Servo::new(body(0.05, com), s0, o).unwrap();
+        let h = 1.0 / RATE;
+        let mut last = s0;
+        for p in path(s0, dir, axis, amp, rot, w, 300) {
+            let t = servo.tick(&p, h, None);
+            let st = *servo.state();
+            prop_assert_eq!(st.pose, t.tool);
+            let (xd, xt) = (p.transform_point(com), t.tool.transform_point(com));
+            let vd = (xd - last.transform_point(com)) / h;
+            let wd = turn(last.rotation, p.rotation) / h;
+            let f = -((xd - xt) * c.stiffness + (vd - st.velocity) * c.damping);
+            let tau = -(turn(t.tool.rotation, p.rotation) * c.angular_stiffness
+                + (wd - st.angular_velocity) * c.angular_damping);
+            prop_assert!(f.length() < o.device.max_force && tau.length() < o.device.max_torque);
+            prop_assert!(close(t.force, f, 1e-9), "{} vs {f}", t.force);
+            prop_assert!(close(t.torque, tau, 1e-9), "{} vs {tau}", t.torque);
+            last = p;
+        }
+    }
+}

@@ -300,8 +300,11 @@ proptest! {
         for (i, v) in [kx, ky, kz, 5.0, 5.0, 5.0].into_iter().enumerate() {
             k[i][i] = v;
         }
+        // A small torque too, against a rotational stiffness of 5 N·mm/rad.
+        let tau0 = push.cross(DVec3::new(0.3, -0.5, 0.8)) * 0.5;
         let model = ContactModel {
             force: push * f0,
+            torque: tau0,
             stiffness: k,
             volume: 0.1,
             ..ContactModel::none(s0)
@@ -323,6 +326,10 @@ proptest! {
         let kv = DVec3::new(kx, ky, kz);
         let want = (xd * kc + push * f0 + kv * x0) / (kv + kc);
         prop_assert!(close(t.tool.transform_point(com), want, 1e-4), "{:?} vs {want}", t.tool);
+        // And the rotation: k_θ·θ = τ₀ − 5·θ (small angles: to their square).
+        let theta = turn(s0.rotation, t.tool.rotation);
+        let want = tau0 / (o.coupling.angular_stiffness + 5.0);
+        prop_assert!((theta - want).length() <= 1e-3 * want.length() + 1e-12, "{theta} vs {want}");
         prop_assert!(servo.energy_to_user_max() <= 1e-9, "{}", servo.energy_to_user_max());
     }
 }
@@ -637,4 +644,34 @@ proptest! {
             last = p;
         }
     }
+}
+
+#[test]
+fn a_new_model_comes_in_at_the_slew() {
+    // From no contact to a constant 3 N push (no stiffness): the contact force on the tool
+    // rises by at most model_slew · h per tick and then holds.
+    let o = options();
+    let s0 = Pose::IDENTITY;
+    let model = ContactModel {
+        force: DVec3::new(0.0, 3.0, 0.0),
+        volume: 0.1,
+        ..ContactModel::none(s0)
+    };
+    let mut servo = Servo::new(body(0.05, DVec3::ZERO), s0, o).unwrap();
+    let step = o.model_slew / RATE;
+    let mut prev = 0.0;
+    for k in 0..20 {
+        let t = servo.tick(&s0, 1.0 / RATE, if k == 0 { Some(&model) } else { None });
+        let f = t.contact_force.length();
+        assert!(
+            f - prev <= step * (1.0 + 1e-9),
+            "tick {k}: {prev} -> {f} N, at most {step}"
+        );
+        assert!(
+            f - prev >= step * (1.0 - 1e-9) || (f - 3.0).abs() < 1e-12,
+            "tick {k}: {prev} -> {f}"
+        );
+        prev = f;
+    }
+    assert!((prev - 3.0).abs() < 1e-12);
 }

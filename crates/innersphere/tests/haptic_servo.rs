@@ -675,3 +675,43 @@ fn a_new_model_comes_in_at_the_slew() {
     }
     assert!((prev - 3.0).abs() < 1e-12);
 }
+
+#[test]
+fn a_device_that_jumps_is_followed_within_the_speed_and_acceleration_limits() {
+    // Read 10 mm away along a skew direction in one tick (and, second, infinitely far along
+    // +x): the loop takes the device there at most at max_device_acceleration and
+    // max_device_speed, so the tool (which lags it) moves no faster, along the jump, and
+    // (the finite jump) gets there.
+    let o = options();
+    let (vmax, amax) = (o.max_device_speed, o.max_device_acceleration);
+    let s0 = Pose::IDENTITY;
+    let dir = DVec3::new(1.0, -2.0, 0.5).normalize();
+    let h = 1.0 / RATE;
+    for (target, far) in [
+        (dir * 10.0, false),
+        (DVec3::new(f64::INFINITY, 0.0, 0.0), true),
+    ] {
+        let goal = Pose::from_translation(target);
+        let along = if far { DVec3::X } else { dir };
+        let mut servo = Servo::new(body(0.05, DVec3::ZERO), s0, o).unwrap();
+        let (mut bound, mut speed) = (0.0f64, 0.0f64);
+        for k in 0..1000 {
+            let t = servo.tick(&goal, h, None);
+            speed = (speed + amax * h).min(vmax);
+            bound += speed * h;
+            let x = t.tool.translation;
+            // (The tool swings up to 0.04 mm past the device where the device stops speeding up.)
+            assert!(
+                x.length() <= bound + 0.1,
+                "tick {k}: {x} mm, at most {bound}"
+            );
+            assert!(
+                (x - along * x.dot(along)).length() <= 1e-9 * (1.0 + x.length()),
+                "tick {k}: {x}"
+            );
+            if !far && k == 999 {
+                assert!((x - target).length() < 1e-6, "{x}");
+            }
+        }
+    }
+}

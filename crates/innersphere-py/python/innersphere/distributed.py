@@ -90,6 +90,18 @@ def _show(futures: List[Future], progress: bool) -> None:
     wait(futures)
 
 
+def _each_or_error(futures: List[Future], progress: bool) -> List[Any]:
+    """Every task's result in order, or the exception it raised in its place."""
+    _show(futures, progress)
+    out: List[Any] = []
+    for f in futures:
+        try:
+            out.append(f.result())
+        except Exception as e:
+            out.append(e)
+    return out
+
+
 def sweep(
     client: Client,
     tree_a: _TreeLike,
@@ -274,14 +286,7 @@ def contact_map_many(
         client.submit(_map_one, os.fspath(a), os.fspath(b), p, None, retries=retries, pure=False)
         for (a, b), p in zip(pairs, poses)
     ]
-    _show(futures, progress)
-    out: List[Any] = []
-    for f in futures:
-        try:
-            out.append(f.result())
-        except Exception as e:
-            out.append(e)
-    return out
+    return _each_or_error(futures, progress)
 
 
 def _occlude_one(a: _TreeLike, b: _TreeLike, from_pose: Any, options: Dict[str, Any]) -> Dict[str, Any]:
@@ -319,11 +324,4 @@ def occlude_many(
         )
         for (a, b), p in zip(pairs, poses)
     ]
-    _show(futures, progress)
-    out: List[Any] = []
-    for f in futures:
-        try:
-            out.append(f.result())
-        except Exception as e:
-            out.append(e)
-    return out
+    return _each_or_error(futures, progress)

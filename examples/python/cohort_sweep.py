@@ -69,7 +69,7 @@ def main():
     ap.add_argument("--poses", type=int, default=1_000_000)
     ap.add_argument("--mm", type=float, default=2.0, help="largest translation error (mm)")
     ap.add_argument("--deg", type=float, default=4.0, help="largest rotation error (degrees)")
-    ap.add_argument("--chunk", type=int, default=16384, help="poses per task")
+    ap.add_argument("--chunk", type=int, default=None, help="poses per task (default: equal tasks in whole rounds of the workers)")
     ap.add_argument("--workers", type=int, default=os.cpu_count(), help="local cluster size")
     ap.add_argument("--scheduler", help="address of a running Dask scheduler")
     ap.add_argument("--out", type=pathlib.Path, help="folder for the trees (default: a temporary one)")

@@ -82,6 +82,8 @@ def test_sweep_equals_the_local_batch(client, trees, tree_files, query):
     # The defaults: every pose from a fresh state, as the local call with chunk=1.
     local1 = getattr(innersphere.Pair(*trees), isd.QUERIES[query])(poses, chunk=1)
     assert same(isd.sweep(client, *trees, poses, query=query, chunk=1000), local1)
+    assert same(isd.sweep(client, *trees, poses, query=query), local1)  # the balanced chunk
+    assert same(isd.sweep(client, *trees, poses, query=query, batch_chunk=64), local)
     # Trees as paths, 4×4 matrices, a moving A.
     pa = random_poses(5000, 4, spread=0.1)
     local = getattr(innersphere.Pair(*trees), isd.QUERIES[query])(poses, pose_a=pa, chunk=64)
@@ -104,12 +106,37 @@ def test_sweeps_of_the_same_trees_one_after_another(client, trees):
     assert same(isd.sweep(client, fa, fb, poses[:0]), local[:0])
 
 
+def test_the_default_chunk_fills_whole_rounds_of_the_workers():
+    # 65 tasks on 8 workers ran a ninth round of one task while seven workers idled
+    # (docs/results/sweep_scaling_16core.txt, run B); the default chunk leaves no such round.
+    for n in [0, 1, 7, 1000, 1023, 1024, 5000, 40_000, 100_000, 10**6, 10**8 + 7]:
+        for threads in [1, 2, 3, 8, 16, 64]:
+            for batch in [1, 64, 1000]:
+                for most in [isd.DEFAULT_TASK_POSES, 1024, 100]:
+                    per = isd.balanced_chunk(n, threads, batch, most)
+                    tasks = -(-n // per)
+                    assert per % batch == 0 and per >= 1
+                    if batch == 1:
+                        assert per <= most or n < 2
+                        if n >= min(most, isd.MIN_TASK_POSES):
+                            assert per >= min(most, isd.MIN_TASK_POSES) // 2
+                        if n >= threads * min(most, isd.MIN_TASK_POSES):
+                            # Whole rounds of equal tasks: the threads' time in rounds is
+                            # spent on poses (the old 65 tasks on 8 workers: 0.90).
+                            rounds = -(-tasks // threads)
+                            assert n / (rounds * threads * per) >= 0.95, (n, threads, per)
+
+
 def test_sweep_refuses_bad_input(client, trees):
     poses = random_poses(10, 5)
     with pytest.raises(ValueError, match="query"):
         isd.sweep(client, *trees, poses, query="volume")
     with pytest.raises(ValueError, match="multiple"):
         isd.sweep(client, *trees, poses, chunk=100, batch_chunk=64)
+    with pytest.raises(ValueError, match="chunk"):
+        isd.sweep(client, *trees, poses, chunk=0)
+    with pytest.raises(ValueError, match="batch_chunk"):
+        isd.sweep(client, *trees, poses, batch_chunk=0)
     with pytest.raises(ValueError, match="shape"):
         isd.sweep(client, *trees, poses[:, :5])
     with pytest.raises(ValueError, match="pose_a"):

@@ -45,7 +45,7 @@ except ImportError as e:  # pragma: no cover - exercised only without the extra
 
 from ._innersphere import Pair, Tree, contact_map, occlude
 
-__all__ = ["sweep", "build_many", "contact_map_many", "occlude_many", "QUERIES"]
+__all__ = ["sweep", "balanced_chunk", "build_many", "contact_map_many", "occlude_many", "QUERIES"]
 
 #: The query kinds of ``sweep`` and the batch method each one runs.
 QUERIES = {
@@ -102,13 +102,46 @@ def _each_or_error(futures: List[Future], progress: bool) -> List[Any]:
     return out
 
 
+DEFAULT_TASK_POSES = 65536
+"""The most poses ``balanced_chunk`` puts in one task unless told (about a second of
+distance on one core of the jaw pair)."""
+
+TASK_POSES = {"distance": DEFAULT_TASK_POSES, "contact": DEFAULT_TASK_POSES, "penetration": 1024}
+"""The most poses ``sweep`` puts in one task by default, per query: about a second of one
+core's work on the jaw pair (penetration answers ~700 poses a second where distance answers
+~55,000), so that a lost worker's task is cheap to redo."""
+
+MIN_TASK_POSES = 1024
+"""The fewest poses ``sweep`` puts in one task by default, where there are poses enough:
+below it a task's fixed cost (milliseconds) outweighs its work."""
+
+TASKS_PER_THREAD = 4
+"""About how many tasks ``sweep`` gives each worker thread by default: enough that a lost
+worker costs little and Dask's stealing can even out a slow core, few enough that per-task
+costs (scheduling, sending the chunk and its answers) stay small."""
+
+
+def balanced_chunk(n: int, threads: int, batch_chunk: int = 1, most: int = DEFAULT_TASK_POSES) -> int:
+    """Poses per task that split ``n`` poses into equal tasks, a whole number of rounds of
+    ``threads`` worker threads, at most ``most`` each, and none much under ``MIN_TASK_POSES``
+    (or ``most``, if smaller) unless ``n`` is (rounded up to a multiple of ``batch_chunk``)."""
+    threads, most = max(1, threads), max(1, most)
+    need = -(-n // most)
+    tasks = max(need, min(threads * TASKS_PER_THREAD, n // min(MIN_TASK_POSES, most)), 1)
+    if tasks >= threads:
+        down = tasks // threads * threads
+        tasks = down if down >= need else -(-tasks // threads) * threads
+    per = max(1, -(-n // tasks))
+    return -(-per // batch_chunk) * batch_chunk
+
+
 def sweep(
     client: Client,
     tree_a: _TreeLike,
     tree_b: _TreeLike,
     poses: Any,
     query: str = "distance",
-    chunk: int = 65536,
+    chunk: Optional[int] = None,
     *,
     pose_a: Any = None,
     stiffness: float = 1.0,
@@ -127,7 +160,11 @@ def sweep(
     query: "distance" (float64 (N,)), "contact" (bool (N,)) or "penetration" (a dict of
         arrays, as ``Pair.penetration_many``; ``stiffness`` applies).
     chunk: poses per task; a multiple of ``batch_chunk`` (each task answers its poses in
-        fresh-state chunks of ``batch_chunk``, exactly as the local call does).
+        fresh-state chunks of ``batch_chunk``, exactly as the local call does). None (the
+        default): equal tasks, as many as a whole number of rounds of the cluster's worker
+        threads needs with at most ``TASK_POSES[query]`` poses each and about
+        ``TASKS_PER_THREAD`` per thread (so no worker idles through a last, partial round,
+        and a lost worker's tasks are small).
     batch_chunk: the local call's ``chunk``: 1 (the default) answers every pose from a fresh
         state, right for scattered poses (a tolerance study, a data set: a state carried
         between unrelated poses costs 1.4× for distance, 9× for penetration on the jaw);
@@ -140,9 +177,11 @@ def sweep(
     """
     if query not in QUERIES:
         raise ValueError(f"query must be one of {', '.join(QUERIES)}, not {query!r}")
-    if not isinstance(chunk, int) or not isinstance(batch_chunk, int) or batch_chunk < 1 or chunk < 1:
-        raise ValueError("chunk and batch_chunk must be positive integers")
-    if chunk % batch_chunk:
+    if chunk is not None and (not isinstance(chunk, int) or chunk < 1):
+        raise ValueError("chunk must be None or a positive integer")
+    if not isinstance(batch_chunk, int) or batch_chunk < 1:
+        raise ValueError("batch_chunk must be a positive integer")
+    if chunk is not None and chunk % batch_chunk:
         raise ValueError(
             f"chunk ({chunk}) must be a multiple of batch_chunk ({batch_chunk}): a task starts a "
             "fresh state where the local batch does"
@@ -168,6 +207,8 @@ def sweep(
         ea = ta.result() if isinstance(ta, Future) else ta
         eb = tb.result() if isinstance(tb, Future) else tb
         return getattr(Pair(ea, eb), method)(b, pose_a=a_one, **kwargs)
+    if chunk is None:
+        chunk = balanced_chunk(n, sum(client.nthreads().values()), batch_chunk, TASK_POSES[query])
     # Fresh keys per sweep (hash=False): see the module's note on content-keyed scatters.
     fa, fb = (
         t if isinstance(t, Future) else client.scatter(t, broadcast=True, hash=False)
@@ -315,8 +356,8 @@ def occlude_many(
     futures = [
         client.submit(
             _occlude_one,
-            a if isinstance(a, Tree) else os.fspath(a),
-            b if isinstance(b, Tree) else os.fspath(b),
+            a if isinstance(a, (Tree, Future)) else os.fspath(a),
+            b if isinstance(b, (Tree, Future)) else os.fspath(b),
             p,
             options,
             retries=retries,

@@ -500,6 +500,14 @@ int ist_penetration_many(const struct ist_tree *a, const struct ist_tree *b, con
 const char *ist_last_error(void);
 
 /*
+ The status of the last failing call on this thread (IST_OK when none failed yet): also
+ for the calls that answer NULL on failure (ist_tree_load, ist_tree_build, …), so a C
+ program can tell a missing file (IST_ERR_IO) from a corrupt one (IST_ERR_CORRUPT_TREE)
+ or a mesh that is no solid (IST_ERR_MESH) without reading the message.
+ */
+int ist_last_status(void);
+
+/*
  The defaults of a device class (IST_DEVICE_TOUCH or IST_DEVICE_OMEGA) at 1 kHz, with A
  at the identity and the tool starting at the identity.
 

@@ -1,7 +1,7 @@
 //! Status codes, the thread-local error message, and the guard that keeps panics in Rust.
 
 use innersphere::Error;
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::ffi::{c_char, c_int, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -26,12 +26,14 @@ pub const IST_ERR_PANIC: c_int = 7;
 
 thread_local! {
     static LAST: RefCell<CString> = RefCell::new(CString::default());
+    static LAST_STATUS: Cell<c_int> = const { Cell::new(IST_OK) };
 }
 
-/// Remembers `message` as this thread's last error.
-pub(crate) fn set_error(message: &str) {
+/// Remembers `code` and `message` as this thread's last error.
+pub(crate) fn set_error(code: c_int, message: &str) {
     let c = CString::new(message.replace('\0', " ")).unwrap_or_default();
     LAST.with(|l| *l.borrow_mut() = c);
+    LAST_STATUS.with(|s| s.set(code));
 }
 
 /// A failure: its status and message.
@@ -66,11 +68,11 @@ pub(crate) fn status(f: impl FnOnce() -> Result<(), Fail>) -> c_int {
     match catch_unwind(AssertUnwindSafe(f)) {
         Ok(Ok(())) => IST_OK,
         Ok(Err(Fail(code, message))) => {
-            set_error(&message);
+            set_error(code, &message);
             code
         }
         Err(p) => {
-            set_error(&panic_message(p));
+            set_error(IST_ERR_PANIC, &panic_message(p.as_ref()));
             IST_ERR_PANIC
         }
     }
@@ -80,18 +82,18 @@ pub(crate) fn status(f: impl FnOnce() -> Result<(), Fail>) -> c_int {
 pub(crate) fn pointer<T>(f: impl FnOnce() -> Result<Box<T>, Fail>) -> *mut T {
     match catch_unwind(AssertUnwindSafe(f)) {
         Ok(Ok(b)) => Box::into_raw(b),
-        Ok(Err(Fail(_, message))) => {
-            set_error(&message);
+        Ok(Err(Fail(code, message))) => {
+            set_error(code, &message);
             std::ptr::null_mut()
         }
         Err(p) => {
-            set_error(&panic_message(p));
+            set_error(IST_ERR_PANIC, &panic_message(p.as_ref()));
             std::ptr::null_mut()
         }
     }
 }
 
-fn panic_message(p: Box<dyn std::any::Any + Send>) -> String {
+fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
     let what = p
         .downcast_ref::<&str>()
         .map(|s| s.to_string())
@@ -105,4 +107,74 @@ fn panic_message(p: Box<dyn std::any::Any + Send>) -> String {
 #[no_mangle]
 pub extern "C" fn ist_last_error() -> *const c_char {
     LAST.with(|l| l.borrow().as_ptr())
+}
+
+/// The status of the last failing call on this thread (IST_OK when none failed yet): also
+/// for the calls that answer NULL on failure (ist_tree_load, ist_tree_build, …), so a C
+/// program can tell a missing file (IST_ERR_IO) from a corrupt one (IST_ERR_CORRUPT_TREE)
+/// or a mesh that is no solid (IST_ERR_MESH) without reading the message.
+#[no_mangle]
+pub extern "C" fn ist_last_status() -> c_int {
+    LAST_STATUS.with(|s| s.get())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_panics_message_names_its_payload() {
+        let m = panic_message(&"the payload");
+        assert!(
+            m.starts_with("innersphere panicked") && m.ends_with(": the payload"),
+            "{m}"
+        );
+        let m = panic_message(&String::from("a String payload"));
+        assert!(m.ends_with(": a String payload"), "{m}");
+        assert!(panic_message(&42u8).ends_with(": unknown panic"));
+    }
+
+    #[test]
+    fn a_panic_is_a_status_and_a_message_not_an_unwind() {
+        let code = status(|| panic!("boom"));
+        assert_eq!(code, IST_ERR_PANIC);
+        assert_eq!(ist_last_status(), IST_ERR_PANIC);
+        let m = unsafe { std::ffi::CStr::from_ptr(ist_last_error()) };
+        assert!(m.to_str().unwrap().ends_with(": boom"));
+    }
+
+    #[test]
+    fn every_library_error_has_its_status() {
+        let io = Error::Io {
+            path: "x".into(),
+            source: std::io::Error::other("gone"),
+        };
+        assert_eq!(Fail::from(io).0, IST_ERR_IO);
+        assert_eq!(Fail::from(Error::Output("o".into())).0, IST_ERR_IO);
+        assert_eq!(Fail::from(Error::InvalidMesh("m".into())).0, IST_ERR_MESH);
+        assert_eq!(
+            Fail::from(Error::UnsupportedFormat("f".into())).0,
+            IST_ERR_MESH
+        );
+        let parse = Error::Parse {
+            path: "p".into(),
+            format: "stl",
+            message: "short".into(),
+        };
+        assert_eq!(Fail::from(parse).0, IST_ERR_MESH);
+        assert_eq!(
+            Fail::from(Error::CorruptTree("t".into())).0,
+            IST_ERR_CORRUPT_TREE
+        );
+        let pose = innersphere::Pose::new(
+            innersphere::glam::DVec3::NAN,
+            innersphere::glam::DQuat::IDENTITY,
+        )
+        .unwrap_err();
+        assert_eq!(Fail::from(Error::Pose(pose)).0, IST_ERR_POSE);
+        assert_eq!(
+            Fail::from(Error::InvalidOption("k".into())).0,
+            IST_ERR_INVALID_ARGUMENT
+        );
+    }
 }

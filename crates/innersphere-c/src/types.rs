@@ -19,7 +19,7 @@ impl ist_pose {
     pub(crate) fn to_pose(self) -> Result<Pose, Fail> {
         let [w, x, y, z] = self.q;
         Pose::new(DVec3::from_array(self.t), DQuat::from_xyzw(x, y, z, w))
-            .map_err(|e| Fail(crate::error::IST_ERR_POSE, format!("bad pose: {e}")))
+            .map_err(|e| innersphere::Error::from(e).into())
     }
 
     pub(crate) fn from_pose(p: &Pose) -> ist_pose {

@@ -158,6 +158,7 @@ fn every_failure_has_its_status_and_message() {
         let nowhere = c(&d.join("missing").join("t.ist"));
         assert_eq!(ist_tree_save(t, nowhere.as_ptr()), IST_ERR_IO);
         assert!(last_error().contains("missing"), "{}", last_error());
+        assert_eq!(ist_last_status(), IST_ERR_IO);
         // NULL arguments.
         assert_eq!(
             ist_tree_save(std::ptr::null(), nowhere.as_ptr()),
@@ -166,6 +167,7 @@ fn every_failure_has_its_status_and_message() {
         assert!(last_error().contains("NULL"), "{}", last_error());
         assert!(ist_tree_load(std::ptr::null()).is_null());
         assert!(last_error().contains("NULL"), "{}", last_error());
+        assert_eq!(ist_last_status(), IST_ERR_NULL);
         // A bad pose.
         let pair = ist_pair_new(t, t);
         let id = ist_pose_identity();
@@ -176,6 +178,7 @@ fn every_failure_has_its_status_and_message() {
         let mut r = ist_distance_result::default();
         assert_eq!(ist_distance(pair, &id, &nan, &mut r), IST_ERR_POSE);
         assert!(last_error().contains("NaN"), "{}", last_error());
+        assert_eq!(ist_last_status(), IST_ERR_POSE);
         // A success leaves the last error as it was.
         let far = ist_pose {
             t: [10.0, 0.0, 0.0],
@@ -183,6 +186,7 @@ fn every_failure_has_its_status_and_message() {
         };
         assert_eq!(ist_distance(pair, &id, &far, &mut r), IST_OK);
         assert!(last_error().contains("NaN"));
+        assert_eq!(ist_last_status(), IST_ERR_POSE);
         assert!(r.distance > 5.0);
         // Bad options of a query: a status of their own.
         let mut p = ist_penetration_result::default();
@@ -190,10 +194,14 @@ fn every_failure_has_its_status_and_message() {
             ist_penetration_with_stiffness(pair, &id, &id, -1.0, &mut p),
             IST_ERR_INVALID_ARGUMENT
         );
-        // A corrupt tree file and a mesh that is not one: NULL, the reason in the message.
+        // A missing file, a corrupt tree file and a mesh that is not one: NULL, the reason
+        // in the message and the status.
+        assert!(ist_tree_load(c(&d.join("absent.ist")).as_ptr()).is_null());
+        assert_eq!(ist_last_status(), IST_ERR_IO);
         let junk = d.join("junk.ist");
         std::fs::write(&junk, b"IST not really a tree").unwrap();
         assert!(ist_tree_load(c(&junk).as_ptr()).is_null());
+        assert_eq!(ist_last_status(), IST_ERR_CORRUPT_TREE);
         let corrupt = last_error();
         let bad_mesh = d.join("bad.stl");
         std::fs::write(
@@ -202,6 +210,7 @@ fn every_failure_has_its_status_and_message() {
         )
         .unwrap();
         assert!(ist_tree_build(c(&bad_mesh).as_ptr(), &o).is_null());
+        assert_eq!(ist_last_status(), IST_ERR_MESH);
         assert!(
             !corrupt.is_empty() && last_error() != corrupt,
             "{corrupt} / {}",

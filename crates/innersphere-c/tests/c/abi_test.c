@@ -214,16 +214,20 @@ static void errors(const char* dir, ist_tree* a, ist_tree* b) {
     /* Bad paths and a corrupt file: NULL and a message. */
     CHECK(ist_tree_load("/nonexistent/x.ist") == NULL, "missing file");
     CHECK(strlen(ist_last_error()) > 0, "no message");
+    CHECK(ist_last_status() == IST_ERR_IO, "a missing file is IST_ERR_IO");
     CHECK(ist_tree_load(NULL) == NULL, "NULL path");
     CHECK(strstr(ist_last_error(), "NULL") != NULL, "message names NULL");
+    CHECK(ist_last_status() == IST_ERR_NULL, "a NULL path is IST_ERR_NULL");
     char* corrupt = join(dir, "corrupt.ist");
     FILE* f = fopen(corrupt, "wb");
     fputs("ISTREE garbage, not a tree", f);
     fclose(f);
     CHECK(ist_tree_load(corrupt) == NULL, "corrupt file");
+    CHECK(ist_last_status() == IST_ERR_CORRUPT_TREE, "a corrupt file is IST_ERR_CORRUPT_TREE");
     free(corrupt);
     char* notmesh = join(dir, "poses.txt");
     CHECK(ist_tree_build(notmesh, NULL) == NULL, "not a mesh");
+    CHECK(ist_last_status() == IST_ERR_MESH, "a file that is no mesh is IST_ERR_MESH");
     free(notmesh);
     ist_build_options bo = ist_build_options_default();
     bo.voxel_size = -1.0;

@@ -282,7 +282,7 @@ fn follow(d: DVec3, v0: DVec3, vmax: f64, amax: f64, h: f64) -> (Option<DVec3>, 
 /// vectors: zero when `d` has no direction (zero, NaN).
 fn towards(d: DVec3, max: f64) -> DVec3 {
     let scale = d.abs().max_element();
-    if scale.is_nan() || scale <= 0.0 {
+    if d.is_nan() || scale <= 0.0 {
         return DVec3::ZERO;
     }
     if scale.is_infinite() {
@@ -312,5 +312,113 @@ fn clamp(v: DVec3, max: f64) -> DVec3 {
         v
     } else {
         DVec3::ZERO
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Follows a target `dist` mm away along x from rest, tick by tick, until `follow` says
+    /// it is there; the ticks taken and the largest position and velocity change seen.
+    fn chase(dist: f64, vmax: f64, amax: f64, h: f64) -> (usize, f64, f64) {
+        let (mut x, mut v) = (0.0f64, DVec3::ZERO);
+        let (mut peak, mut dv_max) = (0.0f64, 0.0f64);
+        for tick in 1..100_000 {
+            let (step, v1) = follow(DVec3::new(dist - x, 0.0, 0.0), v, vmax, amax, h);
+            match step {
+                None => {
+                    dv_max = dv_max.max((v1 - v).length());
+                    return (tick, peak.max(dist), dv_max);
+                }
+                Some(s) => {
+                    assert!(s.y == 0.0 && s.z == 0.0, "{s}");
+                    // Landing on the target (the overshoot guard) may stop at once.
+                    if s.x != dist - x {
+                        dv_max = dv_max.max((v1 - v).length());
+                    }
+                    x += s.x;
+                    v = v1;
+                    peak = peak.max(x);
+                    assert!(v.length() <= vmax * (1.0 + 1e-12), "{v} over {vmax}");
+                }
+            }
+        }
+        panic!("never got there");
+    }
+
+    #[test]
+    fn the_follower_brakes_onto_the_target_in_the_least_time_the_limits_allow() {
+        let h = 1e-3;
+        for (dist, vmax, amax) in [
+            (10.0, 1e9, 5e3),
+            (50.0, 1e9, 2e4),
+            (200.0, 300.0, 5e3),
+            (3.0, 1e9, 1e4),
+        ] {
+            let (ticks, peak, dv) = chase(dist, vmax, amax, h);
+            // Never past the target, never accelerating beyond the limit on the way.
+            assert!(peak <= dist * (1.0 + 1e-12), "{dist}: overshot to {peak}");
+            assert!(
+                dv <= amax * h * (1.0 + 1e-9),
+                "{dist}: Δv {dv} over {}",
+                amax * h
+            );
+            // Bang-bang: accelerate, cruise at vmax if it is reached, brake; a follower that
+            // brakes too early or too late takes longer.
+            let t_acc = (vmax / amax).min((dist / amax).sqrt());
+            let cruise = (dist - amax * t_acc * t_acc) / vmax;
+            let best = 2.0 * t_acc + cruise.max(0.0);
+            let took = ticks as f64 * h;
+            assert!(
+                took >= best * 0.9,
+                "{dist}: {took} s, the limits allow {best}"
+            );
+            assert!(
+                took <= best * 1.05 + 3.0 * h,
+                "{dist}: {took} s, the limits allow {best}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_follower_cruises_at_the_speed_limit_and_goes_for_an_infinite_target() {
+        // A target at infinity: full speed after the ramp, never NaN.
+        let (mut v, h) = (DVec3::ZERO, 1e-3);
+        for _ in 0..1000 {
+            let (step, v1) = follow(DVec3::new(f64::INFINITY, 0.0, 0.0), v, 250.0, 5e3, h);
+            let s = step.expect("an infinite target is never reached");
+            assert!(s.is_finite() && (v1 - v).length() <= 5e3 * h * (1.0 + 1e-12));
+            v = v1;
+        }
+        assert!((v.x - 250.0).abs() < 1e-9 && v.y == 0.0, "{v}");
+        // A NaN target: no motion.
+        let (step, v1) = follow(DVec3::NAN, DVec3::ZERO, 250.0, 5e3, h);
+        assert_eq!((step, v1), (Some(DVec3::ZERO), DVec3::ZERO));
+    }
+
+    #[test]
+    fn towards_keeps_the_direction_and_shortens_to_the_limit() {
+        let d = DVec3::new(3.0, 4.0, 0.0);
+        assert_eq!(towards(d, 5.1), d);
+        assert_eq!(towards(d, 5.0), d);
+        let s = towards(d, 2.5);
+        assert!((s - DVec3::new(1.5, 2.0, 0.0)).length() < 1e-12, "{s}");
+        let big = towards(DVec3::new(1e300, -1e300, 0.0), 2.0);
+        assert!(
+            (big - DVec3::new(1.0, -1.0, 0.0) * 2f64.sqrt()).length() < 1e-12,
+            "{big}"
+        );
+        let inf = towards(DVec3::new(f64::INFINITY, 0.0, f64::NEG_INFINITY), 4.0);
+        assert!(
+            (inf - DVec3::new(1.0, 0.0, -1.0) * 8f64.sqrt()).length() < 1e-12,
+            "{inf}"
+        );
+        assert_eq!(
+            towards(DVec3::new(0.0, f64::INFINITY, 1.0), 0.5),
+            DVec3::new(0.0, 0.5, 0.0)
+        );
+        assert_eq!(towards(DVec3::ZERO, 1.0), DVec3::ZERO);
+        assert_eq!(towards(DVec3::new(f64::NAN, 1.0, 0.0), 1.0), DVec3::ZERO);
     }
 }

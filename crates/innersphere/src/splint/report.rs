@@ -124,7 +124,9 @@ pub fn report(
     let carried = opts.clearance + CARRIED_TOLERANCE;
     let coverage = |m: &Mesh, pts: &[DVec3], other: &(dyn Fn(DVec3) -> f64 + Sync)| -> f64 {
         let area = vertex_areas(m);
-        let (num, den) = pts
+        // The distances in parallel, the sums in vertex order: a parallel reduction would
+        // group the terms as the scheduling fell, and the last bits with them.
+        let terms: Vec<(f64, f64)> = pts
             .par_iter()
             .zip(&area)
             .filter(|(p, _)| other(**p) <= OCCLUSAL_BAND)
@@ -132,7 +134,8 @@ pub fn report(
                 let d = splint_bvh.distance_sq(*p).sqrt();
                 (if d <= carried { *w } else { 0.0 }, *w)
             })
-            .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
+            .collect();
+        let (num, den) = terms.iter().fold((0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
         if den > 0.0 {
             num / den
         } else {

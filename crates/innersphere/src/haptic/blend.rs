@@ -179,4 +179,44 @@ mod tests {
         };
         assert!((capped.wrench_at(&down, DVec3::ZERO).0.force.z - 1.5).abs() < 1e-12);
     }
+
+    #[test]
+    fn a_torque_comes_in_at_the_slew_counted_at_the_lever() {
+        // The same push, then with a torque of 4 N·mm more: 4 / LEVER N of change, at
+        // 0.05 N per tick.
+        let at = Pose::IDENTITY;
+        let mut b = Blend::new(pushing(1.0));
+        let turning = ContactModel {
+            torque: DVec3::new(0.0, 4.0, 0.0),
+            ..pushing(1.0)
+        };
+        b.switch_to(turning);
+        let max_step = 0.05;
+        let ticks = (4.0 / LEVER / max_step).ceil() as usize;
+        let mut last = 0.0;
+        for i in 1..=ticks {
+            let (w, _) = b.wrench_at(&at, DVec3::ZERO, max_step);
+            let step = (w.torque.y - last) / LEVER;
+            assert!(step > 0.0 && step <= max_step + 1e-12, "tick {i}: {step} N");
+            assert!((w.force.z - 1.0).abs() < 1e-12);
+            last = w.torque.y;
+        }
+        assert!(
+            (last - 4.0).abs() < 1e-12,
+            "{last} N·mm after {ticks} ticks"
+        );
+    }
+
+    #[test]
+    fn a_cap_bounds_both_models_of_a_blend() {
+        let at = Pose::IDENTITY;
+        let mut b = Blend::new(pushing(3.0));
+        b.switch_to(pushing(6.0));
+        b.set_cap(2.0);
+        for _ in 0..100 {
+            let (w, _) = b.wrench_at(&at, DVec3::ZERO, 0.25);
+            assert!(w.force.length() <= 2.0 + 1e-12, "{}", w.force);
+        }
+        assert_eq!(b.target().force_cap, 2.0);
+    }
 }

@@ -219,4 +219,35 @@ mod tests {
         }
         assert_eq!(b.target().force_cap, 2.0);
     }
+
+    #[test]
+    fn a_blends_stiffness_is_the_same_blend_of_the_models_stiffnesses() {
+        let at = Pose::IDENTITY;
+        let mut b = Blend::new(pushing(2.0));
+        let mut stiffer = pushing(3.0);
+        stiffer.stiffness[2][2] = 300.0;
+        stiffer.stiffness[3][3] = 7.0;
+        b.switch_to(stiffer);
+        let (_, k) = b.wrench_at(&at, DVec3::ZERO, 0.25);
+        let s = b.s;
+        assert!(s > 0.0 && s < 1.0, "{s}");
+        assert_eq!(k[2][2], (1.0 - s) * 100.0 + s * 300.0);
+        assert_eq!(k[3][3], s * 7.0);
+        assert_eq!(k[0][0], 0.0);
+    }
+
+    #[test]
+    fn a_blend_towards_a_model_of_non_finite_wrench_ends_at_once() {
+        // No slew can be measured towards an infinite torque: the blend takes it whole (the
+        // step then refuses the non-finite wrench) rather than stall at its start for ever.
+        let at = Pose::IDENTITY;
+        let mut b = Blend::new(pushing(1.0));
+        let wild = ContactModel {
+            torque: DVec3::new(1e308, 1e308, 0.0),
+            ..pushing(1.0)
+        };
+        b.switch_to(wild);
+        b.wrench_at(&at, DVec3::ZERO, 0.25);
+        assert_eq!(b.s, 1.0);
+    }
 }

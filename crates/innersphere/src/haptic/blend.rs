@@ -182,27 +182,28 @@ mod tests {
 
     #[test]
     fn a_torque_comes_in_at_the_slew_counted_at_the_lever() {
-        // The same push, then with a torque of 4 N·mm more: 4 / LEVER N of change, at
+        // The same push with 2 N·mm of torque, then with 6: 4 / LEVER N of change, at
         // 0.05 N per tick.
         let at = Pose::IDENTITY;
-        let mut b = Blend::new(pushing(1.0));
-        let turning = ContactModel {
-            torque: DVec3::new(0.0, 4.0, 0.0),
+        let torque = |t: f64| ContactModel {
+            torque: DVec3::new(0.0, t, 0.0),
             ..pushing(1.0)
         };
-        b.switch_to(turning);
+        let mut b = Blend::new(torque(2.0));
+        b.switch_to(torque(6.0));
         let max_step = 0.05;
         let ticks = (4.0 / LEVER / max_step).ceil() as usize;
-        let mut last = 0.0;
+        let mut last = 2.0;
         for i in 1..=ticks {
             let (w, _) = b.wrench_at(&at, DVec3::ZERO, max_step);
             let step = (w.torque.y - last) / LEVER;
             assert!(step > 0.0 && step <= max_step + 1e-12, "tick {i}: {step} N");
+            assert!((w.torque.y - ((1.0 - b.s) * 2.0 + b.s * 6.0)).abs() < 1e-12);
             assert!((w.force.z - 1.0).abs() < 1e-12);
             last = w.torque.y;
         }
         assert!(
-            (last - 4.0).abs() < 1e-12,
+            (last - 6.0).abs() < 1e-12,
             "{last} N·mm after {ticks} ticks"
         );
     }

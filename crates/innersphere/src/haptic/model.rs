@@ -134,3 +134,73 @@ impl ContactModel {
         (Wrench { force, torque }, k)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    /// A contact pushing up with `f` N at the identity pose, stiffness 100 N/mm along z.
+    fn pushing(f: f64) -> ContactModel {
+        let mut k = [[0.0; 6]; 6];
+        k[2][2] = 100.0;
+        ContactModel {
+            force: DVec3::new(0.0, 0.0, f),
+            volume: f / 10.0,
+            stiffness: k,
+            ..ContactModel::none(Pose::IDENTITY)
+        }
+    }
+
+    #[test]
+    fn a_models_age_counts_from_its_sample_and_never_goes_negative() {
+        let m = pushing(1.0);
+        assert_eq!(m.age(m.sampled + Duration::from_millis(3)), 0.003);
+        assert_eq!(m.age(m.sampled), 0.0);
+        let earlier = ContactModel {
+            sampled: m.sampled + Duration::from_millis(5),
+            ..m
+        };
+        assert_eq!(earlier.age(m.sampled), 0.0);
+    }
+
+    #[test]
+    fn only_a_model_with_a_force_is_touching() {
+        assert!(!ContactModel::none(Pose::IDENTITY).touching());
+        assert!(pushing(0.5).touching());
+        assert!(ContactModel {
+            force: DVec3::new(0.0, -1e-3, 0.0),
+            ..ContactModel::none(Pose::IDENTITY)
+        }
+        .touching());
+    }
+
+    #[test]
+    fn a_model_of_non_finite_force_pushes_nothing() {
+        let m = ContactModel {
+            force: DVec3::new(f64::INFINITY, 0.0, 1.0),
+            ..pushing(1.0)
+        };
+        let (w, k) = m.wrench_at(&Pose::IDENTITY, DVec3::ZERO);
+        assert_eq!((w.force, w.torque), (DVec3::ZERO, DVec3::ZERO));
+        assert_eq!(k, [[0.0; 6]; 6]);
+    }
+
+    #[test]
+    fn the_fade_and_the_cap_scale_with_the_models_own_force() {
+        // 2 N, the tool 0.017 mm up: 0.3 N of linearised push, under a quarter of 2 N, so
+        // faded by 0.3 / 0.5 to 0.18 N, the stiffness with it.
+        let m = pushing(2.0);
+        let up = Pose::from_translation(DVec3::new(0.0, 0.0, 0.017));
+        let (w, k) = m.wrench_at(&up, DVec3::ZERO);
+        assert!((w.force.z - 0.3 * 0.6).abs() < 1e-12, "{}", w.force.z);
+        assert!((k[2][2] - 100.0 * 0.6).abs() < 1e-9, "{}", k[2][2]);
+        // A cap under the faded force: the force is the cap exactly.
+        let capped = ContactModel {
+            force_cap: 0.1,
+            ..m
+        };
+        let (w, _) = capped.wrench_at(&up, DVec3::ZERO);
+        assert!((w.force.z - 0.1).abs() < 1e-12, "{}", w.force.z);
+    }
+}

@@ -185,8 +185,7 @@ pub(crate) fn run(
     let start = Instant::now();
     let mut deadline = start;
     let mut state = LoopState::initial(io.control.read().target);
-    let mut window = [0f32; WINDOW];
-    let mut scratch = [0f32; WINDOW];
+    let mut stats = TickStats::new();
     let mut last_mode = Mode::Free;
     let mut seek_id = 0u64;
     let mut rate_from = (start, 0u64, 0u64);
@@ -199,16 +198,7 @@ pub(crate) fn run(
         let c = *io.control.read();
         // Motion time.
         if let Some(m) = &motion {
-            let len = m.duration().max(1e-9);
-            if c.seek_id != seek_id {
-                seek_id = c.seek_id;
-                state.motion_t = c.seek.clamp(0.0, len);
-            } else if c.playing && c.mode == Mode::Motion {
-                state.motion_t += 1.0 / rate;
-                if state.motion_t > len {
-                    state.motion_t = 0.0;
-                }
-            }
+            motion_clock(&mut state.motion_t, &mut seek_id, &c, m.duration(), rate);
             state.playing = c.playing;
         }
         let target = match (&motion, c.mode) {
@@ -271,30 +261,9 @@ pub(crate) fn run(
         }
         state.device_force = device_force;
         // Timing.
-        let work = t0.elapsed().as_secs_f64() * 1e6;
-        let n = state.ticks as usize;
-        window[n % WINDOW] = work as f32;
-        state.ticks += 1;
-        state.over_1ms += (work > 1000.0) as u64;
-        state.tick_us = work;
-        state.tick_us_max = state.tick_us_max.max(work);
-        state.history_us[state.history_next] = work as f32;
-        state.history_next = (state.history_next + 1) % HISTORY;
-        if state.ticks % 100 == 0 {
-            let k = (state.ticks as usize).min(WINDOW);
-            scratch[..k].copy_from_slice(&window[..k]);
-            let i = ((k - 1) as f64 * 0.99).round() as usize;
-            let (_, v, _) = scratch[..k].select_nth_unstable_by(i, f32::total_cmp);
-            state.tick_us_p99 = *v as f64;
-        }
-        // The rates: ticks and collision models over the last half second or more.
-        let since = t0.duration_since(rate_from.0).as_secs_f64();
-        if since >= 0.5 {
-            let models = haptic.as_ref().map_or(0, |h| h.collision_queries());
-            state.rate_hz = (state.ticks - rate_from.1) as f64 / since;
-            state.collision_rate_hz = models.saturating_sub(rate_from.2) as f64 / since;
-            rate_from = (t0, state.ticks, models);
-        }
+        stats.record(t0.elapsed().as_secs_f64() * 1e6, &mut state);
+        let models = haptic.as_ref().map_or(0, |h| h.collision_queries());
+        rates(&mut rate_from, t0, models, &mut state);
         state.t = t0.duration_since(start).as_secs_f64();
         io.state.write(state);
         // Sleep until just before the next tick, then spin: a plain sleep wakes up late.
@@ -309,5 +278,191 @@ pub(crate) fn run(
             // Behind by more than a tick: do not try to catch up.
             deadline = Instant::now();
         }
+    }
+}
+
+/// Advances the motion's clock `t` (s) by one tick at `rate` Hz: a new scrub (`c.seek_id`
+/// not `seek_id`) jumps to `c.seek` within the motion's `len`; else, while playing in motion
+/// mode, it runs on and starts over past the end.
+fn motion_clock(t: &mut f64, seek_id: &mut u64, c: &Control, len: f64, rate: f64) {
+    let len = len.max(1e-9);
+    if c.seek_id != *seek_id {
+        *seek_id = c.seek_id;
+        *t = c.seek.clamp(0.0, len);
+    } else if c.playing && c.mode == Mode::Motion {
+        *t += 1.0 / rate;
+        if *t > len {
+            *t = 0.0;
+        }
+    }
+}
+
+/// The ticks' work times: the last [`WINDOW`] for the p99 (taken every 100 ticks), with
+/// room to select in place, so that recording allocates nothing.
+struct TickStats {
+    window: [f32; WINDOW],
+    scratch: [f32; WINDOW],
+}
+
+impl TickStats {
+    fn new() -> TickStats {
+        TickStats {
+            window: [0.0; WINDOW],
+            scratch: [0.0; WINDOW],
+        }
+    }
+
+    /// Records a tick of `work` µs in `state`: the count, the count over 1 ms, the last and
+    /// largest, the history ring, and every 100 ticks the p99 over the window.
+    fn record(&mut self, work: f64, state: &mut LoopState) {
+        let n = state.ticks as usize;
+        self.window[n % WINDOW] = work as f32;
+        state.ticks += 1;
+        state.over_1ms += (work > 1000.0) as u64;
+        state.tick_us = work;
+        state.tick_us_max = state.tick_us_max.max(work);
+        state.history_us[state.history_next] = work as f32;
+        state.history_next = (state.history_next + 1) % HISTORY;
+        if state.ticks % 100 == 0 {
+            let k = (state.ticks as usize).min(WINDOW);
+            self.scratch[..k].copy_from_slice(&self.window[..k]);
+            let i = ((k - 1) as f64 * 0.99).round() as usize;
+            let (_, v, _) = self.scratch[..k].select_nth_unstable_by(i, f32::total_cmp);
+            state.tick_us_p99 = *v as f64;
+        }
+    }
+}
+
+/// The tick and collision-model rates over the last half second or more: `from` holds when
+/// the span began, the ticks then and the collision queries then (`models` now).
+fn rates(from: &mut (Instant, u64, u64), now: Instant, models: u64, state: &mut LoopState) {
+    let since = now.duration_since(from.0).as_secs_f64();
+    if since >= 0.5 {
+        state.rate_hz = (state.ticks - from.1) as f64 / since;
+        state.collision_rate_hz = models.saturating_sub(from.2) as f64 / since;
+        *from = (now, state.ticks, models);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn control(mode: Mode, playing: bool, seek: f64, seek_id: u64) -> Control {
+        Control {
+            target: Pose::IDENTITY,
+            mode,
+            playing,
+            seek,
+            seek_id,
+        }
+    }
+
+    #[test]
+    fn the_motion_clock_plays_wraps_holds_and_jumps() {
+        let (mut t, mut id) = (0.0, 0u64);
+        let play = control(Mode::Motion, true, 0.0, 0);
+        for _ in 0..250 {
+            motion_clock(&mut t, &mut id, &play, 1.0, 1000.0);
+        }
+        assert!((t - 0.25).abs() < 1e-9, "{t}");
+        // Paused, or playing in another mode: held.
+        motion_clock(
+            &mut t,
+            &mut id,
+            &control(Mode::Motion, false, 0.0, 0),
+            1.0,
+            1000.0,
+        );
+        motion_clock(
+            &mut t,
+            &mut id,
+            &control(Mode::Free, true, 0.0, 0),
+            1.0,
+            1000.0,
+        );
+        assert!((t - 0.25).abs() < 1e-9, "{t}");
+        // A scrub jumps (within the motion) and does not also advance; once.
+        motion_clock(
+            &mut t,
+            &mut id,
+            &control(Mode::Motion, true, 0.9995, 1),
+            1.0,
+            1000.0,
+        );
+        assert_eq!((t, id), (0.9995, 1));
+        // Past the end: back to the start.
+        motion_clock(
+            &mut t,
+            &mut id,
+            &control(Mode::Motion, true, 0.9995, 1),
+            1.0,
+            1000.0,
+        );
+        assert_eq!(t, 0.0);
+        motion_clock(
+            &mut t,
+            &mut id,
+            &control(Mode::Motion, false, 7.0, 2),
+            1.0,
+            1000.0,
+        );
+        assert_eq!(t, 1.0);
+        motion_clock(
+            &mut t,
+            &mut id,
+            &control(Mode::Motion, false, -3.0, 3),
+            1.0,
+            1000.0,
+        );
+        assert_eq!(t, 0.0);
+    }
+
+    #[test]
+    fn the_tick_statistics_count_ring_and_take_the_p99() {
+        let mut stats = TickStats::new();
+        let mut state = LoopState::initial(Pose::IDENTITY);
+        // Ticks of 1..=1000 µs in a scrambled order, then 1500 µs twice.
+        for k in 0..WINDOW {
+            stats.record(((k * 389) % WINDOW + 1) as f64, &mut state);
+            if k == 99 {
+                // The first p99, over the first 100 ticks.
+                let mut first: Vec<usize> = (0..100).map(|k| (k * 389) % WINDOW + 1).collect();
+                first.sort();
+                assert_eq!(state.tick_us_p99, first[98] as f64);
+            }
+        }
+        assert_eq!(state.ticks, WINDOW as u64);
+        assert_eq!(state.tick_us_p99, 990.0);
+        assert_eq!((state.over_1ms, state.tick_us_max), (0, 1000.0));
+        stats.record(1500.0, &mut state);
+        stats.record(1500.0, &mut state);
+        assert_eq!(
+            (state.over_1ms, state.tick_us, state.tick_us_max),
+            (2, 1500.0, 1500.0)
+        );
+        // The ring: the newest entry just before `history_next`.
+        let next = (WINDOW + 2) % HISTORY;
+        assert_eq!(state.history_next, next);
+        assert_eq!(state.history_us[(next + HISTORY - 1) % HISTORY], 1500.0);
+        assert_eq!(
+            state.history_us[(next + HISTORY - 3) % HISTORY],
+            (((WINDOW - 1) * 389) % WINDOW + 1) as f32
+        );
+    }
+
+    #[test]
+    fn the_rates_are_taken_over_half_a_second_or_more() {
+        let mut state = LoopState::initial(Pose::IDENTITY);
+        let t0 = Instant::now();
+        let mut from = (t0, 0u64, 10u64);
+        state.ticks = 300;
+        rates(&mut from, t0 + Duration::from_millis(400), 50, &mut state);
+        assert_eq!((state.rate_hz, from.1), (0.0, 0));
+        state.ticks = 600;
+        rates(&mut from, t0 + Duration::from_millis(600), 70, &mut state);
+        assert!((state.rate_hz - 1000.0).abs() < 1e-9, "{}", state.rate_hz);
+        assert!((state.collision_rate_hz - 100.0).abs() < 1e-9);
+        assert_eq!(from, (t0 + Duration::from_millis(600), 600, 70));
     }
 }

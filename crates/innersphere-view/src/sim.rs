@@ -441,6 +441,8 @@ mod tests {
             (state.over_1ms, state.tick_us, state.tick_us_max),
             (2, 1500.0, 1500.0)
         );
+        // Not a hundredth tick: the p99 stays as it was.
+        assert_eq!(state.tick_us_p99, 990.0);
         // The ring: the newest entry just before `history_next`.
         let next = (WINDOW + 2) % HISTORY;
         assert_eq!(state.history_next, next);
@@ -455,14 +457,14 @@ mod tests {
     fn the_rates_are_taken_over_half_a_second_or_more() {
         let mut state = LoopState::initial(Pose::IDENTITY);
         let t0 = Instant::now();
-        let mut from = (t0, 0u64, 10u64);
+        let mut from = (t0, 100u64, 10u64);
         state.ticks = 300;
         rates(&mut from, t0 + Duration::from_millis(400), 50, &mut state);
-        assert_eq!((state.rate_hz, from.1), (0.0, 0));
-        state.ticks = 600;
+        assert_eq!((state.rate_hz, from.1), (0.0, 100));
+        state.ticks = 700;
         rates(&mut from, t0 + Duration::from_millis(600), 70, &mut state);
         assert!((state.rate_hz - 1000.0).abs() < 1e-9, "{}", state.rate_hz);
         assert!((state.collision_rate_hz - 100.0).abs() < 1e-9);
-        assert_eq!(from, (t0 + Duration::from_millis(600), 600, 70));
+        assert_eq!(from, (t0 + Duration::from_millis(600), 700, 70));
     }
 }

@@ -360,62 +360,32 @@ mod tests {
 
     #[test]
     fn the_motion_clock_plays_wraps_holds_and_jumps() {
+        // A 1 s motion at 1 kHz.
         let (mut t, mut id) = (0.0, 0u64);
-        let play = control(Mode::Motion, true, 0.0, 0);
-        for _ in 0..250 {
-            motion_clock(&mut t, &mut id, &play, 1.0, 1000.0);
+        let mut tick = |mode, playing, seek, seek_id| {
+            motion_clock(
+                &mut t,
+                &mut id,
+                &control(mode, playing, seek, seek_id),
+                1.0,
+                1000.0,
+            );
+            (t, id)
+        };
+        for _ in 0..249 {
+            tick(Mode::Motion, true, 0.0, 0);
         }
-        assert!((t - 0.25).abs() < 1e-9, "{t}");
+        assert!((tick(Mode::Motion, true, 0.0, 0).0 - 0.25).abs() < 1e-9);
         // Paused, or playing in another mode: held.
-        motion_clock(
-            &mut t,
-            &mut id,
-            &control(Mode::Motion, false, 0.0, 0),
-            1.0,
-            1000.0,
-        );
-        motion_clock(
-            &mut t,
-            &mut id,
-            &control(Mode::Free, true, 0.0, 0),
-            1.0,
-            1000.0,
-        );
-        assert!((t - 0.25).abs() < 1e-9, "{t}");
+        tick(Mode::Motion, false, 0.0, 0);
+        let (held, _) = tick(Mode::Free, true, 0.0, 0);
+        assert!((held - 0.25).abs() < 1e-9, "{held}");
         // A scrub jumps (within the motion) and does not also advance; once.
-        motion_clock(
-            &mut t,
-            &mut id,
-            &control(Mode::Motion, true, 0.9995, 1),
-            1.0,
-            1000.0,
-        );
-        assert_eq!((t, id), (0.9995, 1));
+        assert_eq!(tick(Mode::Motion, true, 0.9995, 1), (0.9995, 1));
         // Past the end: back to the start.
-        motion_clock(
-            &mut t,
-            &mut id,
-            &control(Mode::Motion, true, 0.9995, 1),
-            1.0,
-            1000.0,
-        );
-        assert_eq!(t, 0.0);
-        motion_clock(
-            &mut t,
-            &mut id,
-            &control(Mode::Motion, false, 7.0, 2),
-            1.0,
-            1000.0,
-        );
-        assert_eq!(t, 1.0);
-        motion_clock(
-            &mut t,
-            &mut id,
-            &control(Mode::Motion, false, -3.0, 3),
-            1.0,
-            1000.0,
-        );
-        assert_eq!(t, 0.0);
+        assert_eq!(tick(Mode::Motion, true, 0.9995, 1).0, 0.0);
+        assert_eq!(tick(Mode::Motion, false, 7.0, 2).0, 1.0);
+        assert_eq!(tick(Mode::Motion, false, -3.0, 3).0, 0.0);
     }
 
     #[test]

@@ -107,20 +107,9 @@ impl Blend {
 
 #[cfg(test)]
 mod tests {
+    use super::super::model::tests::pushing;
     use super::*;
     use std::time::Instant;
-
-    /// A contact pushing up with `f` N at the identity pose, stiffness 100 N/mm along z.
-    fn pushing(f: f64) -> ContactModel {
-        let mut k = [[0.0; 6]; 6];
-        k[2][2] = 100.0;
-        ContactModel {
-            force: DVec3::new(0.0, 0.0, f),
-            volume: f / 10.0,
-            stiffness: k,
-            ..ContactModel::none(Pose::IDENTITY)
-        }
-    }
 
     #[test]
     fn a_model_that_disagrees_comes_in_at_the_slew_and_one_that_agrees_at_once() {

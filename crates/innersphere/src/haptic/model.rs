@@ -136,12 +136,12 @@ impl ContactModel {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use std::time::Duration;
 
     /// A contact pushing up with `f` N at the identity pose, stiffness 100 N/mm along z.
-    fn pushing(f: f64) -> ContactModel {
+    pub(crate) fn pushing(f: f64) -> ContactModel {
         let mut k = [[0.0; 6]; 6];
         k[2][2] = 100.0;
         ContactModel {

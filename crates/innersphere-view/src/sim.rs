@@ -176,13 +176,10 @@ pub(crate) fn run(
     let haptic_opts = HapticOptions::for_device(DeviceClass::Omega);
     let mut haptic: Option<MultirateLoop> = None;
     let dist = DistanceOptions::default();
-    let pen = PenetrationOptions {
-        stiffness,
-        max_patches: PATCHES,
-        ..Default::default()
-    };
+    let pen = penetration_options(stiffness);
     let period = Duration::from_secs_f64(1.0 / rate);
-    let start = Instant::now();
+    let mut clock = WallClock;
+    let start = clock.now();
     let mut deadline = start;
     let mut state = LoopState::initial(io.control.read().target);
     let mut stats = TickStats::new();
@@ -194,17 +191,13 @@ pub(crate) fn run(
     ));
     while !io.stop.load(Ordering::Relaxed) {
         deadline += period;
-        let t0 = Instant::now();
+        let t0 = clock.now();
         let c = *io.control.read();
-        // Motion time.
         if let Some(m) = &motion {
             motion_clock(&mut state.motion_t, &mut seek_id, &c, m.duration(), rate);
             state.playing = c.playing;
         }
-        let target = match (&motion, c.mode) {
-            (Some(m), Mode::Motion) => m.pose_at(m.frames[0].t + state.motion_t),
-            _ => c.target,
-        };
+        let target = target_of(motion.as_ref(), &c, state.motion_t);
         // Entering haptic mode puts the tool at rest at the device's pose, its penetration
         // query in a collision thread of its own (a thread and an allocation when the mode
         // changes, never per tick); leaving it stops that thread.
@@ -224,7 +217,7 @@ pub(crate) fn run(
         let (pose_b, device_force) = match (c.mode, haptic.as_mut()) {
             (Mode::Haptic, Some(h)) => {
                 let t = h.tick(&target);
-                state.model_age_us = t.model_age * 1e6;
+                state.model_age_us = micros(t.model_age);
                 (t.tool, t.force)
             }
             _ => {
@@ -232,52 +225,114 @@ pub(crate) fn run(
                 (target, DVec3::ZERO)
             }
         };
-        // Penetration first; the distance only while apart (in contact it is 0, and the
-        // patches say where): one query per tick where the work is largest.
-        let p = pair.penetration_with(&Pose::IDENTITY, &pose_b, &pen);
-        if p.pairs > 0 {
-            state.distance = 0.0;
-            state.contact = true;
-            let c = pair.patches().first().map_or(DVec3::ZERO, |q| q.point);
-            state.point_a = c;
-            state.point_b = c;
-        } else {
-            let d = pair.distance_with(&Pose::IDENTITY, &pose_b, &dist);
-            state.distance = d.distance;
-            state.contact = d.overlapping;
-            state.point_a = d.point_a;
-            state.point_b = d.point_b;
-        }
+        observe(&mut pair, &pose_b, &pen, &dist, &mut state);
         state.mode = c.mode;
         state.pose_b = pose_b;
         state.target_b = target;
-        state.volume = p.volume;
-        state.max_depth = p.max_depth;
-        state.force = p.force;
-        state.torque = p.torque_b;
-        state.patch_count = pair.patches().len().min(PATCHES);
-        for (s, q) in state.patches.iter_mut().zip(pair.patches()) {
-            *s = *q;
-        }
         state.device_force = device_force;
         // Timing.
-        stats.record(t0.elapsed().as_secs_f64() * 1e6, &mut state);
+        stats.record(micros(t0.elapsed().as_secs_f64()), &mut state);
         let models = haptic.as_ref().map_or(0, |h| h.collision_queries());
         rates(&mut rate_from, t0, models, &mut state);
         state.t = t0.duration_since(start).as_secs_f64();
         io.state.write(state);
-        // Sleep until just before the next tick, then spin: a plain sleep wakes up late.
-        if let Some(d) = deadline.checked_duration_since(Instant::now()) {
-            if d > Duration::from_micros(200) {
-                std::thread::sleep(d - Duration::from_micros(200));
-            }
-            while Instant::now() < deadline {
-                std::hint::spin_loop();
-            }
-        } else {
-            // Behind by more than a tick: do not try to catch up.
-            deadline = Instant::now();
+        pace(&mut deadline, &mut clock);
+    }
+}
+
+/// The penetration options of the loop's query: the scene's `stiffness`, and the patches
+/// the state keeps.
+fn penetration_options(stiffness: f64) -> PenetrationOptions {
+    PenetrationOptions {
+        stiffness,
+        max_patches: PATCHES,
+        ..Default::default()
+    }
+}
+
+/// B's target this tick: in motion mode the motion's pose `motion_t` after its first frame,
+/// else the page's.
+fn target_of(motion: Option<&Motion>, c: &Control, motion_t: f64) -> Pose {
+    match (motion, c.mode) {
+        (Some(m), Mode::Motion) => m.pose_at(m.frames[0].t + motion_t),
+        _ => c.target,
+    }
+}
+
+/// One tick's queries with B at `pose_b`, into `state`: penetration first, the distance only
+/// while apart (in contact it is 0, and the patches say where), so that one query runs per
+/// tick where the work is largest.
+fn observe(
+    pair: &mut Pair,
+    pose_b: &Pose,
+    pen: &PenetrationOptions,
+    dist: &DistanceOptions,
+    state: &mut LoopState,
+) {
+    let p = pair.penetration_with(&Pose::IDENTITY, pose_b, pen);
+    if p.pairs > 0 {
+        state.distance = 0.0;
+        state.contact = true;
+        let c = pair.patches().first().map_or(DVec3::ZERO, |q| q.point);
+        state.point_a = c;
+        state.point_b = c;
+    } else {
+        let d = pair.distance_with(&Pose::IDENTITY, pose_b, dist);
+        state.distance = d.distance;
+        state.contact = d.overlapping;
+        state.point_a = d.point_a;
+        state.point_b = d.point_b;
+    }
+    state.volume = p.volume;
+    state.max_depth = p.max_depth;
+    state.force = p.force;
+    state.torque = p.torque_b;
+    state.patch_count = pair.patches().len().min(PATCHES);
+    for (s, q) in state.patches.iter_mut().zip(pair.patches()) {
+        *s = *q;
+    }
+}
+
+/// Seconds in microseconds, the unit of the state's times.
+fn micros(seconds: f64) -> f64 {
+    seconds * 1e6
+}
+
+/// How long before a tick's deadline the loop stops sleeping and spins: a plain sleep wakes
+/// up late.
+const SPIN: Duration = Duration::from_micros(200);
+
+/// The loop's time: a trait so that the pacing can be tested on a clock the test drives.
+trait Clock {
+    fn now(&mut self) -> Instant;
+    fn sleep(&mut self, d: Duration);
+}
+
+/// The machine's clock.
+struct WallClock;
+
+impl Clock for WallClock {
+    fn now(&mut self) -> Instant {
+        Instant::now()
+    }
+    fn sleep(&mut self, d: Duration) {
+        std::thread::sleep(d);
+    }
+}
+
+/// Waits for `deadline`: sleeps until [`SPIN`] before it, then spins. Behind it already
+/// (the tick took longer than its period), it moves the deadline to now rather than run the
+/// next ticks back to back to catch up.
+fn pace(deadline: &mut Instant, clock: &mut impl Clock) {
+    if let Some(d) = deadline.checked_duration_since(clock.now()) {
+        if d > SPIN {
+            clock.sleep(d - SPIN);
         }
+        while clock.now() < *deadline {
+            std::hint::spin_loop();
+        }
+    } else {
+        *deadline = clock.now();
     }
 }
 
@@ -436,5 +491,150 @@ mod tests {
         assert!((state.rate_hz - 1000.0).abs() < 1e-9, "{}", state.rate_hz);
         assert!((state.collision_rate_hz - 100.0).abs() < 1e-9);
         assert_eq!(from, (t0 + Duration::from_millis(600), 700, 70));
+    }
+
+    /// A clock the test drives: each reading returns the time, then moves it on by 1 µs (a
+    /// spin's step); a sleep moves it on by exactly what was asked.
+    struct FakeClock {
+        t: Instant,
+        sleeps: Vec<Duration>,
+    }
+
+    impl Clock for FakeClock {
+        fn now(&mut self) -> Instant {
+            let t = self.t;
+            self.t += Duration::from_micros(1);
+            t
+        }
+        fn sleep(&mut self, d: Duration) {
+            self.sleeps.push(d);
+            self.t += d;
+        }
+    }
+
+    fn us(n: u64) -> Duration {
+        Duration::from_micros(n)
+    }
+
+    #[test]
+    fn the_pacing_sleeps_to_just_before_the_deadline_then_spins_onto_it() {
+        let t0 = Instant::now();
+        // A millisecond ahead: sleeps 800 µs, then spins until the first reading at the
+        // deadline, and the deadline stays.
+        let mut clock = FakeClock {
+            t: t0,
+            sleeps: Vec::new(),
+        };
+        let mut deadline = t0 + us(1000);
+        pace(&mut deadline, &mut clock);
+        assert_eq!(clock.sleeps, [us(800)]);
+        assert_eq!(clock.t, t0 + us(1001), "the last reading is the deadline's");
+        assert_eq!(deadline, t0 + us(1000));
+        // Within the spin's span: no sleep at all.
+        let mut clock = FakeClock {
+            t: t0,
+            sleeps: Vec::new(),
+        };
+        let mut deadline = t0 + SPIN;
+        pace(&mut deadline, &mut clock);
+        assert!(clock.sleeps.is_empty(), "{:?}", clock.sleeps);
+        assert_eq!(clock.t, t0 + SPIN + us(1));
+        // Behind: no wait, and the deadline moves to now instead of catching up.
+        let mut clock = FakeClock {
+            t: t0 + us(50),
+            sleeps: Vec::new(),
+        };
+        let mut deadline = t0;
+        pace(&mut deadline, &mut clock);
+        assert!(clock.sleeps.is_empty());
+        assert_eq!(deadline, t0 + us(51));
+    }
+
+    #[test]
+    fn times_are_reported_in_microseconds() {
+        assert_eq!(micros(0.0015), 1500.0);
+        assert_eq!(micros(0.0), 0.0);
+    }
+
+    #[test]
+    fn the_query_keeps_the_scenes_stiffness_and_the_states_patches() {
+        let o = penetration_options(2.5e4);
+        assert_eq!((o.stiffness, o.max_patches), (2.5e4, PATCHES));
+        let rest = PenetrationOptions {
+            stiffness: 2.5e4,
+            max_patches: PATCHES,
+            ..Default::default()
+        };
+        assert_eq!(o, rest);
+    }
+
+    #[test]
+    fn the_target_is_the_motions_pose_in_motion_mode_else_the_pages() {
+        let scene = crate::Scene::demo().unwrap();
+        let mut m = scene.motion.unwrap();
+        // A motion that does not start at 0 s.
+        for f in &mut m.frames {
+            f.t += 5.0;
+        }
+        let page = Pose::from_translation(DVec3::new(1.0, 2.0, 3.0));
+        let c = |mode| Control {
+            target: page,
+            ..control(mode, true, 0.0, 0)
+        };
+        let at = target_of(Some(&m), &c(Mode::Motion), 0.3);
+        assert_eq!(at, m.pose_at(5.3));
+        assert_ne!(at, m.pose_at(0.3));
+        assert_ne!(at, m.pose_at(5.0));
+        assert_eq!(target_of(Some(&m), &c(Mode::Free), 0.3), page);
+        assert_eq!(target_of(Some(&m), &c(Mode::Haptic), 0.3), page);
+        assert_eq!(target_of(None, &c(Mode::Motion), 0.3), page);
+    }
+
+    #[test]
+    fn a_tick_reports_the_penetration_in_contact_and_the_distance_apart() {
+        let scene = crate::Scene::demo().unwrap();
+        let motion = scene.motion.unwrap();
+        let pen = penetration_options(1e4);
+        let dist = DistanceOptions::default();
+        let mut pair = Pair::new(scene.a.clone(), scene.b.clone());
+        let mut reference = Pair::new(scene.a, scene.b);
+        let (mut touched, mut apart) = (0, 0);
+        for pose in motion.poses().step_by(10) {
+            let mut state = LoopState::initial(Pose::IDENTITY);
+            observe(&mut pair, &pose, &pen, &dist, &mut state);
+            let p = reference.penetration_with(&Pose::IDENTITY, &pose, &pen);
+            assert_eq!(
+                (state.volume, state.max_depth, state.force, state.torque),
+                (p.volume, p.max_depth, p.force, p.torque_b)
+            );
+            let patches = reference.patches();
+            assert_eq!(state.patch_count, patches.len().min(PATCHES));
+            assert_eq!(
+                &state.patches[..state.patch_count],
+                &patches[..state.patch_count]
+            );
+            if p.pairs > 0 {
+                touched += 1;
+                assert!(state.contact);
+                assert_eq!(state.distance, 0.0);
+                assert_eq!(
+                    (state.point_a, state.point_b),
+                    (patches[0].point, patches[0].point)
+                );
+                assert_ne!(state.point_a, DVec3::ZERO);
+            } else {
+                apart += 1;
+                let d = reference.distance_with(&Pose::IDENTITY, &pose, &dist);
+                assert_eq!(
+                    (state.distance, state.contact, state.point_a, state.point_b),
+                    (d.distance, d.overlapping, d.point_a, d.point_b)
+                );
+                assert!(state.distance > 0.0);
+            }
+        }
+        assert!(
+            touched > 5 && apart > 5,
+            "{touched} in contact, {apart} apart"
+        );
     }
 }

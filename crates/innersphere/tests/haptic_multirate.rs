@@ -289,3 +289,101 @@ fn a_slow_collision_thread_keeps_the_loop_passive_smooth_and_out_of_the_slab() {
         assert!(stats.queries > 100, "{what}");
     }
 }
+
+#[test]
+fn apart_the_loop_moves_the_tool_and_counts_the_energy_as_a_lone_servo_does() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    let o = options();
+    // 20 mm above the slab: the collision thread's models are all empty, so the tool's
+    // motion and the energy are the servo's alone, whenever the models arrive.
+    let start = on_slab(-20.0);
+    let mut hl = MultirateLoop::spawn(
+        Pair::new(a.clone(), b.clone()),
+        Pose::IDENTITY,
+        start,
+        o,
+        CollisionOptions::default(),
+    )
+    .unwrap();
+    let body = RigidBody::from_tree(b.tree(), o.density).unwrap();
+    let mut servo = Servo::new(body, start, o).unwrap();
+    // The device moves and turns smoothly; the hand does work on the coupling.
+    let path: Vec<Pose> = (0..400)
+        .map(|i| {
+            let s = 1.0 - (12.0 * i as f64 / o.rate).cos();
+            Pose {
+                rotation: DQuat::from_rotation_y(0.3 * s),
+                translation: start.translation + DVec3::new(s, 0.0, 0.0),
+            }
+        })
+        .collect();
+    for (i, p) in path.iter().enumerate() {
+        let t = hl.tick(p);
+        let s = servo.tick(p, 1.0 / o.rate, None);
+        assert_eq!((t.tool, t.force), (s.tool, s.force), "tick {i}");
+        if i % 50 == 10 {
+            // Let models arrive mid-run.
+            let asked = Instant::now();
+            let n = hl.collision_queries();
+            while hl.collision_queries() == n && asked.elapsed() < Duration::from_secs(10) {
+                std::thread::sleep(Duration::from_micros(100));
+            }
+        }
+    }
+    assert!(hl.collision_queries() >= 3, "{}", hl.collision_queries());
+    let (e, e_max) = (servo.energy_to_user(), servo.energy_to_user_max());
+    assert_eq!((hl.energy_to_user(), hl.energy_to_user_max()), (e, e_max));
+    // A passive loop's energy to the user stays at or below 0 (its largest is 0 here).
+    assert!(
+        e < 0.0 && e != -1.0 && e_max >= e,
+        "{e} J, largest {e_max} J"
+    );
+}
+
+#[test]
+fn dropping_the_loop_stops_and_joins_its_collision_thread() {
+    let _serial = serial();
+    // Trees of its own: the thread's pair is the only other holder of them.
+    let a = haptic_util::build(&innersphere::shapes::cuboid(DVec3::splat(2.0)), 12);
+    let b = a.clone();
+    let before = std::sync::Arc::strong_count(b.tree());
+    let hl = MultirateLoop::spawn(
+        Pair::new(a.clone(), b.clone()),
+        Pose::IDENTITY,
+        Pose::from_translation(DVec3::new(0.0, 0.0, 10.0)),
+        options(),
+        CollisionOptions::default(),
+    )
+    .unwrap();
+    assert!(std::sync::Arc::strong_count(b.tree()) > before);
+    drop(hl);
+    assert_eq!(std::sync::Arc::strong_count(b.tree()), before);
+}
+
+#[test]
+fn every_query_out_of_its_budget_is_counted_as_budgeted() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    // Held 0.5 mm into the slab with a nanosecond's budget: the time-critical query has room
+    // for one node pair and never completes, so each model is the one in use, capped.
+    let mut hl = MultirateLoop::spawn(
+        Pair::new(a.clone(), b.clone()),
+        Pose::IDENTITY,
+        on_slab(0.5),
+        options(),
+        CollisionOptions {
+            budget: 1e-9,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let asked = Instant::now();
+    while hl.collision_queries() < 20 && asked.elapsed() < Duration::from_secs(10) {
+        hl.tick(&on_slab(0.5));
+        std::thread::sleep(Duration::from_micros(200));
+    }
+    let stats = hl.finish();
+    assert!(stats.queries >= 20, "{stats:?}");
+    assert_eq!(stats.budgeted, stats.queries);
+}

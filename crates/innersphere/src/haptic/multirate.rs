@@ -302,10 +302,9 @@ impl Collision {
                 // scheduling that keeps the core busy, and the kernel's real-time throttling
                 // then stops the thread for 50 ms in every second (measured).
                 idle = idle.saturating_add(1);
-                if idle < 64 {
-                    std::hint::spin_loop();
-                } else {
-                    std::thread::sleep(Duration::from_micros(20));
+                match idle_wait(idle) {
+                    None => std::hint::spin_loop(),
+                    Some(nap) => std::thread::sleep(nap),
                 }
                 continue;
             }
@@ -325,58 +324,218 @@ impl Collision {
                 Duration::ZERO,
                 false,
             );
-            if let Answer::Bound { found, .. } = answer {
-                // A contact the model in use knows nothing of: only the exact answer will do.
-                if found > 0.0 && !last.touching() {
-                    answer = deadline.query(
-                        &mut self.pair,
-                        &self.pose_a,
-                        &p.pose,
-                        p.at,
-                        &self.penetration,
-                        t0,
-                        Duration::ZERO,
-                        true,
-                    );
-                }
+            if needs_exact(&answer, &last) {
+                answer = deadline.query(
+                    &mut self.pair,
+                    &self.pose_a,
+                    &p.pose,
+                    p.at,
+                    &self.penetration,
+                    t0,
+                    Duration::ZERO,
+                    true,
+                );
             }
             let t = t0.elapsed().as_secs_f64();
-            let mut model = match answer {
-                Answer::Model(m) => m,
-                Answer::Bound { cap, .. } => {
-                    budgeted += 1;
-                    ContactModel {
-                        force_cap: cap,
-                        ..last
-                    }
-                }
-            };
+            budgeted += matches!(answer, Answer::Bound { .. }) as u64;
+            let mut model = model_of(answer, &last);
             queries += 1;
             model.seq = queries;
             model.query_seconds = t;
             last = model;
             self.models.write(model);
             self.published.store(queries, Ordering::Relaxed);
-            let slot = ((queries - 1) % times.len() as u64) as usize;
+            let slot = ring_slot(queries, times.len());
             times[slot] = t as f32;
-        }
-        // The ring, oldest first.
-        let n = times.len() as u64;
-        let kept = queries.min(n) as usize;
-        let mut ordered = Vec::with_capacity(kept);
-        let first = if queries > n {
-            (queries % n) as usize
-        } else {
-            0
-        };
-        for i in 0..kept {
-            ordered.push(times[(first + i) % times.len()]);
         }
         CollisionStats {
             queries,
             budgeted,
             elapsed: began.elapsed().as_secs_f64(),
-            times: ordered,
+            times: oldest_first(&times, queries),
         }
+    }
+}
+
+/// The model an `answer` makes: a complete answer's own; for one that ran out of budget, the
+/// model in use (`last`) with the bound's force cap.
+fn model_of(answer: Answer, last: &ContactModel) -> ContactModel {
+    match answer {
+        Answer::Model(m) => m,
+        Answer::Bound { cap, .. } => ContactModel {
+            force_cap: cap,
+            ..*last
+        },
+    }
+}
+
+/// Where query `k` (1, 2, …) keeps its time in a ring of `len`.
+fn ring_slot(k: u64, len: usize) -> usize {
+    ((k - 1) % len as u64) as usize
+}
+
+/// The times of `queries` queries kept in the ring `times`, oldest first.
+fn oldest_first(times: &[f32], queries: u64) -> Vec<f32> {
+    let n = times.len() as u64;
+    let first = if queries > n { queries % n } else { 0 };
+    (0..queries.min(n))
+        .map(|i| times[((first + i) % n) as usize])
+        .collect()
+}
+
+/// How the collision thread waits after `idle` rounds in a row found no new pose: `None`, a
+/// spin, for the first 63; then naps of 20 µs. Not a yield in a loop: under real-time
+/// scheduling that keeps the core busy, and the kernel's real-time throttling then stops the
+/// thread for 50 ms in every second (measured).
+fn idle_wait(idle: u32) -> Option<Duration> {
+    (idle >= 64).then_some(Duration::from_micros(20))
+}
+
+/// Whether a time-critical `answer` that ran out of budget must be replaced by the exact
+/// one: it found a contact the model in use (`last`) knows nothing of, which a bound on the
+/// old model's force cannot stand in for.
+fn needs_exact(answer: &Answer, last: &ContactModel) -> bool {
+    matches!(*answer, Answer::Bound { found, .. } if found > 0.0 && !last.touching())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    #[test]
+    fn bad_collision_options_are_refused_and_the_edges_taken() {
+        let ok = CollisionOptions::default();
+        assert!(ok.check().is_ok());
+        let with = |delay, budget, history| CollisionOptions {
+            delay,
+            budget,
+            history,
+        };
+        for good in [with(0.0, 1.0, 1), with(1.0, 1e-9, 1 << 26)] {
+            assert!(good.check().is_ok(), "{good:?}");
+        }
+        for bad in [
+            with(-1e-3, 5e-3, 8),
+            with(2.0, 5e-3, 8),
+            with(f64::NAN, 5e-3, 8),
+            with(f64::INFINITY, 5e-3, 8),
+            with(0.0, 0.0, 8),
+            with(0.0, -1.0, 8),
+            with(0.0, 2.0, 8),
+            with(0.0, f64::NAN, 8),
+            with(0.0, f64::INFINITY, 8),
+            with(0.0, 5e-3, 0),
+            with(0.0, 5e-3, (1 << 26) + 1),
+        ] {
+            assert!(
+                matches!(bad.check(), Err(Error::InvalidOption(_))),
+                "{bad:?}"
+            );
+        }
+    }
+
+    fn stats(queries: u64, elapsed: f64, times: &[f32]) -> CollisionStats {
+        CollisionStats {
+            queries,
+            budgeted: 0,
+            elapsed,
+            times: times.to_vec(),
+        }
+    }
+
+    #[test]
+    fn the_collision_rate_and_the_time_quantiles() {
+        assert_eq!(stats(300, 1.5, &[]).rate_hz(), 200.0);
+        assert_eq!(stats(300, 0.0, &[]).rate_hz(), 0.0);
+        assert_eq!(stats(0, 0.0, &[]).quantile(0.5), 0.0);
+        // 11 times in a scrambled order: the quantiles are the sorted ones at q · 10.
+        let t: Vec<f32> = (0..11).map(|k| ((k * 7) % 11) as f32 + 1.0).collect();
+        let s = stats(11, 1.0, &t);
+        assert_eq!(s.quantile(0.0), 1.0);
+        assert_eq!(s.quantile(0.5), 6.0);
+        assert_eq!(s.quantile(0.94), 10.0);
+        assert_eq!(s.quantile(1.0), 11.0);
+        assert_eq!(s.quantile(7.0), 11.0);
+        assert_eq!(s.quantile(-1.0), 1.0);
+    }
+
+    #[test]
+    fn the_query_times_ring_keeps_the_last_ones_oldest_first() {
+        // Queries 1..=k into a ring of 4, each time its number.
+        let ring = |k: u64| {
+            let mut times = [0f32; 4];
+            for q in 1..=k {
+                times[ring_slot(q, 4)] = q as f32;
+            }
+            oldest_first(&times, k)
+        };
+        assert_eq!(ring(0), Vec::<f32>::new());
+        assert_eq!(ring(3), [1.0, 2.0, 3.0]);
+        assert_eq!(ring(4), [1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(ring(6), [3.0, 4.0, 5.0, 6.0]);
+        assert_eq!(ring(9), [6.0, 7.0, 8.0, 9.0]);
+        assert_eq!(ring_slot(1, 1), 0);
+        assert_eq!(ring_slot(7, 1), 0);
+    }
+
+    #[test]
+    fn an_answer_out_of_budget_keeps_the_model_in_use_under_its_cap() {
+        let last = ContactModel {
+            force: DVec3::new(0.0, 0.0, 2.0),
+            volume: 0.1,
+            seq: 7,
+            ..ContactModel::none(Pose::IDENTITY)
+        };
+        let bound = Answer::Bound {
+            cap: 1.5,
+            found: 0.05,
+            bound: 0.03,
+            depth: 0.1,
+        };
+        let kept = model_of(bound, &last);
+        assert_eq!(kept.force_cap, 1.5);
+        assert_eq!(
+            ContactModel {
+                force_cap: last.force_cap,
+                ..kept
+            },
+            last
+        );
+        let new = ContactModel {
+            force: DVec3::X,
+            ..last
+        };
+        assert_eq!(model_of(Answer::Model(new), &last), new);
+    }
+
+    #[test]
+    fn the_thread_spins_first_then_naps() {
+        assert_eq!(idle_wait(1), None);
+        assert_eq!(idle_wait(63), None);
+        assert_eq!(idle_wait(64), Some(Duration::from_micros(20)));
+        assert_eq!(idle_wait(u32::MAX), Some(Duration::from_micros(20)));
+    }
+
+    #[test]
+    fn only_a_new_contact_found_out_of_budget_asks_for_the_exact_query() {
+        let apart = ContactModel::none(Pose::IDENTITY);
+        let touching = ContactModel {
+            force: DVec3::new(0.0, 0.0, 2.0),
+            volume: 0.1,
+            ..apart
+        };
+        assert!(touching.touching() && !apart.touching());
+        let bound = |found| Answer::Bound {
+            cap: 1.0,
+            found,
+            bound: 1.0,
+            depth: 0.1,
+        };
+        assert!(needs_exact(&bound(0.01), &apart));
+        assert!(!needs_exact(&bound(0.0), &apart));
+        assert!(!needs_exact(&bound(0.01), &touching));
+        assert!(!needs_exact(&bound(0.0), &touching));
+        assert!(!needs_exact(&Answer::Model(touching), &apart));
     }
 }

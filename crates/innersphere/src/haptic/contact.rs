@@ -173,6 +173,13 @@ impl<C: Clock> Deadline<C> {
     }
 }
 
+/// Whether a time-critical `answer` that ran out of budget must be replaced by the exact
+/// one: it found a contact the model in use (`last`) knows nothing of, which a bound on the
+/// old model's force cannot stand in for.
+pub(crate) fn needs_exact(answer: &Answer, last: &ContactModel) -> bool {
+    matches!(*answer, Answer::Bound { found, .. } if found > 0.0 && !last.touching())
+}
+
 #[cfg(test)]
 mod tests {
     //! The choice between the exact and the time-critical query, driven tick by tick by a
@@ -359,5 +366,27 @@ mod tests {
             (90.0..=97.0).contains(&ran),
             "{ran} node pairs for a budget of 93"
         );
+    }
+
+    #[test]
+    fn only_a_new_contact_found_out_of_budget_asks_for_the_exact_query() {
+        let apart = ContactModel::none(Pose::IDENTITY);
+        let touching = ContactModel {
+            force: DVec3::new(0.0, 0.0, 2.0),
+            volume: 0.1,
+            ..apart
+        };
+        assert!(touching.touching() && !apart.touching());
+        let bound = |found| Answer::Bound {
+            cap: 1.0,
+            found,
+            bound: 1.0,
+            depth: 0.1,
+        };
+        assert!(needs_exact(&bound(0.01), &apart));
+        assert!(!needs_exact(&bound(0.0), &apart));
+        assert!(!needs_exact(&bound(0.01), &touching));
+        assert!(!needs_exact(&bound(0.0), &touching));
+        assert!(!needs_exact(&Answer::Model(touching), &apart));
     }
 }

@@ -7,7 +7,7 @@
 //! its time does not depend on the contact (Mark et al. 1996; Otaduy & Lin 2006).
 
 use super::body::{BodyState, RigidBody};
-use super::contact::{Answer, Deadline};
+use super::contact::{needs_exact, Answer, Deadline};
 use super::model::ContactModel;
 use super::servo::Servo;
 use super::{HapticOptions, Tick};
@@ -391,13 +391,6 @@ fn idle_wait(idle: u32) -> Option<Duration> {
     (idle >= 64).then_some(Duration::from_micros(20))
 }
 
-/// Whether a time-critical `answer` that ran out of budget must be replaced by the exact
-/// one: it found a contact the model in use (`last`) knows nothing of, which a bound on the
-/// old model's force cannot stand in for.
-fn needs_exact(answer: &Answer, last: &ContactModel) -> bool {
-    matches!(*answer, Answer::Bound { found, .. } if found > 0.0 && !last.touching())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -515,27 +508,5 @@ mod tests {
         assert_eq!(idle_wait(63), None);
         assert_eq!(idle_wait(64), Some(Duration::from_micros(20)));
         assert_eq!(idle_wait(u32::MAX), Some(Duration::from_micros(20)));
-    }
-
-    #[test]
-    fn only_a_new_contact_found_out_of_budget_asks_for_the_exact_query() {
-        let apart = ContactModel::none(Pose::IDENTITY);
-        let touching = ContactModel {
-            force: DVec3::new(0.0, 0.0, 2.0),
-            volume: 0.1,
-            ..apart
-        };
-        assert!(touching.touching() && !apart.touching());
-        let bound = |found| Answer::Bound {
-            cap: 1.0,
-            found,
-            bound: 1.0,
-            depth: 0.1,
-        };
-        assert!(needs_exact(&bound(0.01), &apart));
-        assert!(!needs_exact(&bound(0.0), &apart));
-        assert!(!needs_exact(&bound(0.01), &touching));
-        assert!(!needs_exact(&bound(0.0), &touching));
-        assert!(!needs_exact(&Answer::Model(touching), &apart));
     }
 }

@@ -2,7 +2,7 @@
 //! send, moving a virtual tool that the contact stops at the other body's surface.
 
 use super::body::{BodyState, RigidBody, TOOTH_DENSITY};
-use super::contact::{Answer, Deadline};
+use super::contact::{needs_exact, Answer, Deadline};
 use super::device::{Coupling, DeviceClass, DeviceLimits};
 use super::model::ContactModel;
 use super::servo::Servo;
@@ -314,19 +314,17 @@ impl HapticLoop {
             stale,
         );
         // Leaf pairs found where the model in use has no contact: the model cannot stand in.
-        if let Answer::Bound { found, .. } = answer {
-            if found > 0.0 && !self.tool.blend.target().touching() {
-                answer = self.deadline.query(
-                    &mut self.pair,
-                    &self.pose_a,
-                    &pose,
-                    start,
-                    &self.penetration,
-                    start,
-                    Duration::ZERO,
-                    true,
-                );
-            }
+        if needs_exact(&answer, self.tool.blend.target()) {
+            answer = self.deadline.query(
+                &mut self.pair,
+                &self.pose_a,
+                &pose,
+                start,
+                &self.penetration,
+                start,
+                Duration::ZERO,
+                true,
+            );
         }
         let (volume, volume_bound, max_depth, budgeted) = match answer {
             Answer::Model(mut m) => {

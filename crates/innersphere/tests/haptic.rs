@@ -444,6 +444,15 @@ fn occlusion_refuses_bad_options() {
             "{o:?}"
         );
     }
+    // An axis with one NaN component is refused as an axis, before any step (it was taken
+    // for a direction, and the dynamics failed later with a message about them).
+    let o = OcclusionOptions {
+        axis: DVec3::new(f64::NAN, 0.0, 1.0),
+        ..base
+    };
+    let mut pair = Pair::new(a.clone(), b.clone());
+    let e = occlude(&mut pair, &Pose::IDENTITY, &on_slab(-1.0), &o).unwrap_err();
+    assert!(e.to_string().contains("closing axis"), "{e}");
 }
 
 #[test]

@@ -153,23 +153,11 @@ pub fn occlude(
         // The contact's stiffness, then the joints' springs added to it.
         let kc: Mat6 = p.stiffness.to_matrix6();
         let mut k = kc;
-        let (mut jf, mut jt) = (DVec3::ZERO, DVec3::ZERO);
-        if let Some(j) = &opts.joints {
-            for (pb, anchor) in j.points.iter().zip(&j.anchors) {
-                let at = state.pose.transform_point(*pb);
-                let f = (*anchor - at) * j.stiffness;
-                let r = at - com;
-                jf += f;
-                jt += r.cross(f);
-                // A point spring at lever r: K = k·[[I, −[r]×], [[r]×, −[r]×[r]×]].
-                let c = cross(r);
-                let ks = j.stiffness;
-                add_block(&mut k, 0, 0, &(DMat3::IDENTITY * ks));
-                add_block(&mut k, 0, 3, &(c * -ks));
-                add_block(&mut k, 3, 0, &(c * ks));
-                add_block(&mut k, 3, 3, &(c * c * -ks));
-            }
-        }
+        let joints = match &opts.joints {
+            Some(j) => add_joints(j, &state.pose, com, &mut k),
+            None => Wrench::default(),
+        };
+        let (jf, jt) = (joints.force, joints.torque);
         // The contact's damping only: β·K of the contact, not of the joints.
         let (cd, mut d) = contact_damping(&kc, opts.contact_damping, &state);
         let w = Wrench {
@@ -199,11 +187,35 @@ pub fn occlude(
     })
 }
 
+/// The joints' springs on B at `pose` (`com` its centre of mass, world): their wrench about
+/// `com`, with their stiffness added to `k` (the wrench changes by `−K·Δ` for a small motion
+/// `Δ` of the centre of mass and a rotation about it; exact where the springs are slack,
+/// their geometric term `[f]×` being left out).
+fn add_joints(j: &Joints, pose: &Pose, com: DVec3, k: &mut Mat6) -> Wrench {
+    let mut w = Wrench::default();
+    for (pb, anchor) in j.points.iter().zip(&j.anchors) {
+        let at = pose.transform_point(*pb);
+        let f = (*anchor - at) * j.stiffness;
+        let r = at - com;
+        w.force += f;
+        w.torque += r.cross(f);
+        // A point spring at lever r: K = k·[[I, −[r]×], [[r]×, −[r]×[r]×]].
+        let c = cross(r);
+        let ks = j.stiffness;
+        add_block(k, 0, 0, &(DMat3::IDENTITY * ks));
+        add_block(k, 0, 3, &(c * -ks));
+        add_block(k, 3, 0, &(c * ks));
+        add_block(k, 3, 3, &(c * c * -ks));
+    }
+    w
+}
+
 /// `v` scaled to length 1, robustly (a huge or tiny vector too); `None` when it has no
 /// direction (zero or non-finite).
 fn unit(v: DVec3) -> Option<DVec3> {
+    // `max_element` passes a NaN component over: test every component.
     let scale = v.abs().max_element();
-    if !(scale.is_finite() && scale > 0.0) {
+    if !(v.is_finite() && scale > 0.0) {
         return None;
     }
     let u = v / scale;
@@ -261,4 +273,90 @@ fn check(o: &OcclusionOptions) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DQuat;
+
+    /// `pose` moved by `d`: its centre of mass `com` by `d[..3]`, and turned by `d[3..]`
+    /// (rotation vector) about it.
+    fn moved(pose: &Pose, com: DVec3, d: [f64; 6]) -> Pose {
+        let turn = DQuat::from_scaled_axis(DVec3::new(d[3], d[4], d[5]));
+        let c = com + DVec3::new(d[0], d[1], d[2]);
+        Pose {
+            rotation: (turn * pose.rotation).normalize(),
+            translation: turn * (pose.translation - com) + c,
+        }
+    }
+
+    #[test]
+    fn the_joints_stiffness_is_the_derivative_of_their_wrench() {
+        let points = [DVec3::new(40.0, -5.0, 12.0), DVec3::new(-38.0, -4.0, 10.0)];
+        let pose = Pose::new(
+            DVec3::new(1.0, -2.0, 3.0),
+            DQuat::from_euler(glam::EulerRot::XYZ, 0.2, -0.1, 0.3),
+        )
+        .unwrap();
+        let com = pose.transform_point(DVec3::new(0.5, 20.0, -3.0));
+        // Slack: the anchors where the points are.
+        let j = Joints {
+            points,
+            anchors: points.map(|p| pose.transform_point(p)),
+            stiffness: 7.0,
+        };
+        let mut k = [[0.0; 6]; 6];
+        let w0 = add_joints(&j, &pose, com, &mut k);
+        assert!(w0.force.length() < 1e-9 && w0.torque.length() < 1e-9);
+        let eps = 1e-6;
+        for c in 0..6 {
+            let mut d = [0.0; 6];
+            d[c] = eps;
+            let p = moved(&pose, com, d);
+            let w = add_joints(
+                &j,
+                &p,
+                com + DVec3::new(d[0], d[1], d[2]),
+                &mut [[0.0; 6]; 6],
+            );
+            let dw = [w.force, w.torque].map(|v| v.to_array()).concat();
+            for r in 0..6 {
+                let fd = -dw[r] / eps;
+                assert!(
+                    (fd - k[r][c]).abs() <= 1e-4 * (1.0 + k[r][c].abs()),
+                    "K[{r}][{c}] = {} but the wrench changes by {fd}",
+                    k[r][c]
+                );
+            }
+        }
+        // Stretched: the pull towards the anchors and its moment about the centre of mass.
+        let stretched = Joints {
+            anchors: [j.anchors[0] + DVec3::X, j.anchors[1] - DVec3::Z],
+            ..j
+        };
+        let w = add_joints(&stretched, &pose, com, &mut [[0.0; 6]; 6]);
+        let f = [DVec3::X * 7.0, -DVec3::Z * 7.0];
+        let r = [j.anchors[0] - com, j.anchors[1] - com];
+        assert!((w.force - (f[0] + f[1])).length() < 1e-9);
+        assert!((w.torque - (r[0].cross(f[0]) + r[1].cross(f[1]))).length() < 1e-9);
+    }
+
+    #[test]
+    fn unit_directions_are_robust_and_refuse_no_direction() {
+        assert_eq!(unit(DVec3::new(0.0, 0.0, 3.0)), Some(DVec3::Z));
+        let huge = unit(DVec3::new(1e300, 1e300, 0.0)).unwrap();
+        assert!((huge - DVec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-15);
+        let tiny = unit(DVec3::new(0.0, -1e-310, 0.0)).unwrap();
+        assert_eq!(tiny, -DVec3::Y);
+        for none in [DVec3::ZERO, DVec3::new(f64::NAN, 1.0, 0.0), DVec3::INFINITY] {
+            assert_eq!(unit(none), None, "{none}");
+        }
+    }
+
+    #[test]
+    fn cross_is_the_cross_product_matrix() {
+        let (r, v) = (DVec3::new(1.0, -2.0, 3.0), DVec3::new(-0.5, 4.0, 2.0));
+        assert_eq!(cross(r) * v, r.cross(v));
+    }
 }

@@ -400,3 +400,43 @@ impl HapticLoop {
         &self.pair
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_loops_query_has_its_stiffness_patches_and_linearisation() {
+        let mut o = HapticOptions::for_device(DeviceClass::Omega);
+        o.contact_stiffness = 37.0;
+        o.max_patches = 5;
+        assert_eq!(
+            o.penetration(),
+            PenetrationOptions {
+                stiffness: 37.0,
+                max_patches: 5,
+                linearize: true,
+                ..Default::default()
+            }
+        );
+    }
+
+    #[test]
+    fn the_defaults_at_a_rate_take_its_period_and_coupling() {
+        for class in [DeviceClass::Touch, DeviceClass::Omega] {
+            let at = HapticOptions::for_device_at(class, 4000.0);
+            assert_eq!((at.rate, at.budget), (4000.0, 1.0 / 4000.0));
+            assert_eq!(at.coupling, class.coupling_at(4000.0));
+            assert_eq!(
+                HapticOptions {
+                    rate: 1000.0,
+                    budget: 1e-3,
+                    coupling: class.coupling(),
+                    ..at
+                },
+                HapticOptions::for_device(class)
+            );
+            assert!(at.check().is_ok());
+        }
+    }
+}

@@ -439,4 +439,92 @@ mod tests {
             assert!(at.check().is_ok());
         }
     }
+
+    type Field = (&'static str, fn(&mut HapticOptions, f64));
+
+    #[test]
+    fn every_setting_is_checked_at_its_edges() {
+        let base = HapticOptions::for_device(DeviceClass::Omega);
+        assert!(base.check().is_ok());
+        let refused = |set: fn(&mut HapticOptions, f64), x: f64| {
+            let mut o = base;
+            set(&mut o, x);
+            o.check().is_err()
+        };
+        // Above 0 and finite.
+        let positive: [Field; 7] = [
+            ("budget", |o, x| o.budget = x),
+            ("model_slew", |o, x| o.model_slew = x),
+            ("max_model_age", |o, x| o.max_model_age = x),
+            ("max_device_speed", |o, x| o.max_device_speed = x),
+            ("max_device_acceleration", |o, x| {
+                o.max_device_acceleration = x
+            }),
+            ("density", |o, x| o.density = x),
+            ("angular_stiffness", |o, x| o.coupling.angular_stiffness = x),
+        ];
+        for (what, set) in positive {
+            for x in [0.0, -1.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                assert!(refused(set, x), "{what} = {x}");
+            }
+            assert!(!refused(set, base_value(&base, what) * 2.0), "{what}");
+        }
+        // At least 0 and finite.
+        let nonneg: [Field; 6] = [
+            ("damping", |o, x| o.coupling.damping = x),
+            ("angular_damping", |o, x| o.coupling.angular_damping = x),
+            ("contact_stiffness", |o, x| o.contact_stiffness = x),
+            ("contact_damping", |o, x| o.contact_damping = x),
+            ("max_force", |o, x| o.device.max_force = x),
+            ("max_torque", |o, x| o.device.max_torque = x),
+        ];
+        for (what, set) in nonneg {
+            for x in [-1.0, f64::NAN, f64::INFINITY] {
+                assert!(refused(set, x), "{what} = {x}");
+            }
+        }
+        for set in [
+            (|o: &mut HapticOptions, x| o.contact_stiffness = x) as fn(&mut HapticOptions, f64),
+            |o, x| o.contact_damping = x,
+            |o, x| o.device.max_force = x,
+        ] {
+            assert!(!refused(set, 0.0));
+        }
+        // The rate from 100 Hz to 1 MHz (with a coupling for it).
+        for (rate, ok) in [(100.0, true), (99.9, false), (1e6, true), (1.1e6, false)] {
+            let o = HapticOptions {
+                rate,
+                ..HapticOptions::for_device_at(DeviceClass::Omega, rate)
+            };
+            assert_eq!(o.check().is_ok(), ok, "{rate} Hz");
+        }
+        // The coupling: no stiffer than the device; damped at least k·T/2.
+        let c = base.coupling;
+        assert!(refused(|o, _| o.coupling.stiffness = 0.0, 0.0));
+        let stiff = |o: &mut HapticOptions, k: f64| o.coupling.stiffness = k;
+        assert!(!refused(stiff, base.device.max_stiffness));
+        assert!(refused(stiff, base.device.max_stiffness * 1.001));
+        let least = c.stiffness / (2.0 * base.rate);
+        assert!(!refused(|o, b| o.coupling.damping = b, least));
+        assert!(refused(|o, b| o.coupling.damping = b, least * 0.999));
+        let least = c.angular_stiffness / (2.0 * base.rate);
+        assert!(!refused(|o, b| o.coupling.angular_damping = b, least));
+        assert!(refused(
+            |o, b| o.coupling.angular_damping = b,
+            least * 0.999
+        ));
+    }
+
+    /// A positive setting's value in `o`, by name.
+    fn base_value(o: &HapticOptions, what: &str) -> f64 {
+        match what {
+            "budget" => o.budget,
+            "model_slew" => o.model_slew,
+            "max_model_age" => o.max_model_age,
+            "max_device_speed" => o.max_device_speed,
+            "max_device_acceleration" => o.max_device_acceleration,
+            "density" => o.density,
+            _ => o.coupling.angular_stiffness,
+        }
+    }
 }

@@ -515,6 +515,16 @@ mod tests {
         ));
     }
 
+    #[test]
+    fn a_callers_step_is_zero_or_positive_and_finite() {
+        for ok in [0.0, 1e-3, 0.5] {
+            assert!(check_step(ok).is_ok(), "{ok}");
+        }
+        for bad in [-1e-3, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            assert!(check_step(bad).is_err(), "{bad}");
+        }
+    }
+
     /// A positive setting's value in `o`, by name.
     fn base_value(o: &HapticOptions, what: &str) -> f64 {
         match what {

@@ -14,7 +14,7 @@ use glam::{DQuat, DVec3};
 use haptic_util::{build, on_slab, options, serial, slab_and_block};
 use innersphere::haptic::{
     occlude, occlude_free, DeviceClass, FreeOcclusionOptions, HapticLoop, HapticOptions, Joints,
-    OcclusionOptions, RigidBody,
+    OcclusionOptions, RigidBody, Servo,
 };
 use innersphere::{shapes, Pair, Pose, SphereTree};
 use proptest::prelude::*;
@@ -686,4 +686,60 @@ fn a_slow_loop_is_passive_with_the_defaults_for_its_rate() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("from 100 Hz"), "{e}");
+}
+
+#[test]
+fn apart_the_loop_counts_its_answers_and_the_energy_as_a_lone_servo_does() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    let o = HapticOptions {
+        budget: 1.0,
+        ..options()
+    };
+    // 20 mm above the slab: the tool's motion and the energy are the servo's alone.
+    let start = on_slab(-20.0);
+    let mut hl =
+        HapticLoop::new(Pair::new(a.clone(), b.clone()), Pose::IDENTITY, start, o).unwrap();
+    let body = RigidBody::from_tree(b.tree(), o.density).unwrap();
+    let mut servo = Servo::new(body, start, o).unwrap();
+    for i in 0..300 {
+        let s = 1.0 - (12.0 * i as f64 / o.rate).cos();
+        let p = Pose {
+            rotation: DQuat::from_rotation_y(0.3 * s),
+            translation: start.translation + DVec3::new(s, 0.0, 0.0),
+        };
+        let t = hl.tick(&p);
+        let u = servo.tick(&p, 1.0 / o.rate, None);
+        assert_eq!((t.tool, t.force), (u.tool, u.force), "tick {i}");
+        // A whole second's budget: every tick answers exactly, in time.
+        assert!(!t.budgeted && !t.late, "tick {i}");
+        assert_eq!(hl.model().seq, i + 1);
+    }
+    let (e, e_max) = (servo.energy_to_user(), servo.energy_to_user_max());
+    assert_eq!((hl.energy_to_user(), hl.energy_to_user_max()), (e, e_max));
+    assert!(
+        e < 0.0 && e != -1.0 && e_max >= e,
+        "{e} J, largest {e_max} J"
+    );
+}
+
+#[test]
+fn a_tick_over_its_budget_says_it_was_late() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    let o = HapticOptions {
+        budget: 1e-9,
+        ..options()
+    };
+    let mut hl = HapticLoop::new(
+        Pair::new(a.clone(), b.clone()),
+        Pose::IDENTITY,
+        on_slab(0.3),
+        o,
+    )
+    .unwrap();
+    for _ in 0..20 {
+        let t = hl.tick(&on_slab(0.3));
+        assert!(t.late && t.compute > 1e-9, "{t:?}");
+    }
 }

@@ -1,0 +1,136 @@
+"""What every result object says: its getters equal its ``to_dict``, its ``repr`` shows its
+numbers; a haptic tick's timing fields; the build's progress on standard error."""
+
+import re
+
+import numpy as np
+import pytest
+
+import innersphere
+from helpers import POSES
+
+
+def same(got, want):
+    """Equal values: arrays bit for bit, lists of dicts key by key, scalars exactly."""
+    if isinstance(want, list):
+        assert isinstance(got, list) and len(got) == len(want)
+        for g, w in zip(got, want):
+            same(g, w)
+    elif isinstance(want, dict):
+        assert got.keys() == want.keys()
+        for k in want:
+            same(got[k], want[k])
+    elif isinstance(want, np.ndarray):
+        assert np.array_equal(got, want)
+    else:
+        assert type(got) is type(want) and got == want, (got, want)
+
+
+def field(text, name):
+    """The number (or list of numbers) after ``name=`` in a repr (Rust's shortest
+    round-trip form: the same float back)."""
+    m = re.search(rf"\b{name}=(\[[^\]]*\]|[^,)]+)", text)
+    assert m, (name, text)
+    v = m.group(1)
+    if v.startswith("["):
+        return [float(x) for x in v[1:-1].split(",")]
+    return {"True": True, "False": False}.get(v, None) if v in ("True", "False") else float(v)
+
+
+def assert_dict_is_the_getters(result, renamed=()):
+    d = result.to_dict()
+    assert d, result
+    for key, value in d.items():
+        same(value, getattr(result, dict(renamed).get(key, key)))
+
+
+@pytest.fixture(scope="module")
+def pair(trees):
+    return innersphere.Pair(*trees)
+
+
+def touching(pair):
+    """A pose of the generated pair in contact."""
+    for p in POSES:
+        if pair.penetration(p).contact:
+            return p
+    raise AssertionError("no pose in contact")
+
+
+def test_a_distance_result_says_what_it_holds(pair):
+    d = pair.distance(POSES[0])
+    assert d.distance > 0 and not d.contact and d.visits > 0
+    assert_dict_is_the_getters(d)
+    r = repr(d)
+    assert r.startswith("DistanceResult(") and field(r, "distance") == d.distance
+    assert field(r, "contact") is False
+    assert field(r, "point_a") == d.point_a.tolist() and field(r, "point_b") == d.point_b.tolist()
+    c = pair.distance(touching(pair))
+    assert c.contact and field(repr(c), "contact") is True
+
+
+def test_a_penetration_result_says_what_it_holds(pair):
+    p = pair.penetration(touching(pair), stiffness=3.0)
+    assert p.contact and p.pairs > 0 and p.volume > 0 and len(p.patches) > 0
+    # "torque" is torque_b under the name the CLI uses.
+    d = p.to_dict()
+    assert np.array_equal(d["torque"], p.torque_b)
+    del d["torque"]
+    for key, value in d.items():
+        same(value, getattr(p, key))
+    r = repr(p)
+    assert field(r, "volume") == p.volume and field(r, "max_depth") == p.max_depth
+    assert field(r, "force") == p.force.tolist() and field(r, "patches") == len(p.patches)
+
+
+def test_a_haptic_tick_says_its_bound_its_time_and_whether_it_was_late(pair, trees):
+    start = POSES[0]
+    h = innersphere.Haptic(innersphere.Pair(*trees), "omega", 1000.0, start=start, budget=1.0)
+    t = h.tick(start)
+    assert_dict_is_the_getters(t)
+    assert 0 < t.compute < 1.0 and not t.late and t.volume_bound == t.volume
+    assert t.to_dict()["compute"] == t.compute
+    r = repr(t)
+    assert r.startswith("Tick(") and field(r, "force") == t.force.tolist()
+    assert field(r, "budgeted") is False
+    assert field(r, "volume") == t.volume and field(r, "max_depth") == t.max_depth
+    # In contact with a budget of a nanosecond: every tick is late, and budgeted.
+    deep = touching(pair)
+    late = innersphere.Haptic(innersphere.Pair(*trees), "omega", 1000.0, start=deep, budget=1e-9)
+    ticks = [late.tick(deep) for _ in range(5)]
+    assert all(k.late and k.compute > 1e-9 for k in ticks)
+    assert any(k.budgeted for k in ticks)
+    assert field(repr(next(k for k in ticks if k.budgeted)), "budgeted") is True
+    r = repr(h)
+    assert field(r, "rate") == h.rate and field(r, "budget") == h.budget
+    assert field(r, "energy_to_user") == h.energy_to_user
+
+
+def test_trees_and_pairs_say_their_size(trees):
+    a, b = trees
+    r = repr(a)
+    assert field(r, "node_count") == a.node_count and field(r, "leaf_count") == a.leaf_count
+    assert field(r, "depth") == a.depth and field(r, "voxel_size") == a.meta["voxel_size"]
+    p = repr(innersphere.Pair(a, b))
+    assert f"tree_a=Tree(node_count={a.node_count})" in p
+    assert f"tree_b=Tree(node_count={b.node_count})" in p
+
+
+def test_the_build_reports_its_progress_on_standard_error(meshes, capfd):
+    innersphere.Tree.build(meshes["box"], resolution=12, progress=True)
+    err = capfd.readouterr().err
+    lines = [line for line in err.split("\n") if line]
+    assert len(lines) >= 4, err
+    middle = 0
+    for line in lines:
+        # A stage: "name: 0%", rising percentages, each printed once, then "name: done".
+        parts = line.split("\r")
+        stage = parts[0].rsplit(":", 1)[0]
+        assert parts[0] == f"{stage}: 0%" and parts[-1] == f"{stage}: done", line
+        pcts = [int(p[len(stage) + 2:-1]) for p in parts[:-1]]
+        assert all(p.startswith(f"{stage}: ") for p in parts), line
+        assert pcts == sorted(set(pcts)) and pcts[-1] <= 100, line
+        middle += sum(0 < p < 100 for p in pcts)
+    assert middle > 0, err
+    innersphere.Tree.build(meshes["box"], resolution=12)
+    assert capfd.readouterr().err == ""

@@ -441,6 +441,16 @@ mod tests {
         assert_eq!(tick(Mode::Motion, true, 0.9995, 1).0, 0.0);
         assert_eq!(tick(Mode::Motion, false, 7.0, 2).0, 1.0);
         assert_eq!(tick(Mode::Motion, false, -3.0, 3).0, 0.0);
+        // At 4 Hz the clock lands on the end exactly: the last frame shows, then the first.
+        let (mut t, mut id) = (0.0, 0u64);
+        let c = control(Mode::Motion, true, 0.0, 0);
+        let ts: Vec<f64> = (0..6)
+            .map(|_| {
+                motion_clock(&mut t, &mut id, &c, 1.0, 4.0);
+                t
+            })
+            .collect();
+        assert_eq!(ts, [0.25, 0.5, 0.75, 1.0, 0.0, 0.25]);
     }
 
     #[test]

@@ -743,3 +743,30 @@ fn a_tick_over_its_budget_says_it_was_late() {
         assert!(t.late && t.compute > 1e-9, "{t:?}");
     }
 }
+
+#[test]
+fn a_tool_pushed_out_of_a_contact_gives_the_rising_hand_energy_and_the_largest_is_kept() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    let o = HapticOptions {
+        budget: 1.0,
+        ..options()
+    };
+    // The tool starts 0.5 mm deep in the slab (its contact's energy counted nowhere), and
+    // the hand rises with it: the contact pushes the tool out, the coupling pulls the hand
+    // up as it goes up, and the energy to the user rises above 0.
+    let mut hl = HapticLoop::new(
+        Pair::new(a.clone(), b.clone()),
+        Pose::IDENTITY,
+        on_slab(0.5),
+        o,
+    )
+    .unwrap();
+    let mut top = 0.0f64;
+    for i in 0..400 {
+        hl.tick(&on_slab(0.5 - i as f64 / 400.0));
+        top = top.max(hl.energy_to_user());
+    }
+    assert!(top > 0.0, "{top} J");
+    assert_eq!(hl.energy_to_user_max(), top);
+}

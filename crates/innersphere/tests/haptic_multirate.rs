@@ -387,3 +387,29 @@ fn every_query_out_of_its_budget_is_counted_as_budgeted() {
     assert!(stats.queries >= 20, "{stats:?}");
     assert_eq!(stats.budgeted, stats.queries);
 }
+
+#[test]
+fn a_tool_pushed_out_of_a_contact_gives_the_rising_hand_energy_and_the_largest_is_kept() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    let o = options();
+    // As haptic.rs's test of the same name, with the query in its thread: paced in real
+    // time, so that the models arrive as the tool rises.
+    let mut hl = MultirateLoop::spawn(
+        Pair::new(a.clone(), b.clone()),
+        Pose::IDENTITY,
+        on_slab(0.5),
+        o,
+        CollisionOptions::default(),
+    )
+    .unwrap();
+    let path: Vec<Pose> = (0..400).map(|i| on_slab(0.5 - i as f64 / 400.0)).collect();
+    let mut top = 0.0f64;
+    paced(&path, o.rate, |p| {
+        let t = hl.tick(p);
+        top = top.max(hl.energy_to_user());
+        t
+    });
+    assert!(top > 0.0, "{top} J");
+    assert_eq!(hl.energy_to_user_max(), top);
+}

@@ -185,7 +185,8 @@ impl MultirateLoop {
     /// One device tick at the period of the options' rate (see
     /// [`HapticLoop::tick`](super::HapticLoop::tick)).
     pub fn tick(&mut self, device: &Pose) -> Tick {
-        self.tick_step(device, 1.0 / self.tool.opts.rate)
+        // A step of 0 stands for one period.
+        self.tick_step(device, 0.0)
     }
 
     /// One device tick with the caller's measured `dt` (see
@@ -377,10 +378,10 @@ fn ring_slot(k: u64, len: usize) -> usize {
 /// The times of `queries` queries kept in the ring `times`, oldest first.
 fn oldest_first(times: &[f32], queries: u64) -> Vec<f32> {
     let n = times.len() as u64;
-    let first = if queries > n { queries % n } else { 0 };
-    (0..queries.min(n))
-        .map(|i| times[((first + i) % n) as usize])
-        .collect()
+    let mut ordered = times[..queries.min(n) as usize].to_vec();
+    // Once the ring is full the oldest is in the slot written next; before, in slot 0.
+    ordered.rotate_left((queries.max(n) % n) as usize);
+    ordered
 }
 
 /// How the collision thread waits after `idle` rounds in a row found no new pose: `None`, a

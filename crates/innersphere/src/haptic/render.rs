@@ -287,7 +287,8 @@ impl HapticLoop {
     /// One device tick: the device's pose in (B's pose in the world, as read from the device
     /// this tick), the force and torque to send out, with the tool's new pose.
     pub fn tick(&mut self, device: &Pose) -> Tick {
-        self.tick_step(device, 1.0 / self.tool.opts.rate)
+        // A step of 0 stands for one period.
+        self.tick_step(device, 0.0)
     }
 
     /// [`tick`](Self::tick) with the time since the last tick measured by the caller

@@ -201,18 +201,16 @@ pub(crate) fn run(
         // Entering haptic mode puts the tool at rest at the device's pose, its penetration
         // query in a collision thread of its own (a thread and an allocation when the mode
         // changes, never per tick); leaving it stops that thread.
-        if c.mode == Mode::Haptic && last_mode != Mode::Haptic {
-            haptic = MultirateLoop::spawn(
+        switch_haptic(&mut haptic, last_mode, c.mode, || {
+            MultirateLoop::spawn(
                 Pair::new(a.clone(), b.clone()),
                 Pose::IDENTITY,
                 target,
                 haptic_opts,
                 CollisionOptions::default(),
             )
-            .ok();
-        } else if c.mode != Mode::Haptic {
-            haptic = None;
-        }
+            .ok()
+        });
         last_mode = c.mode;
         let (pose_b, device_force) = match (c.mode, haptic.as_mut()) {
             (Mode::Haptic, Some(h)) => {
@@ -237,6 +235,21 @@ pub(crate) fn run(
         state.t = t0.duration_since(start).as_secs_f64();
         io.state.write(state);
         pace(&mut deadline, &mut clock);
+    }
+}
+
+/// The haptic loop across a mode change from `last` to `mode`: entering haptic mode starts
+/// one (`start`), leaving it drops it (which stops its collision thread), else it stays.
+fn switch_haptic<H>(
+    haptic: &mut Option<H>,
+    last: Mode,
+    mode: Mode,
+    start: impl FnOnce() -> Option<H>,
+) {
+    if mode == Mode::Haptic && last != Mode::Haptic {
+        *haptic = start();
+    } else if mode != Mode::Haptic {
+        *haptic = None;
     }
 }
 
@@ -558,6 +571,29 @@ mod tests {
         pace(&mut deadline, &mut clock);
         assert!(clock.sleeps.is_empty());
         assert_eq!(deadline, t0 + us(51));
+    }
+
+    #[test]
+    fn the_haptic_loop_starts_on_entering_haptic_mode_and_stops_on_leaving_it() {
+        use Mode::*;
+        let mut started = 0;
+        let mut haptic: Option<u32> = None;
+        let mut step = |last, mode| {
+            switch_haptic(&mut haptic, last, mode, || {
+                started += 1;
+                Some(started)
+            });
+            haptic
+        };
+        assert_eq!(step(Free, Free), None);
+        assert_eq!(step(Motion, Free), None);
+        assert_eq!(step(Free, Haptic), Some(1));
+        assert_eq!(step(Haptic, Haptic), Some(1));
+        assert_eq!(step(Haptic, Motion), None);
+        assert_eq!(step(Motion, Haptic), Some(2));
+        assert_eq!(step(Haptic, Free), None);
+        assert_eq!(step(Free, Motion), None);
+        assert_eq!(started, 2);
     }
 
     #[test]

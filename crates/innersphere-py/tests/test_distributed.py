@@ -34,6 +34,9 @@ def same(a, b):
 
 @pytest.fixture(scope="module")
 def client():
+    if os.environ.get("INNERSPHERE_NO_CLUSTER"):
+        # The mutation harness (tests/python_suite.rs) runs the local batches only.
+        pytest.skip("INNERSPHERE_NO_CLUSTER is set")
     cluster = distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
     )

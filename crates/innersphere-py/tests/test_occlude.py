@@ -54,6 +54,8 @@ def test_the_bite_equals_ist_occlude_with_the_joints(jaws, ist):
     assert pair.penetration(got["pose"]).volume > 0
     assert np.dot(got["frame"]["up"], [0, 0, 1]) > 0.99
     assert got["joints"]["stiffness"] == 20.0 and got["contact_stiffness"] == 10.0
+    # JSON integers stay ints (`==` above takes 3 == 3.0).
+    assert type(got["steps"]) is int and type(got["converged"]) is bool
 
 
 def test_the_free_bite_equals_ist_occlude_free(jaws, ist):

@@ -78,6 +78,11 @@ def test_a_penetration_result_says_what_it_holds(pair):
     del d["torque"]
     for key, value in d.items():
         same(value, getattr(p, key))
+    # The patches asked for: fewer than the default 8, or none, the volume the same.
+    many = next(q for q in POSES if len(pair.penetration(q).patches) > 3)
+    few = pair.penetration(many, max_patches=3)
+    assert len(few.patches) == 3 and len(pair.penetration(many, max_patches=0).patches) == 0
+    assert few.volume == pair.penetration(many).volume
     r = repr(p)
     assert field(r, "volume") == p.volume and field(r, "max_depth") == p.max_depth
     assert field(r, "force") == p.force.tolist() and field(r, "patches") == len(p.patches)
@@ -104,6 +109,29 @@ def test_a_haptic_tick_says_its_bound_its_time_and_whether_it_was_late(pair, tre
     r = repr(h)
     assert field(r, "rate") == h.rate and field(r, "budget") == h.budget
     assert field(r, "energy_to_user") == h.energy_to_user
+
+
+def test_a_tool_pushed_out_of_a_contact_gives_the_rising_hand_energy(trees):
+    """B starts 0.3 mm into the box's face x = 1 and the hand rises with it: the contact
+    pushes the tool out, the coupling pulls the hand along, the energy to the user rises above
+    0; the largest is kept."""
+    start = [1.3, 0.1, -0.05, 1.0, 0.0, 0.0, 0.0]
+    h = innersphere.Haptic(innersphere.Pair(*trees), "omega", 1000.0, start=start, budget=1.0)
+    top = 0.0
+    for x in np.linspace(1.3, 2.0, 400):
+        h.tick([x] + start[1:])
+        top = max(top, h.energy_to_user)
+    assert top > 0 and h.energy_to_user_max == top and h.energy_to_user != 0
+
+
+def test_the_tools_mass_is_its_trees(trees, meshes):
+    """The mass follows the tree's volume at one density: two tools' masses are in the ratio
+    of their meshes' volumes."""
+    a, b = trees
+    c = innersphere.Tree.build(meshes["sphere"], resolution=24)
+    m = [innersphere.Haptic(innersphere.Pair(a, t), "omega", 1000.0).mass for t in (b, c)]
+    v = [t.meta["mesh_volume"] for t in (b, c)]
+    assert m[0] > 0 and m[0] / m[1] == pytest.approx(v[0] / v[1], rel=1e-9)
 
 
 def test_trees_and_pairs_say_their_size(trees):

@@ -64,6 +64,17 @@ def test_splint_between_generated_arches_is_one_solid_and_matches_ist(tmp_path, 
         assert cli[k] == same[k], k
 
 
+def test_an_automatic_opening_is_the_clis(tmp_path, ist):
+    a, b = arches()
+    write_obj(tmp_path / "a.obj", *a)
+    write_obj(tmp_path / "b.obj", *b)
+    _, _, got = innersphere.splint(tmp_path / "a.obj", tmp_path / "b.obj", voxel=0.3, open="auto")
+    cli = json.loads(ist.run("splint", tmp_path / "a.obj", tmp_path / "b.obj", "--voxel", "0.3",
+                             "--open", "auto", "-o", tmp_path / "cli.stl", "--json"))
+    for k in ("volume", "triangles", "opened", "coverage_b"):
+        assert cli[k] == got[k], k
+
+
 def test_bad_splint_options_are_value_errors():
     a, b = arches()
     with pytest.raises(ValueError, match="voxel size"):

@@ -63,6 +63,17 @@ def test_arrays_are_welded(meshes):
     b = innersphere.Tree.build((soup_v, soup_f), resolution=16)
     c = innersphere.Tree.build([soup_v.tolist(), soup_f.tolist()], resolution=16)
     assert a.to_bytes() == b.to_bytes() == c.to_bytes()
+    # -0.0 and 0.0 are one coordinate: a soup of the box [0, 1]³ whose origin corner is
+    # written (-0.0, 0, 0) in some triangles still welds into the closed box.
+    from helpers import box_mesh
+    v, f = box_mesh((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
+    soup_v = v[f.reshape(-1)].copy()
+    soup_v[::2][np.all(soup_v[::2] == 0.0, axis=1), 0] = -0.0
+    assert np.signbit(soup_v[:, 0]).any()
+    soup_f = np.arange(len(soup_v)).reshape(-1, 3)
+    a = innersphere.Tree.build((v, f), resolution=16)
+    b = innersphere.Tree.build((soup_v, soup_f), resolution=16)
+    assert b.meta["mesh_closed"] and a.to_bytes() == b.to_bytes()
 
 
 def test_object_with_vertices_and_faces(meshes):

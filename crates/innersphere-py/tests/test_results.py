@@ -78,6 +78,9 @@ def test_a_penetration_result_says_what_it_holds(pair):
     del d["torque"]
     for key, value in d.items():
         same(value, getattr(p, key))
+    # Apart: no contact in the dict either.
+    apart = pair.penetration(POSES[0])
+    assert not apart.contact and apart.to_dict()["contact"] is False
     # The patches asked for: fewer than the default 8, or none, the volume the same.
     many = next(q for q in POSES if len(pair.penetration(q).patches) > 3)
     few = pair.penetration(many, max_patches=3)
@@ -105,6 +108,13 @@ def test_a_haptic_tick_says_its_bound_its_time_and_whether_it_was_late(pair, tre
     ticks = [late.tick(deep) for _ in range(5)]
     assert all(k.late and k.compute > 1e-9 for k in ticks)
     assert any(k.budgeted for k in ticks)
+    for k in ticks:
+        if k.budgeted:
+            # The model in use is older than the tick; the bound covers what was found.
+            assert k.model_age > 0 and k.volume_bound > 0 and k.volume_bound >= k.volume
+    # Exact ticks in contact (after the first, time-critical one): the model's patches.
+    exact = innersphere.Haptic(innersphere.Pair(*trees), "omega", 1000.0, start=deep, budget=1.0)
+    assert [exact.tick(deep).patches > 0 for _ in range(3)] == [False, True, True]
     assert field(repr(next(k for k in ticks if k.budgeted)), "budgeted") is True
     r = repr(h)
     assert field(r, "rate") == h.rate and field(r, "budget") == h.budget
@@ -134,6 +144,20 @@ def test_the_tools_mass_is_its_trees(trees, meshes):
     assert m[0] > 0 and m[0] / m[1] == pytest.approx(v[0] / v[1], rel=1e-9)
 
 
+def test_multipoint_takes_its_k_and_split_depth(pair):
+    p = next(q for q in POSES if len(pair.multipoint(q)) > 1)
+    # One contact asked for: one; at split depth 0 there is one pair of nodes (the roots),
+    # so one contact below it.
+    assert len(pair.multipoint(p, k=1)) == 1
+    assert len(pair.multipoint(p, k=16, split_depth=0)) == 1
+
+
+def test_an_explicit_none_pose_a_is_the_identity(pair):
+    p = touching(pair)
+    assert pair.distance(p, pose_a=None).distance == pair.distance(p).distance
+    assert pair.penetration(p, pose_a=None).volume == pair.penetration(p).volume
+
+
 def test_trees_and_pairs_say_their_size(trees):
     a, b = trees
     r = repr(a)
@@ -160,5 +184,7 @@ def test_the_build_reports_its_progress_on_standard_error(meshes, capfd):
         assert pcts == sorted(set(pcts)) and pcts[-1] <= 100, line
         middle += sum(0 < p < 100 for p in pcts)
     assert middle > 0, err
+    # The percentage is of the stage's total: some stage gets to 100.
+    assert any(line.split("\r")[-2].endswith(": 100%") for line in lines), err
     innersphere.Tree.build(meshes["box"], resolution=12)
     assert capfd.readouterr().err == ""

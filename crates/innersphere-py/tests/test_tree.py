@@ -52,6 +52,14 @@ def test_build_with_voxel_size_and_preset_equals_cli(ist, tmp_path):
     t = innersphere.Tree.build((v, f), preset="jaw-fast", voxel_size=0.5)
     assert same_tree(t, innersphere.Tree.load(cli))
     assert t.meta["min_radius"] == 0.05 and t.meta["built_by"]["refine_steps"] == 8
+    # Each build option given beside a preset overrides that field, as in the CLI.
+    ist.run("build", obj, "-o", cli, "-q", "--preset", "jaw-fast", "--voxel-size", 0.5,
+            "--min-radius", 0.08, "--refine-steps", 2, "--fanout", 8)
+    t = innersphere.Tree.build((v, f), preset="jaw-fast", voxel_size=0.5, min_radius=0.08,
+                               refine_steps=2, fanout=8)
+    assert same_tree(t, innersphere.Tree.load(cli))
+    assert t.meta["min_radius"] == 0.08 and t.meta["built_by"]["refine_steps"] == 2
+    assert t.meta["fanout"] == 8
 
 
 def test_arrays_are_welded(meshes):
@@ -64,16 +72,33 @@ def test_arrays_are_welded(meshes):
     c = innersphere.Tree.build([soup_v.tolist(), soup_f.tolist()], resolution=16)
     assert a.to_bytes() == b.to_bytes() == c.to_bytes()
     # -0.0 and 0.0 are one coordinate: a soup of the box [0, 1]³ whose origin corner is
-    # written (-0.0, 0, 0) in some triangles still welds into the closed box.
+    # written with a -0.0 in x, y or z in its triangles still welds into the closed box.
     from helpers import box_mesh
     v, f = box_mesh((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
     soup_v = v[f.reshape(-1)].copy()
-    soup_v[::2][np.all(soup_v[::2] == 0.0, axis=1), 0] = -0.0
-    assert np.signbit(soup_v[:, 0]).any()
+    corner = np.flatnonzero(np.all(soup_v == 0.0, axis=1))
+    for j, row in enumerate(corner):
+        soup_v[row, j % 3] = -0.0
+    assert len(corner) >= 6 and all(np.signbit(soup_v[:, c]).any() for c in range(3))
     soup_f = np.arange(len(soup_v)).reshape(-1, 3)
     a = innersphere.Tree.build((v, f), resolution=16)
     b = innersphere.Tree.build((soup_v, soup_f), resolution=16)
     assert b.meta["mesh_closed"] and a.to_bytes() == b.to_bytes()
+
+
+def test_faces_of_unsigned_integers_build_the_same_tree(meshes):
+    v, f = meshes["box"]
+    a = innersphere.Tree.build((v, f), resolution=16)
+    for dtype in (np.uint32, np.uint64, np.int32):
+        assert innersphere.Tree.build((v, f.astype(dtype)), resolution=16).to_bytes() == a.to_bytes()
+
+
+def test_an_object_with_vertices_but_no_faces_is_no_mesh(meshes):
+    class Half:
+        vertices = meshes["box"][0]
+
+    with pytest.raises(ValueError, match="expected a mesh file path"):
+        innersphere.Tree.build(Half(), resolution=16)
 
 
 def test_object_with_vertices_and_faces(meshes):

@@ -118,13 +118,10 @@ pub(crate) fn pose(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Pose> {
     pose_of_view(&view).map_err(|m| PyValueError::new_err(format!("{what}: {m}")))
 }
 
-/// An optional pose argument: `None` is the identity.
+/// An optional pose argument: `None` is the identity (pyo3 passes a Python `None` given
+/// explicitly as `None` too).
 pub(crate) fn pose_or_identity(obj: Option<&Bound<'_, PyAny>>, what: &str) -> PyResult<Pose> {
-    match obj {
-        None => Ok(Pose::IDENTITY),
-        Some(o) if o.is_none() => Ok(Pose::IDENTITY),
-        Some(o) => pose(o, what),
-    }
+    obj.map_or(Ok(Pose::IDENTITY), |o| pose(o, what))
 }
 
 /// A batch of poses: an `(N, 7)` or `(N, 4, 4)` array-like. `ValueError` naming the first

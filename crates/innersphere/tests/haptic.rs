@@ -444,6 +444,20 @@ fn occlusion_refuses_bad_options() {
             "{o:?}"
         );
     }
+    // A joint stiffness below 0 or not finite.
+    for stiffness in [-1.0, f64::INFINITY, f64::NAN] {
+        let o = OcclusionOptions {
+            joints: Some(Joints {
+                points: [DVec3::X, -DVec3::X],
+                anchors: [DVec3::X, -DVec3::X],
+                stiffness,
+            }),
+            ..base
+        };
+        let mut pair = Pair::new(a.clone(), b.clone());
+        let e = occlude(&mut pair, &Pose::IDENTITY, &on_slab(-1.0), &o).unwrap_err();
+        assert!(e.to_string().contains("joint stiffness"), "{e}");
+    }
     // An axis with one NaN component is refused as an axis, before any step (it was taken
     // for a direction, and the dynamics failed later with a message about them).
     let o = OcclusionOptions {

@@ -11,7 +11,7 @@ static COUNTING: alloc_util::Counting = alloc_util::Counting;
 mod haptic_util;
 
 use glam::{DQuat, DVec3};
-use haptic_util::{build, on_slab, options, serial, slab_and_block};
+use haptic_util::{build, on_slab, options, serial, slab_and_block, swing};
 use innersphere::haptic::{
     occlude, occlude_free, DeviceClass, FreeOcclusionOptions, HapticLoop, HapticOptions, Joints,
     OcclusionOptions, RigidBody, Servo,
@@ -716,18 +716,13 @@ fn apart_the_loop_counts_its_answers_and_the_energy_as_a_lone_servo_does() {
         HapticLoop::new(Pair::new(a.clone(), b.clone()), Pose::IDENTITY, start, o).unwrap();
     let body = RigidBody::from_tree(b.tree(), o.density).unwrap();
     let mut servo = Servo::new(body, start, o).unwrap();
-    for i in 0..300 {
-        let s = 1.0 - (12.0 * i as f64 / o.rate).cos();
-        let p = Pose {
-            rotation: DQuat::from_rotation_y(0.3 * s),
-            translation: start.translation + DVec3::new(s, 0.0, 0.0),
-        };
-        let t = hl.tick(&p);
-        let u = servo.tick(&p, 1.0 / o.rate, None);
+    for (i, p) in swing(start, o.rate, 300).iter().enumerate() {
+        let t = hl.tick(p);
+        let u = servo.tick(p, 1.0 / o.rate, None);
         assert_eq!((t.tool, t.force), (u.tool, u.force), "tick {i}");
         // A whole second's budget: every tick answers exactly, in time.
         assert!(!t.budgeted && !t.late, "tick {i}");
-        assert_eq!(hl.model().seq, i + 1);
+        assert_eq!(hl.model().seq, i as u64 + 1);
     }
     let (e, e_max) = (servo.energy_to_user(), servo.energy_to_user_max());
     assert_eq!((hl.energy_to_user(), hl.energy_to_user_max()), (e, e_max));

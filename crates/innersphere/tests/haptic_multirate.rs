@@ -7,7 +7,7 @@
 mod haptic_util;
 
 use glam::{DQuat, DVec3};
-use haptic_util::{on_slab, options, serial, slab_and_block};
+use haptic_util::{on_slab, options, serial, slab_and_block, swing};
 use innersphere::haptic::{
     CollisionOptions, ContactModel, HapticLoop, HapticOptions, MultirateLoop, RigidBody, Servo,
 };
@@ -309,16 +309,7 @@ fn apart_the_loop_moves_the_tool_and_counts_the_energy_as_a_lone_servo_does() {
     let body = RigidBody::from_tree(b.tree(), o.density).unwrap();
     let mut servo = Servo::new(body, start, o).unwrap();
     // The device moves and turns smoothly; the hand does work on the coupling.
-    let path: Vec<Pose> = (0..400)
-        .map(|i| {
-            let s = 1.0 - (12.0 * i as f64 / o.rate).cos();
-            Pose {
-                rotation: DQuat::from_rotation_y(0.3 * s),
-                translation: start.translation + DVec3::new(s, 0.0, 0.0),
-            }
-        })
-        .collect();
-    for (i, p) in path.iter().enumerate() {
+    for (i, p) in swing(start, o.rate, 400).iter().enumerate() {
         let t = hl.tick(p);
         let s = servo.tick(p, 1.0 / o.rate, None);
         assert_eq!((t.tool, t.force), (s.tool, s.force), "tick {i}");

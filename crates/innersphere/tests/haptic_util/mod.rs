@@ -51,3 +51,17 @@ pub fn options() -> HapticOptions {
     o.contact_stiffness = 50.0;
     o
 }
+
+/// `n` device poses at `rate` Hz from `start` at rest: up to 2 mm along x and 0.6 rad about
+/// y, as `1 − cos` at 12 rad/s (smooth, within the loop's speed limits).
+pub fn swing(start: Pose, rate: f64, n: usize) -> Vec<Pose> {
+    (0..n)
+        .map(|i| {
+            let s = 1.0 - (12.0 * i as f64 / rate).cos();
+            Pose {
+                rotation: glam::DQuat::from_rotation_y(0.3 * s),
+                translation: start.translation + DVec3::new(s, 0.0, 0.0),
+            }
+        })
+        .collect()
+}

@@ -23,10 +23,10 @@
 //! (docs/OCCLUSION.md).
 
 use super::occlusion::{occlude, Occlusion, OcclusionOptions};
-use crate::error::{num, Error, Result};
+use crate::error::{num, vec3, Error, Result};
 use crate::pose::Pose;
 use crate::query::{Pair, Patch, PenetrationOptions, SharedTree};
-use glam::{DQuat, DVec3};
+use glam::{DMat3, DQuat, DVec3};
 use rayon::prelude::*;
 
 /// Settings of [`occlude_free`]. Units: mm, N, s.
@@ -69,6 +69,47 @@ impl Default for FreeOcclusionOptions {
             seed: 1,
             same_pose: 0.1,
         }
+    }
+}
+
+impl FreeOcclusionOptions {
+    /// Refuses what the closings cannot start from (joints, no starts, a negative or
+    /// non-finite spread or same-pose distance, a lateral direction along the closing axis);
+    /// gives the unit closing axis and the unit lateral direction across it. The closing's
+    /// own options are [`occlude`]'s to check.
+    fn check(&self) -> Result<(DVec3, DVec3)> {
+        if self.closing.joints.is_some() {
+            return Err(Error::InvalidOption(
+                "a free segment has no joints: give the closing options without them".into(),
+            ));
+        }
+        if !(1..=100_000).contains(&self.starts) {
+            return Err(Error::InvalidOption(format!(
+                "the starts must be 1 to 100000, not {}",
+                self.starts
+            )));
+        }
+        for (what, x) in [
+            ("the spread", self.spread),
+            ("the spread angle", self.spread_angle),
+            ("the same-pose distance", self.same_pose),
+        ] {
+            if !(x.is_finite() && x >= 0.0) {
+                return Err(Error::InvalidOption(format!(
+                    "{what} must be finite and at least 0, not {}",
+                    num(x)
+                )));
+            }
+        }
+        let axis = self.closing.axis.normalize_or_zero();
+        let lateral = (self.lateral - axis * self.lateral.dot(axis)).normalize_or_zero();
+        if lateral == DVec3::ZERO {
+            return Err(Error::InvalidOption(format!(
+                "the lateral direction must be finite and not along the closing axis, not {}",
+                vec3(self.lateral)
+            )));
+        }
+        Ok((axis, lateral))
     }
 }
 
@@ -155,35 +196,9 @@ pub fn occlude_free(
     from: &Pose,
     opts: &FreeOcclusionOptions,
 ) -> Result<FreeOcclusion> {
-    let axis = opts.closing.axis.normalize_or_zero();
-    let lateral = (opts.lateral - axis * opts.lateral.dot(axis)).normalize_or_zero();
-    if opts.closing.joints.is_some() {
-        return Err(Error::InvalidOption(
-            "a free segment has no joints: give the closing options without them".into(),
-        ));
-    }
-    if !(1..=100_000).contains(&opts.starts) {
-        return Err(Error::InvalidOption(format!(
-            "the starts must be 1 to 100000, not {}",
-            opts.starts
-        )));
-    }
-    for (what, x) in [
-        ("the spread", opts.spread),
-        ("the spread angle", opts.spread_angle),
-        ("the same-pose distance", opts.same_pose),
-    ] {
-        if !(x.is_finite() && x >= 0.0) {
-            return Err(Error::InvalidOption(format!(
-                "{what} must be finite and at least 0, not {}",
-                num(x)
-            )));
-        }
-    }
-    if lateral == DVec3::ZERO || !from.translation.is_finite() || !from.rotation.is_finite() {
-        return Err(Error::InvalidOption(
-            "the lateral direction must be finite and not along the closing axis, and the start finite".into(),
-        ));
+    let (axis, lateral) = opts.check()?;
+    if !from.translation.is_finite() || !from.rotation.is_finite() {
+        return Err(Error::InvalidOption("the start pose must be finite".into()));
     }
     let anterior = axis.cross(lateral);
     let info = b.info();
@@ -203,39 +218,8 @@ pub fn occlude_free(
             })
         })
         .collect();
-    // Probe points of B (its model frame) for "the same pose".
-    let r = info.radius.max(1e-9);
-    let probes = [
-        com,
-        com + DVec3::X * r,
-        com - DVec3::X * r,
-        com + DVec3::Y * r,
-        com - DVec3::Y * r,
-        com + DVec3::Z * r,
-        com - DVec3::Z * r,
-    ];
-    let apart = |p: &Pose, q: &Pose| {
-        probes
-            .iter()
-            .map(|x| (p.transform_point(*x) - q.transform_point(*x)).length())
-            .fold(0.0, f64::max)
-    };
-    let mut converged_starts = 0;
-    let mut clusters: Vec<Rest> = Vec::new();
-    for rest in rests {
-        let rest = rest?;
-        converged_starts += rest.o.converged as usize;
-        if rest.on + rest.off == 0 {
-            continue;
-        }
-        match clusters
-            .iter_mut()
-            .find(|k| apart(&k.o.pose, &rest.o.pose) < opts.same_pose)
-        {
-            Some(k) => k.starts += 1,
-            None => clusters.push(rest),
-        }
-    }
+    let probes = Probes::new(com, info.radius);
+    let (mut clusters, converged_starts) = cluster(rests, &probes, opts.same_pose)?;
     // Best first (stable: ties keep the start order).
     clusters.sort_by(|x, y| y.score().total_cmp(&x.score()));
     let popts = PenetrationOptions {
@@ -243,20 +227,11 @@ pub fn occlude_free(
         linearize: true,
         ..Default::default()
     };
-    let e2 = anterior;
     let candidates: Vec<Candidate> = clusters
         .par_iter()
         .map(|k| {
             let mut pair = Pair::new(a, b);
             let p = pair.penetration_with(pose_a, &k.o.pose, &popts);
-            // The linear block (world); its part across the closing axis.
-            let m = p.stiffness.linear;
-            let (l, f) = (lateral, e2);
-            let (kxx, kxy, kyy) = (
-                l.dot(m * l),
-                0.5 * (l.dot(m * f) + f.dot(m * l)),
-                f.dot(m * f),
-            );
             Candidate {
                 pose: k.o.pose,
                 starts: k.starts,
@@ -266,7 +241,7 @@ pub fn occlude_free(
                 other_side: k.off,
                 contact_area: p.area,
                 volume: p.volume,
-                lateral_stiffness: least_eigenvalue(kxx, kxy, kyy),
+                lateral_stiffness: lateral_stiffness(&p.stiffness.linear, lateral, anterior),
             }
         })
         .collect();
@@ -278,6 +253,73 @@ pub fn occlude_free(
         converged_starts,
         closing,
     })
+}
+
+/// Where "the same pose" is judged: B's centre of mass and six points at its radius along
+/// its model axes.
+struct Probes([DVec3; 7]);
+
+impl Probes {
+    /// The probes of a body with centre of mass `com` and radius `radius` (model frame).
+    fn new(com: DVec3, radius: f64) -> Probes {
+        let r = radius.max(1e-9);
+        Probes([
+            com,
+            com + DVec3::X * r,
+            com - DVec3::X * r,
+            com + DVec3::Y * r,
+            com - DVec3::Y * r,
+            com + DVec3::Z * r,
+            com - DVec3::Z * r,
+        ])
+    }
+
+    /// How far apart B is at poses `p` and `q`: the largest distance of a probe.
+    fn apart(&self, p: &Pose, q: &Pose) -> f64 {
+        self.0
+            .iter()
+            .map(|x| (p.transform_point(*x) - q.transform_point(*x)).length())
+            .fold(0.0, f64::max)
+    }
+}
+
+/// The rests with contact, merged into clusters in start order: a rest within `same_pose`
+/// of a cluster's first rest ([`Probes::apart`]) counts as one more start of it. Also gives
+/// how many closings came to rest, with contact or without. Fails with a closing's error.
+fn cluster(
+    rests: impl IntoIterator<Item = Result<Rest>>,
+    probes: &Probes,
+    same_pose: f64,
+) -> Result<(Vec<Rest>, usize)> {
+    let mut converged = 0;
+    let mut clusters: Vec<Rest> = Vec::new();
+    for rest in rests {
+        let rest = rest?;
+        converged += rest.o.converged as usize;
+        if rest.on + rest.off == 0 {
+            continue;
+        }
+        match clusters
+            .iter_mut()
+            .find(|k| probes.apart(&k.o.pose, &rest.o.pose) < same_pose)
+        {
+            Some(k) => k.starts += 1,
+            None => clusters.push(rest),
+        }
+    }
+    Ok((clusters, converged))
+}
+
+/// The least stiffness of the contact's linear block `m` (N/mm, world) against a push
+/// across the closing axis: the smaller eigenvalue of its symmetric part in the plane of the
+/// unit, orthogonal `lateral` and `anterior`.
+fn lateral_stiffness(m: &DMat3, lateral: DVec3, anterior: DVec3) -> f64 {
+    let (l, f) = (lateral, anterior);
+    least_eigenvalue(
+        l.dot(*m * l),
+        0.5 * (l.dot(*m * f) + f.dot(*m * l)),
+        f.dot(*m * f),
+    )
 }
 
 /// The starts of the closings: `from`, then `opts.starts − 1` poses moved from it by up to
@@ -448,6 +490,187 @@ mod tests {
             .iter()
             .fold((1.0f64, -1.0f64), |(l, h), &x| (l.min(x), h.max(x)));
         assert!(lo < -0.999 && hi > 0.999, "{lo} {hi}");
+    }
+
+    #[test]
+    fn the_options_refuse_what_no_closing_can_start_from() {
+        let good = FreeOcclusionOptions {
+            lateral: DVec3::new(2.0, 0.0, 5.0),
+            ..Default::default()
+        };
+        // The lateral direction's part along the closing axis (z) is dropped.
+        assert_eq!(good.check().unwrap(), (DVec3::Z, DVec3::X));
+        let edges = FreeOcclusionOptions {
+            starts: 100_000,
+            spread: 0.0,
+            spread_angle: 0.0,
+            same_pose: 0.0,
+            ..good
+        };
+        assert!(edges.check().is_ok());
+        assert!(FreeOcclusionOptions { starts: 1, ..good }.check().is_ok());
+        let mut bad = vec![
+            FreeOcclusionOptions { starts: 0, ..good },
+            FreeOcclusionOptions {
+                starts: 100_001,
+                ..good
+            },
+            FreeOcclusionOptions {
+                lateral: DVec3::Z * 3.0,
+                ..good
+            },
+            FreeOcclusionOptions {
+                lateral: DVec3::ZERO,
+                ..good
+            },
+            FreeOcclusionOptions {
+                lateral: DVec3::new(f64::NAN, 1.0, 0.0),
+                ..good
+            },
+            FreeOcclusionOptions {
+                closing: OcclusionOptions {
+                    joints: Some(super::super::Joints {
+                        points: [DVec3::ZERO; 2],
+                        anchors: [DVec3::ZERO; 2],
+                        stiffness: 1.0,
+                    }),
+                    ..good.closing
+                },
+                ..good
+            },
+        ];
+        for x in [-1.0, f64::INFINITY, f64::NAN] {
+            bad.push(FreeOcclusionOptions { spread: x, ..good });
+            bad.push(FreeOcclusionOptions {
+                spread_angle: x,
+                ..good
+            });
+            bad.push(FreeOcclusionOptions {
+                same_pose: x,
+                ..good
+            });
+        }
+        for o in bad {
+            assert!(
+                matches!(o.check(), Err(Error::InvalidOption(_))),
+                "{o:?} passed"
+            );
+        }
+    }
+
+    #[test]
+    fn apart_is_the_largest_move_of_the_centre_of_mass_and_six_points_at_the_radius() {
+        let com = DVec3::new(1.0, -2.0, 0.5);
+        let probes = Probes::new(com, 3.0);
+        let p = Pose::new(DVec3::new(0.3, 0.2, -1.0), DQuat::from_rotation_y(0.4)).unwrap();
+        // A shift: every point moves by it.
+        let shifted = Pose::new(p.translation + DVec3::new(0.0, 0.3, 0.4), p.rotation).unwrap();
+        assert!((probes.apart(&p, &shifted) - 0.5).abs() < 1e-12);
+        assert_eq!(probes.apart(&p, &p), 0.0);
+        // Poses that differ by turns about the centre of mass and shifts: the largest move of
+        // the seven points, whichever moves most.
+        let points = [
+            com,
+            com + DVec3::new(3.0, 0.0, 0.0),
+            com - DVec3::new(3.0, 0.0, 0.0),
+            com + DVec3::new(0.0, 3.0, 0.0),
+            com - DVec3::new(0.0, 3.0, 0.0),
+            com + DVec3::new(0.0, 0.0, 3.0),
+            com - DVec3::new(0.0, 0.0, 3.0),
+        ];
+        for (axis, shift) in [
+            (DVec3::X, DVec3::new(0.0, -0.2, 0.1)),
+            (DVec3::Y, DVec3::new(0.1, 0.0, -0.3)),
+            (DVec3::Z, DVec3::new(-0.2, 0.25, 0.0)),
+            (
+                DVec3::new(1.0, 2.0, -1.0).normalize(),
+                DVec3::new(0.05, 0.1, 0.2),
+            ),
+        ] {
+            let turn = DQuat::from_axis_angle(axis, 0.07);
+            let c = p.transform_point(com);
+            let q = Pose::new(turn * (p.translation - c) + c + shift, turn * p.rotation).unwrap();
+            let want = points
+                .iter()
+                .map(|x| (p.transform_point(*x) - q.transform_point(*x)).length())
+                .fold(0.0, f64::max);
+            assert_eq!(probes.apart(&p, &q), want, "{axis}");
+            assert!(want > shift.length(), "{axis}");
+        }
+        // A body of no size is probed at its centre of mass (and a point beside it).
+        assert!((Probes::new(com, 0.0).apart(&p, &shifted) - 0.5).abs() < 1e-12);
+    }
+
+    fn rest_at(x: f64, converged: bool, on: usize, off: usize) -> Result<Rest> {
+        Ok(Rest {
+            o: Occlusion {
+                pose: Pose::new(DVec3::new(x, 0.0, 0.0), DQuat::IDENTITY).unwrap(),
+                converged,
+                steps: 0,
+                seconds: 0.0,
+                volume: 0.0,
+                max_depth: 0.0,
+                patches: vec![],
+                axis: DVec3::Z,
+            },
+            on,
+            off,
+            starts: 1,
+        })
+    }
+
+    #[test]
+    fn rests_within_the_same_pose_distance_of_a_cluster_join_it() {
+        let probes = Probes::new(DVec3::ZERO, 1.0);
+        let rests = [
+            rest_at(0.0, true, 2, 1),
+            rest_at(0.0625, false, 1, 1),
+            // Exactly the distance from the first: a cluster of its own.
+            rest_at(0.125, true, 3, 3),
+            // No contact: counted as converged, not clustered.
+            rest_at(5.0, true, 0, 0),
+            rest_at(0.1875, true, 1, 0),
+            rest_at(-0.0625, true, 1, 2),
+        ];
+        let (clusters, converged) = cluster(rests, &probes, 0.125).unwrap();
+        assert_eq!(converged, 5);
+        let got: Vec<(f64, usize, usize)> = clusters
+            .iter()
+            .map(|k| (k.o.pose.translation.x, k.starts, k.on))
+            .collect();
+        assert_eq!(got, [(0.0, 3, 2), (0.125, 2, 3)]);
+        // A closing's error is the answer.
+        let failing = [
+            rest_at(0.0, true, 1, 1),
+            Err(Error::InvalidOption("x".into())),
+        ];
+        assert!(cluster(failing, &probes, 0.125).is_err());
+    }
+
+    #[test]
+    fn the_lateral_stiffness_is_the_least_stiffness_across_the_axis() {
+        // A linear block with couplings, not symmetric (the contact's is not in general).
+        let m = DMat3::from_cols(
+            DVec3::new(40.0, 7.0, -3.0),
+            DVec3::new(-2.0, 25.0, 5.0),
+            DVec3::new(9.0, 4.0, 100.0),
+        );
+        let (l, f) = (
+            DVec3::new(1.0, 1.0, 0.0).normalize(),
+            DVec3::new(-1.0, 1.0, 0.0).normalize(),
+        );
+        let got = lateral_stiffness(&m, l, f);
+        // The least of u·M·u over the unit pushes u across the axis (z), by brute force.
+        let least = (0..36_000)
+            .map(|i| {
+                let a = i as f64 * std::f64::consts::TAU / 36_000.0;
+                let u = DVec3::new(a.cos(), a.sin(), 0.0);
+                u.dot(m * u)
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!((got - least).abs() < 1e-6, "{got} against {least}");
+        // The same in any basis of the plane.
+        assert!((lateral_stiffness(&m, DVec3::X, DVec3::Y) - got).abs() < 1e-9);
     }
 
     /// Seed 7's first draws, computed apart from this code (Python, the published

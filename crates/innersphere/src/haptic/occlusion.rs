@@ -9,7 +9,7 @@ use crate::error::{num, vec3};
 use crate::error::{Error, Result};
 use crate::pose::Pose;
 use crate::query::{Pair, Patch, PenetrationOptions};
-use glam::{DMat3, DVec3};
+use glam::{DMat3, DQuat, DVec3};
 
 /// `[r]×`.
 fn cross(r: DVec3) -> DMat3 {
@@ -127,28 +127,19 @@ pub fn occlude(
     };
     let h = opts.step;
     let max_steps = (opts.max_seconds / h).ceil() as usize;
-    let window = opts.rest_window.max(1);
-    // The centre of mass and rotation `window` steps ago, in a ring.
-    let mut ring = vec![(DVec3::ZERO, glam::DQuat::IDENTITY); window];
     // Rotations are damped as the body's mass at its radius of gyration would be by the
     // linear damping, so that a small body and a large one settle alike.
-    let i = &body.inertia;
-    let gyration2 = (i.x_axis.x + i.y_axis.y + i.z_axis.z) / (3.0 * body.mass);
+    let gyration2 = gyration_squared(&body);
     let (b, br) = (opts.damping, opts.damping * gyration2);
+    let mut rest = RestWatch::new(opts.rest_window, opts.rest_distance, gyration2.sqrt());
     let mut steps = 0;
     let mut converged = false;
     while steps < max_steps {
         let p = pair.penetration_with(pose_a, &state.pose, &popts);
         let com = state.pose.transform_point(body.center_of_mass);
-        ring[steps % window] = (com, state.pose.rotation);
-        if steps >= window {
-            let (c0, q0) = ring[(steps + 1) % window];
-            let moved = (com - c0).length();
-            let turned = rotation_between(q0, state.pose.rotation).length();
-            if moved < opts.rest_distance && turned < opts.rest_distance / gyration2.sqrt() {
-                converged = true;
-                break;
-            }
+        if rest.at_rest(com, state.pose.rotation) {
+            converged = true;
+            break;
         }
         // The contact's stiffness, then the joints' springs added to it.
         let kc: Mat6 = p.stiffness.to_matrix6();
@@ -157,16 +148,12 @@ pub fn occlude(
             Some(j) => add_joints(j, &state.pose, com, &mut k),
             None => Wrench::default(),
         };
-        let (jf, jt) = (joints.force, joints.torque);
-        // The contact's damping only: β·K of the contact, not of the joints.
-        let (cd, mut d) = contact_damping(&kc, opts.contact_damping, &state);
+        // The damping: B's own, and the contact's (β·K of the contact, not of the joints).
+        let (dw, d) = damping(&kc, opts.contact_damping, b, br, &state);
         let w = Wrench {
-            force: axis * opts.force + jf + p.force - state.velocity * b + cd.force,
-            torque: p.torque_b + jt - state.angular_velocity * br + cd.torque,
+            force: axis * opts.force + joints.force + p.force + dw.force,
+            torque: p.torque_b + joints.torque + dw.torque,
         };
-        for (i, row) in d.iter_mut().enumerate() {
-            row[i] += if i < 3 { b } else { br };
-        }
         if !implicit_step(&body, &mut state, h, w, &k, &d) {
             return Err(Error::InvalidOption(
                 "the occlusion's dynamics became non-finite (a non-finite pose or option?)".into(),
@@ -185,6 +172,66 @@ pub fn occlude(
         patches: pair.patches().to_vec(),
         axis,
     })
+}
+
+/// The square of B's radius of gyration about its centre of mass (mm²): the mean of its
+/// principal moments over its mass.
+fn gyration_squared(body: &RigidBody) -> f64 {
+    let i = &body.inertia;
+    (i.x_axis.x + i.y_axis.y + i.z_axis.z) / (3.0 * body.mass)
+}
+
+/// B's damping: its own viscous damping (`b` on the velocity, `br` on the spin) and the
+/// contact's (`β·K_c`, of the contact stiffness `kc`): the wrench on B's velocity, and the
+/// damping matrix `D` (the wrench is `−D·[v; ω]`).
+fn damping(kc: &Mat6, beta: f64, b: f64, br: f64, state: &BodyState) -> (Wrench, Mat6) {
+    let (cd, mut d) = contact_damping(kc, beta, state);
+    for (i, row) in d.iter_mut().enumerate() {
+        row[i] += if i < 3 { b } else { br };
+    }
+    let w = Wrench {
+        force: cd.force - state.velocity * b,
+        torque: cd.torque - state.angular_velocity * br,
+    };
+    (w, d)
+}
+
+/// Judges when B rests: its centre of mass moved less than `distance` and it turned less
+/// than `angle` since `window` steps ago.
+struct RestWatch {
+    /// The centre of mass and rotation of the last `window` steps, by step modulo `window`.
+    ring: Vec<(DVec3, DQuat)>,
+    /// Steps seen.
+    seen: usize,
+    distance: f64,
+    angle: f64,
+}
+
+impl RestWatch {
+    /// Rest within `distance` (mm) and `distance / gyration` (rad) over `window` steps (at
+    /// least 1).
+    fn new(window: usize, distance: f64, gyration: f64) -> RestWatch {
+        RestWatch {
+            ring: vec![(DVec3::ZERO, DQuat::IDENTITY); window.max(1)],
+            seen: 0,
+            distance,
+            angle: distance / gyration,
+        }
+    }
+
+    /// Records this step's centre of mass and rotation; true when B rests.
+    fn at_rest(&mut self, com: DVec3, rotation: DQuat) -> bool {
+        let (step, window) = (self.seen, self.ring.len());
+        self.seen += 1;
+        self.ring[step % window] = (com, rotation);
+        if step < window {
+            return false;
+        }
+        let (c0, q0) = self.ring[(step + 1) % window];
+        let moved = (com - c0).length();
+        let turned = rotation_between(q0, rotation).length();
+        moved < self.distance && turned < self.angle
+    }
 }
 
 /// The joints' springs on B at `pose` (`com` its centre of mass, world): their wrench about
@@ -278,7 +325,6 @@ fn check(o: &OcclusionOptions) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::DQuat;
 
     /// `pose` moved by `d`: its centre of mass `com` by `d[..3]`, and turned by `d[3..]`
     /// (rotation vector) about it.
@@ -358,5 +404,93 @@ mod tests {
     fn cross_is_the_cross_product_matrix() {
         let (r, v) = (DVec3::new(1.0, -2.0, 3.0), DVec3::new(-0.5, 4.0, 2.0));
         assert_eq!(cross(r) * v, r.cross(v));
+    }
+
+    #[test]
+    fn the_radius_of_gyration_is_the_mean_moment_over_the_mass() {
+        let body = RigidBody {
+            mass: 2.0,
+            center_of_mass: DVec3::new(1.0, 2.0, 3.0),
+            inertia: DMat3::from_diagonal(DVec3::new(1.0, 2.0, 6.0)),
+        };
+        assert_eq!(gyration_squared(&body), 1.5);
+    }
+
+    #[test]
+    fn the_damping_wrench_is_minus_its_matrix_times_the_velocity() {
+        // A contact stiffness, symmetric positive definite with couplings.
+        let mut kc = [[0.0; 6]; 6];
+        for (r, row) in kc.iter_mut().enumerate() {
+            for (c, x) in row.iter_mut().enumerate() {
+                *x = if r == c {
+                    10.0 + r as f64
+                } else {
+                    1.0 / (1.0 + (r + c) as f64)
+                };
+            }
+        }
+        let state = BodyState {
+            pose: Pose::IDENTITY,
+            velocity: DVec3::new(0.3, -1.2, 2.0),
+            angular_velocity: DVec3::new(-0.7, 0.4, 0.9),
+        };
+        let (beta, b, br) = (0.25, 3.0, 5.0);
+        let (w, d) = damping(&kc, beta, b, br, &state);
+        let v = [0.3, -1.2, 2.0, -0.7, 0.4, 0.9];
+        let mut power = 0.0;
+        for r in 0..6 {
+            for c in 0..6 {
+                let own = if r != c {
+                    0.0
+                } else if r < 3 {
+                    b
+                } else {
+                    br
+                };
+                assert_eq!(d[r][c], beta * kc[r][c] + own, "D[{r}][{c}]");
+            }
+            let dv: f64 = (0..6).map(|c| d[r][c] * v[c]).sum();
+            let got = if r < 3 { w.force[r] } else { w.torque[r - 3] };
+            assert!((got + dv).abs() < 1e-12, "row {r}: {got} against {}", -dv);
+            power += got * v[r];
+        }
+        // It takes energy out.
+        assert!(power < 0.0);
+    }
+
+    #[test]
+    fn rest_is_judged_over_the_window_strictly_within_both_thresholds() {
+        let still = (DVec3::new(1.0, 2.0, 3.0), DQuat::from_rotation_z(0.3));
+        // Still: rest from the step after the window fills, not before.
+        let mut watch = RestWatch::new(4, 0.25, 2.0);
+        for step in 0..4 {
+            assert!(!watch.at_rest(still.0, still.1), "step {step}");
+        }
+        assert!(watch.at_rest(still.0, still.1));
+        // A window of 0 is one step.
+        let mut watch = RestWatch::new(0, 0.25, 2.0);
+        assert!(!watch.at_rest(still.0, still.1));
+        assert!(watch.at_rest(still.0, still.1));
+        // Moved by exactly the distance since the window's oldest step: not at rest; by less:
+        // at rest.
+        for (moved, rests) in [(0.25, false), (0.125, true)] {
+            let mut watch = RestWatch::new(3, 0.25, 2.0);
+            for _ in 0..3 {
+                assert!(!watch.at_rest(still.0, still.1));
+            }
+            let at = still.0 + DVec3::X * moved;
+            assert_eq!(watch.at_rest(at, still.1), rests, "moved {moved}");
+        }
+        // Turned by exactly the angle (the distance over the radius of gyration): not at
+        // rest; by less: at rest; the angle is the distance over the radius, not times it.
+        let turn = DQuat::from_rotation_x(0.2) * still.1;
+        let angle = rotation_between(still.1, turn).length();
+        for (gyration, rests) in [(1.0, false), (0.5, true), (2.0, false)] {
+            let mut watch = RestWatch::new(2, angle, gyration);
+            for _ in 0..2 {
+                assert!(!watch.at_rest(still.0, still.1));
+            }
+            assert_eq!(watch.at_rest(still.0, turn), rests, "gyration {gyration}");
+        }
     }
 }

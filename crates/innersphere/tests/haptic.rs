@@ -16,7 +16,7 @@ use innersphere::haptic::{
     occlude, occlude_free, DeviceClass, FreeOcclusionOptions, HapticLoop, HapticOptions, Joints,
     OcclusionOptions, RigidBody, Servo,
 };
-use innersphere::{shapes, Pair, Pose, SphereTree};
+use innersphere::{shapes, Pair, PenetrationOptions, Pose, SphereTree};
 use proptest::prelude::*;
 
 #[test]
@@ -375,7 +375,31 @@ fn free_occlusion_from_many_starts_seats_the_peg() {
             c.contact_area > 0.0 && c.volume > 0.0 && c.lateral_stiffness > 0.0,
             "{c:?}"
         );
+        assert_eq!(c.contacts, c.lateral_side + c.other_side, "{c:?}");
+        // The contact at the candidate, with the closing's stiffness: its area, volume and
+        // least stiffness across the closing axis (z), lateral x and anterior y.
+        let p = Pair::new(a.clone(), b.clone()).penetration_with(
+            &Pose::IDENTITY,
+            &c.pose,
+            &PenetrationOptions {
+                stiffness: 20.0,
+                linearize: true,
+                ..Default::default()
+            },
+        );
+        assert_eq!((c.contact_area, c.volume), (p.area, p.volume));
+        let m = p.stiffness.linear;
+        let (xx, yy, xy) = (m.x_axis.x, m.y_axis.y, 0.5 * (m.y_axis.x + m.x_axis.y));
+        let least = 0.5 * (xx + yy) - (0.25 * (xx - yy).powi(2) + xy * xy).sqrt();
+        assert!(
+            (c.lateral_stiffness - least).abs() <= 1e-9 * least.abs(),
+            "{} against {least}",
+            c.lateral_stiffness
+        );
     }
+    let closing = f.closing.as_ref().unwrap();
+    assert_eq!(closing.pose, f.pose);
+    assert_eq!(closing.patches.len(), f.candidates[0].contacts);
     assert_eq!(
         f,
         occlude_free(&a, &b, &Pose::IDENTITY, &from, &opts).unwrap()
@@ -414,6 +438,20 @@ fn free_occlusion_from_many_starts_seats_the_peg() {
             occlude_free(&a, &b, &Pose::IDENTITY, &from, &bad).is_err(),
             "{bad:?}"
         );
+    }
+    // A start with a non-finite translation, or rotation, alone.
+    for start in [
+        Pose {
+            translation: DVec3::new(0.0, f64::NAN, 0.0),
+            ..from
+        },
+        Pose {
+            rotation: DQuat::from_xyzw(0.0, 0.0, f64::INFINITY, 1.0),
+            ..from
+        },
+    ] {
+        let e = occlude_free(&a, &b, &Pose::IDENTITY, &start, &opts).unwrap_err();
+        assert!(e.to_string().contains("start pose must be finite"), "{e}");
     }
 }
 
@@ -467,6 +505,23 @@ fn occlusion_refuses_bad_options() {
     let mut pair = Pair::new(a.clone(), b.clone());
     let e = occlude(&mut pair, &Pose::IDENTITY, &on_slab(-1.0), &o).unwrap_err();
     assert!(e.to_string().contains("closing axis"), "{e}");
+}
+
+/// Out of time, the occlusion stops after the steps the time allows (rounded up), not one
+/// more, and says it did not come to rest.
+#[test]
+fn an_occlusion_out_of_time_stops_at_its_step_limit() {
+    let _serial = serial();
+    let (a, b) = slab_and_block();
+    let o = OcclusionOptions {
+        max_seconds: 0.0105,
+        ..OcclusionOptions::default()
+    };
+    let mut pair = Pair::new(a.clone(), b.clone());
+    let r = occlude(&mut pair, &Pose::IDENTITY, &on_slab(-1.0), &o).unwrap();
+    assert!(!r.converged);
+    assert_eq!(r.steps, 11);
+    assert!((r.seconds - 0.011).abs() < 1e-15, "{}", r.seconds);
 }
 
 #[test]

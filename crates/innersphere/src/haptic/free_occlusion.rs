@@ -401,6 +401,19 @@ mod tests {
             assert_ne!(other[1], starts[1], "seed {seed}");
         }
         let c = from.transform_point(com);
+        // Start 1 from the generator's state for seed 3 (3 ^ 0x9e3779b97f4a7c15, odd): its
+        // draws 4 to 6 move it sideways (x), forwards (y) and turn it (z) about the centre of
+        // mass. A seed gives the same starts in every version.
+        let mut draws = Spread(0x9e37_79b9_7f4a_7c17);
+        let d: Vec<f64> = (0..6).map(|_| draws.unit()).collect();
+        let turn = DQuat::from_rotation_z(d[5] * 0.1);
+        let want = turn * (from.translation - c) + c + DVec3::new(d[3], d[4], 0.0) * 1.5;
+        assert!(
+            (starts[1].translation - want).length() < 1e-12,
+            "{}",
+            starts[1].translation
+        );
+        assert!((starts[1].rotation - turn * from.rotation).length() < 1e-12);
         let (mut far_x, mut far_y, mut far_turn) = (0.0f64, 0.0f64, 0.0f64);
         for s in &starts[1..] {
             let d = s.transform_point(com) - c;

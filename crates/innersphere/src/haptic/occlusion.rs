@@ -119,18 +119,13 @@ pub fn occlude(
     let body = RigidBody::from_tree(pair.tree_b(), opts.density)?;
     let axis = unit(opts.axis).expect("checked");
     let mut state = BodyState::at_rest(*from);
-    let popts = PenetrationOptions {
-        stiffness: opts.contact_stiffness,
-        max_patches: 16,
-        linearize: true,
-        ..Default::default()
-    };
+    let popts = contact_options(opts);
     let h = opts.step;
     let max_steps = (opts.max_seconds / h).ceil() as usize;
     // Rotations are damped as the body's mass at its radius of gyration would be by the
     // linear damping, so that a small body and a large one settle alike.
     let gyration2 = gyration_squared(&body);
-    let (b, br) = (opts.damping, opts.damping * gyration2);
+    let (b, br) = own_damping(opts.damping, gyration2);
     let mut rest = RestWatch::new(opts.rest_window, opts.rest_distance, gyration2.sqrt());
     let mut steps = 0;
     let mut converged = false;
@@ -172,6 +167,27 @@ pub fn occlude(
         patches: pair.patches().to_vec(),
         axis,
     })
+}
+
+/// Up to this many contact patches are reported at rest.
+const PATCHES: usize = 16;
+
+/// The contact query of every step: the penetration at the options' stiffness, linearised
+/// (the implicit step needs the contact's stiffness), with up to [`PATCHES`] patches.
+fn contact_options(opts: &OcclusionOptions) -> PenetrationOptions {
+    PenetrationOptions {
+        stiffness: opts.contact_stiffness,
+        max_patches: PATCHES,
+        linearize: true,
+        ..Default::default()
+    }
+}
+
+/// B's own damping, linear (N·s/mm) and rotational (N·mm·s/rad): `damping`, and `damping`
+/// at the radius of gyration (`gyration2` its square), so that B's mass at that radius is
+/// damped as the linear damping damps it.
+fn own_damping(damping: f64, gyration2: f64) -> (f64, f64) {
+    (damping, damping * gyration2)
 }
 
 /// The square of B's radius of gyration about its centre of mass (mm²): the mean of its
@@ -492,5 +508,28 @@ mod tests {
             }
             assert_eq!(watch.at_rest(still.0, turn), rests, "gyration {gyration}");
         }
+    }
+
+    #[test]
+    fn each_step_asks_for_the_linearised_contact_with_its_patches() {
+        let opts = OcclusionOptions {
+            contact_stiffness: 123.0,
+            ..Default::default()
+        };
+        assert_eq!(
+            contact_options(&opts),
+            PenetrationOptions {
+                stiffness: 123.0,
+                max_patches: 16,
+                linearize: true,
+                ..Default::default()
+            }
+        );
+    }
+
+    #[test]
+    fn rotations_are_damped_as_the_mass_at_the_radius_of_gyration() {
+        assert_eq!(own_damping(3.0, 4.0), (3.0, 12.0));
+        assert_eq!(own_damping(0.5, 0.25), (0.5, 0.125));
     }
 }

@@ -532,4 +532,36 @@ mod tests {
         assert_eq!(own_damping(3.0, 4.0), (3.0, 12.0));
         assert_eq!(own_damping(0.5, 0.25), (0.5, 0.125));
     }
+
+    #[test]
+    fn the_options_are_checked_at_their_edges() {
+        let base = OcclusionOptions::default();
+        let ok = |o: OcclusionOptions| check(&o).is_ok();
+        assert!(ok(base));
+        // No contact damping is allowed; a negative or non-finite one is not.
+        assert!(ok(OcclusionOptions {
+            contact_damping: 0.0,
+            ..base
+        }));
+        for x in [-1.0, f64::INFINITY, f64::NAN] {
+            assert!(
+                !ok(OcclusionOptions {
+                    contact_damping: x,
+                    ..base
+                }),
+                "{x}"
+            );
+        }
+        // Exactly 10⁸ steps are allowed, more are not.
+        assert!(ok(OcclusionOptions {
+            max_seconds: 5e7,
+            step: 0.5,
+            ..base
+        }));
+        assert!(!ok(OcclusionOptions {
+            max_seconds: 5.000_000_1e7,
+            step: 0.5,
+            ..base
+        }));
+    }
 }

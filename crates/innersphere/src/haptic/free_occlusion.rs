@@ -383,14 +383,14 @@ mod tests {
             starts: 300,
             spread: 1.5,
             spread_angle: 0.1,
-            seed: 3,
+            seed: 4,
             ..Default::default()
         };
         let starts = spread_starts(&from, com, axis, lateral, &opts);
         assert_eq!(starts.len(), 300);
         assert_eq!(starts[0], from);
         assert_eq!(starts, spread_starts(&from, com, axis, lateral, &opts));
-        for seed in [0, 4, u64::MAX] {
+        for seed in [0, 3, u64::MAX] {
             let other = spread_starts(
                 &from,
                 com,
@@ -401,10 +401,10 @@ mod tests {
             assert_ne!(other[1], starts[1], "seed {seed}");
         }
         let c = from.transform_point(com);
-        // Start 1 from the generator's state for seed 3 (3 ^ 0x9e3779b97f4a7c15, odd): its
+        // Start 1 from the generator's state for seed 4 (4 ^ 0x9e3779b97f4a7c15, made odd): its
         // draws 4 to 6 move it sideways (x), forwards (y) and turn it (z) about the centre of
         // mass. A seed gives the same starts in every version.
-        let mut draws = Spread(0x9e37_79b9_7f4a_7c17);
+        let mut draws = Spread(0x9e37_79b9_7f4a_7c11);
         let d: Vec<f64> = (0..6).map(|_| draws.unit()).collect();
         let turn = DQuat::from_rotation_z(d[5] * 0.1);
         let want = turn * (from.translation - c) + c + DVec3::new(d[3], d[4], 0.0) * 1.5;

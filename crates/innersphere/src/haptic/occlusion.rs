@@ -213,7 +213,7 @@ fn damping(kc: &Mat6, beta: f64, b: f64, br: f64, state: &BodyState) -> (Wrench,
 }
 
 /// Judges when B rests: its centre of mass moved less than `distance` and it turned less
-/// than `angle` since `window` steps ago.
+/// than `angle` since the oldest of the last `window` steps (`window − 1` steps ago).
 struct RestWatch {
     /// The centre of mass and rotation of the last `window` steps, by step modulo `window`.
     ring: Vec<(DVec3, DQuat)>,

@@ -22,7 +22,7 @@
 //! 0.39–0.41 mm from the scanned bite at the worst crown centre, in 1–4 s on 2 cores
 //! (docs/OCCLUSION.md).
 
-use super::occlusion::{occlude, Occlusion, OcclusionOptions};
+use super::occlusion::{occlude, unit, Occlusion, OcclusionOptions};
 use crate::error::{num, vec3, Error, Result};
 use crate::pose::Pose;
 use crate::query::{Pair, Patch, PenetrationOptions, SharedTree};
@@ -101,7 +101,8 @@ impl FreeOcclusionOptions {
                 )));
             }
         }
-        let axis = self.closing.axis.normalize_or_zero();
+        // No axis (the closing refuses it): the lateral direction is taken as given.
+        let axis = unit(self.closing.axis).unwrap_or(DVec3::ZERO);
         let lateral = (self.lateral - axis * self.lateral.dot(axis)).normalize_or_zero();
         if lateral == DVec3::ZERO {
             return Err(Error::InvalidOption(format!(
@@ -453,19 +454,8 @@ mod tests {
     #[test]
     fn rests_rank_by_starts_times_the_weaker_side_over_the_imbalance() {
         let rest = |starts, on, off| Rest {
-            o: Occlusion {
-                pose: Pose::IDENTITY,
-                converged: true,
-                steps: 0,
-                seconds: 0.0,
-                volume: 0.0,
-                max_depth: 0.0,
-                patches: vec![],
-                axis: DVec3::Z,
-            },
-            on,
-            off,
             starts,
+            ..rest_at(0.0, true, on, off).unwrap()
         };
         assert_eq!(rest(3, 4, 2).score(), 2.0);
         assert_eq!(rest(3, 2, 4).score(), 2.0);
@@ -513,6 +503,15 @@ mod tests {
         };
         // The lateral direction's part along the closing axis (z) is dropped.
         assert_eq!(good.check().unwrap(), (DVec3::Z, DVec3::X));
+        // A closing axis too long to square is still a direction.
+        let huge = FreeOcclusionOptions {
+            closing: OcclusionOptions {
+                axis: DVec3::new(0.0, 0.0, 1e300),
+                ..good.closing
+            },
+            ..good
+        };
+        assert_eq!(huge.check().unwrap(), (DVec3::Z, DVec3::X));
         let edges = FreeOcclusionOptions {
             starts: 100_000,
             spread: 0.0,
@@ -614,6 +613,7 @@ mod tests {
         assert!((Probes::new(com, 0.0).apart(&p, &shifted) - 0.5).abs() < 1e-12);
     }
 
+    /// A closing that rested at `x` along x, with `on` and `off` patches on either side.
     fn rest_at(x: f64, converged: bool, on: usize, off: usize) -> Result<Rest> {
         Ok(Rest {
             o: Occlusion {

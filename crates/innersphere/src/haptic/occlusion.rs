@@ -275,7 +275,7 @@ fn add_joints(j: &Joints, pose: &Pose, com: DVec3, k: &mut Mat6) -> Wrench {
 
 /// `v` scaled to length 1, robustly (a huge or tiny vector too); `None` when it has no
 /// direction (zero or non-finite).
-fn unit(v: DVec3) -> Option<DVec3> {
+pub(super) fn unit(v: DVec3) -> Option<DVec3> {
     // `max_element` passes a NaN component over: test every component.
     let scale = v.abs().max_element();
     if !(v.is_finite() && scale > 0.0) {

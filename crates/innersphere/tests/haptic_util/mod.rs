@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use glam::DVec3;
-use innersphere::haptic::{DeviceClass, HapticOptions};
+use innersphere::haptic::{DeviceClass, HapticOptions, Servo};
 use innersphere::{shapes, BuildOptions, Mesh, Pose, Resolution, SharedTree, SphereTree};
 use std::sync::OnceLock;
 
@@ -64,4 +64,16 @@ pub fn swing(start: Pose, rate: f64, n: usize) -> Vec<Pose> {
             }
         })
         .collect()
+}
+
+/// A loop's energy to the user and its largest (`got`) are a lone `Servo`'s (`servo`) bit
+/// for bit, and passive: below 0 (not the −1 a broken sum would give), the largest at least
+/// the last.
+pub fn assert_passive_as_servo(got: (f64, f64), servo: &Servo) {
+    let (e, e_max) = (servo.energy_to_user(), servo.energy_to_user_max());
+    assert_eq!(got, (e, e_max));
+    assert!(
+        e < 0.0 && e != -1.0 && e_max >= e,
+        "{e} J, largest {e_max} J"
+    );
 }

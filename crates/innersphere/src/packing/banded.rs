@@ -54,7 +54,7 @@ pub(super) fn pack(
     } else {
         0.0
     };
-    let mut live: Vec<u32> = (0..bounds.len() as u32)
+    let live: Vec<u32> = (0..bounds.len() as u32)
         .into_par_iter()
         .filter(|&p| {
             let v = bounds[p as usize];
@@ -73,20 +73,34 @@ pub(super) fn pack(
     while edge(n) < largest {
         n += 1;
     }
+    // Band `m ≥ 1` is `[edge(m − 1), edge(m))`, the first (`n`) also holds its top; with
+    // `n = 0` one band takes everything down to the floor.
+    let edges: Vec<f64> = (0..n).map(edge).collect();
+    let band_of = |v: f64| edges.partition_point(|&e| e <= v);
+    // The live voxels by the band of their remaining distance. Distances only shrink, so a
+    // voxel only moves to lower bands: each band looks at its own voxels, not at all of them.
+    let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); n as usize + 1];
+    sort_into(&mut buckets, &live, |p| {
+        let v = bounds[p as usize];
+        Some(band_of(v))
+    });
+    drop(live);
     progress.start("packing spheres", field.inside.len() as u64);
     let mut spheres: Vec<Sphere> = Vec::new();
-    while !live.is_empty() {
-        // Every remaining distance is at most `top`; the band is [low, top]. The last band
-        // takes everything down to the floor.
-        let top = edge(n);
-        n = (n - 1).max(0);
-        let low = edge(n);
+    for band in (0..=n as usize).rev() {
+        let held = std::mem::take(&mut buckets[band]);
+        if held.is_empty() {
+            continue;
+        }
+        // Every remaining distance is at most `top`; the band is [low, top].
+        let top = edge(band as i32);
+        let low = edge(band.saturating_sub(1) as i32);
         let cap = top + growth;
         // Writes reach 2·cap + top + 1.5 voxels from a block's voxels: two same-coloured
         // blocks, one block apart, never meet.
         let side = (((4.0 * cap + 2.0 * top) / h).ceil() as u32 + 4).max(8);
         // The band's voxels, by colour and block.
-        let mut entries: Vec<(u64, Entry)> = live
+        let mut entries: Vec<(u64, Entry)> = held
             .par_iter()
             .filter_map(|&p| {
                 let v = remaining.get(p as usize);
@@ -133,16 +147,44 @@ pub(super) fn pack(
             }
         }
         progress.advance(covered);
-        live = live
-            .into_par_iter()
-            .filter(|&p| {
-                let v = remaining.get(p as usize);
-                v > 0.0 && v >= floor
-            })
-            .collect();
+        // Every voxel left in this band's range was packed down below `low` (or covered):
+        // the live ones move to the bands of their remaining distances.
+        sort_into(&mut buckets, &held, |p| {
+            let v = remaining.get(p as usize);
+            (v > 0.0 && v >= floor).then(|| band_of(v))
+        });
     }
     progress.finish();
     spheres
+}
+
+/// Appends each of `voxels` to the bucket `band(voxel)` gives (none: dropped), on all threads;
+/// the order within a bucket is of no consequence (a band's voxels are sorted by block, and
+/// a block's queue orders them totally).
+fn sort_into(buckets: &mut [Vec<u32>], voxels: &[u32], band: impl Fn(u32) -> Option<usize> + Sync) {
+    const CHUNK: usize = 1 << 16;
+    let n = buckets.len();
+    let parts: Vec<Vec<Vec<u32>>> = voxels
+        .par_chunks(CHUNK)
+        .map(|chunk| {
+            let mut local = vec![Vec::new(); n];
+            for &p in chunk {
+                if let Some(b) = band(p) {
+                    local[b].push(p);
+                }
+            }
+            local
+        })
+        .collect();
+    for part in parts {
+        for (bucket, mut add) in buckets.iter_mut().zip(part) {
+            if bucket.is_empty() {
+                *bucket = add;
+            } else {
+                bucket.append(&mut add);
+            }
+        }
+    }
 }
 
 /// What the blocks of one band share.

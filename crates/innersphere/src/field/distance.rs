@@ -14,6 +14,7 @@ use crate::mesh::Mesh;
 use crate::progress::Progress;
 use glam::DVec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 /// Rows of voxels handled sequentially by one parallel task (fixed, so that seeding does not
 /// depend on scheduling).
@@ -142,18 +143,18 @@ pub fn bounds(
         let [a, b, cc] = [i, j, k].map(|x| (x + s / 2) / s);
         a as usize + cd[0] as usize * (b as usize + cd[1] as usize * cc as usize)
     };
-    // The triangle slot of every lattice node, dense (a 27th of the grid's cells at stride
-    // 3, 4 bytes each): first marked where a node is next to an inside voxel.
-    const UNSET: u32 = u32::MAX;
-    const NEEDED: u32 = u32::MAX - 1;
-    let mut node_slot = vec![UNSET; cd.iter().map(|&d| d as usize).product()];
-    for &c in &inside {
-        node_slot[node_of(c)] = NEEDED;
-    }
-    // The marked nodes, ascending.
-    let nodes: Vec<u32> = (0..node_slot.len() as u32)
-        .filter(|&n| node_slot[n as usize] == NEEDED)
+    // The lattice nodes next to an inside voxel, ascending (marked on all threads).
+    let cells = cd.iter().map(|&d| d as usize).product();
+    let marked: Vec<AtomicBool> = (0..cells).map(|_| AtomicBool::new(false)).collect();
+    inside
+        .par_iter()
+        .for_each(|&c| marked[node_of(c)].store(true, Relaxed));
+    let nodes: Vec<u32> = (0..cells as u32)
+        .into_par_iter()
+        .filter(|&n| marked[n as usize].load(Relaxed))
         .collect();
+    drop(marked);
+    const UNSET: u32 = u32::MAX;
     progress.start("distance field", (nodes.len() + inside.len()) as u64);
     let node_point = |n: u32| -> DVec3 {
         let n = n as usize;
@@ -180,6 +181,9 @@ pub fn bounds(
             out
         })
         .collect();
+    // The triangle slot of every lattice node, dense (a 27th of the grid's cells at stride
+    // 3, 4 bytes each).
+    let mut node_slot = vec![UNSET; cells];
     for (&n, &slot) in nodes.iter().zip(&slots) {
         node_slot[n as usize] = slot;
     }

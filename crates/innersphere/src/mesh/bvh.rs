@@ -142,7 +142,9 @@ fn half_area(lo: DVec3, hi: DVec3) -> f64 {
 impl TriangleBvh {
     /// Builds the tree over all triangles of `mesh` (whose indices must be valid).
     pub fn new(mesh: &Mesh) -> Self {
+        use rayon::prelude::*;
         let tris: Vec<[DVec3; 3]> = (0..mesh.triangles.len())
+            .into_par_iter()
             .map(|t| mesh.triangle(t))
             .collect();
         Self::from_triangles(&tris)
@@ -150,8 +152,9 @@ impl TriangleBvh {
 
     /// Builds the tree over a triangle soup; triangle `i` of the answers is `tris[i]`.
     pub fn from_triangles(tris: &[[DVec3; 3]]) -> Self {
+        use rayon::prelude::*;
         let mut prims: Vec<Prim> = tris
-            .iter()
+            .par_iter()
             .enumerate()
             .map(|(i, t)| {
                 let lo = t[0].min(t[1]).min(t[2]);
@@ -168,8 +171,8 @@ impl TriangleBvh {
         if !prims.is_empty() {
             build(&mut prims, 0, 0, &mut nodes);
         }
-        let order: Vec<u32> = prims.iter().map(|p| p.idx).collect();
-        let tris: Vec<[DVec3; 3]> = order.iter().map(|&i| tris[i as usize]).collect();
+        let order: Vec<u32> = prims.par_iter().map(|p| p.idx).collect();
+        let tris: Vec<[DVec3; 3]> = order.par_iter().map(|&i| tris[i as usize]).collect();
         let slabs = slabs(&nodes, &tris);
         TriangleBvh {
             nodes,
@@ -347,16 +350,22 @@ fn slabs(nodes: &[BvhNode], tris: &[[DVec3; 3]]) -> Vec<NodeSlab> {
     use rayon::prelude::*;
     let n = nodes.len();
     let mut range = vec![(0usize, 0usize); n];
-    let mut normal = vec![DVec3::ZERO; n];
+    // The leaves' area-weighted normals on all threads, then the inner nodes' sums.
+    let mut normal: Vec<DVec3> = nodes
+        .par_iter()
+        .map(|node| {
+            if node.is_leaf() {
+                let r = node.start as usize..(node.start + node.count) as usize;
+                tris[r].iter().map(|&[a, b, c]| (b - a).cross(c - a)).sum()
+            } else {
+                DVec3::ZERO
+            }
+        })
+        .collect();
     for i in (0..n).rev() {
         let node = &nodes[i];
         if node.is_leaf() {
-            let r = node.start as usize..(node.start + node.count) as usize;
-            normal[i] = tris[r.clone()]
-                .iter()
-                .map(|&[a, b, c]| (b - a).cross(c - a))
-                .sum();
-            range[i] = (r.start, r.end);
+            range[i] = (node.start as usize, (node.start + node.count) as usize);
         } else {
             let (l, r) = (i + 1, node.start as usize);
             normal[i] = normal[l] + normal[r];
@@ -403,16 +412,23 @@ fn slabs(nodes: &[BvhNode], tris: &[[DVec3; 3]]) -> Vec<NodeSlab> {
 
 /// Builds the subtree over `prims` (whose first slot is `first`) and appends it to `out`.
 fn build(prims: &mut [Prim], first: u32, depth: u32, out: &mut Vec<BvhNode>) {
-    let mut lo = DVec3::splat(f64::INFINITY);
-    let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    let mut clo = lo;
-    let mut chi = hi;
-    for p in prims.iter() {
-        lo = lo.min(p.lo);
-        hi = hi.max(p.hi);
-        clo = clo.min(p.c);
-        chi = chi.max(p.c);
-    }
+    let [lo, hi, clo, chi] = if prims.len() > 4 * PAR_THRESHOLD {
+        // Min and max merge exactly: the same box whatever the scheduling.
+        use rayon::prelude::*;
+        prims.par_chunks(PAR_THRESHOLD).map(extent).reduce(
+            || extent(&[]),
+            |a, b| {
+                [
+                    a[0].min(b[0]),
+                    a[1].max(b[1]),
+                    a[2].min(b[2]),
+                    a[3].max(b[3]),
+                ]
+            },
+        )
+    } else {
+        extent(prims)
+    };
     let n = prims.len();
     if n <= LEAF_SIZE {
         out.push(BvhNode {
@@ -454,6 +470,21 @@ fn build(prims: &mut [Prim], first: u32, depth: u32, out: &mut Vec<BvhNode>) {
         out[me].start = out.len() as u32;
         build(right, rfirst, depth + 1, out);
     }
+}
+
+/// The box of `prims` and the box of their centroids: `[lo, hi, centroid lo, centroid hi]`.
+fn extent(prims: &[Prim]) -> [DVec3; 4] {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    let mut clo = lo;
+    let mut chi = hi;
+    for p in prims {
+        lo = lo.min(p.lo);
+        hi = hi.max(p.hi);
+        clo = clo.min(p.c);
+        chi = chi.max(p.c);
+    }
+    [lo, hi, clo, chi]
 }
 
 /// Appends a subtree built in its own vector, shifting its child links.

@@ -53,29 +53,12 @@ pub fn cluster(points: &[DVec3], weights: &[f64], n: usize, opts: &BngOptions) -
         for (k, hk) in h.iter_mut().enumerate().take(n) {
             *hk = (-(k as f64) / lambda).exp();
         }
-        let accumulate = |range: std::ops::Range<usize>| {
-            let mut num = [DVec3::ZERO; MAX_PROTOTYPES];
-            let mut den = [0.0f64; MAX_PROTOTYPES];
-            let mut d = [0.0f64; MAX_PROTOTYPES];
-            for j in range {
-                let x = points[j];
-                for i in 0..n {
-                    d[i] = x.distance_squared(protos[i]);
-                }
-                for i in 0..n {
-                    // Rank: how many prototypes are strictly closer (ties by index).
-                    let mut rank = 0;
-                    for k in 0..n {
-                        if d[k] < d[i] || (d[k] == d[i] && k < i) {
-                            rank += 1;
-                        }
-                    }
-                    let w = h[rank] * weights[j];
-                    num[i] += x * w;
-                    den[i] += w;
-                }
-            }
-            (num, den)
+        // The common fan-outs get loops of a constant length (unrolled): the same sums.
+        let accumulate = |range: std::ops::Range<usize>| match n {
+            2 => accumulate(points, weights, &protos, &h, range, 2),
+            4 => accumulate(points, weights, &protos, &h, range, 4),
+            8 => accumulate(points, weights, &protos, &h, range, 8),
+            _ => accumulate(points, weights, &protos, &h, range, n),
         };
         let parts: Vec<([DVec3; MAX_PROTOTYPES], [f64; MAX_PROTOTYPES])> = if points.len() > CHUNK {
             (0..points.len().div_ceil(CHUNK))
@@ -118,6 +101,41 @@ pub fn cluster(points: &[DVec3], weights: &[f64], n: usize, opts: &BngOptions) -
             best as u8
         })
         .collect()
+}
+
+/// One iteration's weighted sums over the points `range`: for each of the `n` prototypes,
+/// `Σ h[rank] · w_j · x_j` and `Σ h[rank] · w_j`, the rank being how many prototypes are
+/// strictly closer to `x_j` (ties by index).
+#[inline(always)]
+fn accumulate(
+    points: &[DVec3],
+    weights: &[f64],
+    protos: &[DVec3],
+    h: &[f64; MAX_PROTOTYPES],
+    range: std::ops::Range<usize>,
+    n: usize,
+) -> ([DVec3; MAX_PROTOTYPES], [f64; MAX_PROTOTYPES]) {
+    let mut num = [DVec3::ZERO; MAX_PROTOTYPES];
+    let mut den = [0.0f64; MAX_PROTOTYPES];
+    let mut d = [0.0f64; MAX_PROTOTYPES];
+    for j in range {
+        let x = points[j];
+        for i in 0..n {
+            d[i] = x.distance_squared(protos[i]);
+        }
+        for i in 0..n {
+            let mut rank = 0;
+            for k in 0..n {
+                if d[k] < d[i] || (d[k] == d[i] && k < i) {
+                    rank += 1;
+                }
+            }
+            let w = h[rank] * weights[j];
+            num[i] += x * w;
+            den[i] += w;
+        }
+    }
+    (num, den)
 }
 
 /// Deterministic farthest-point initialisation: the point farthest from the centroid, then

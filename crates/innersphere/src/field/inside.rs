@@ -209,7 +209,7 @@ where
     let buckets = RowBuckets::new(mesh, grid);
     let nbands = buckets.start.len() - 1;
     progress.start(stage, ny as u64);
-    let per_band: Vec<Vec<u32>> = (0..nbands)
+    let per_band: Vec<(Vec<u32>, Vec<usize>)> = (0..nbands)
         .into_par_iter()
         .map(|b| {
             let tris = &buckets.tris[buckets.start[b] as usize..buckets.start[b + 1] as usize];
@@ -231,12 +231,60 @@ where
                 f(j, &hits, &mut out);
             }
             progress.advance(rows_here.len() as u64);
-            out
+            by_layer(out, grid)
         })
         .collect();
     progress.finish();
-    let mut inside: Vec<u32> = per_band.concat();
-    inside.par_sort_unstable();
+    merge_layers(&per_band, grid)
+}
+
+/// A band's cells, emitted row by row (`j`), column by column (`i`), `k` ascending, regrouped
+/// by layer `k` (stable): the cells and where each layer starts (`nz + 1` entries).
+fn by_layer(cells: Vec<u32>, grid: &VoxelGrid) -> (Vec<u32>, Vec<usize>) {
+    let [nx, ny, nz] = grid.dims;
+    let layer = |c: u32| (c / (nx * ny)) as usize;
+    let mut start = vec![0usize; nz as usize + 1];
+    for &c in &cells {
+        start[layer(c) + 1] += 1;
+    }
+    for k in 0..nz as usize {
+        start[k + 1] += start[k];
+    }
+    let mut at = start.clone();
+    let mut out = vec![0u32; cells.len()];
+    for c in cells {
+        let k = layer(c);
+        out[at[k]] = c;
+        at[k] += 1;
+    }
+    (out, start)
+}
+
+/// All bands' cells in ascending order: layer by layer, each layer's cells band by band (the
+/// bands hold ascending rows), on all threads; a final check falls back to sorting should an
+/// emitter ever break the order.
+fn merge_layers(bands: &[(Vec<u32>, Vec<usize>)], grid: &VoxelGrid) -> Vec<u32> {
+    let nz = grid.dims[2] as usize;
+    let size = |k: usize| bands.iter().map(|(_, s)| s[k + 1] - s[k]).sum::<usize>();
+    let mut inside = vec![0u32; (0..nz).map(size).sum()];
+    let mut layers = Vec::with_capacity(nz);
+    let mut rest = &mut inside[..];
+    for k in 0..nz {
+        let (this, more) = rest.split_at_mut(size(k));
+        layers.push(this);
+        rest = more;
+    }
+    layers.into_par_iter().enumerate().for_each(|(k, dst)| {
+        let mut at = 0;
+        for (cells, start) in bands {
+            let src = &cells[start[k]..start[k + 1]];
+            dst[at..at + src.len()].copy_from_slice(src);
+            at += src.len();
+        }
+    });
+    if !inside.par_windows(2).all(|w| w[0] < w[1]) {
+        inside.par_sort_unstable();
+    }
     inside
 }
 

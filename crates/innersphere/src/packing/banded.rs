@@ -136,13 +136,14 @@ pub(super) fn pack(
             let placed: Vec<(Vec<Sphere>, u64)> =
                 these.par_iter().map(|b| band.block(b, &spheres)).collect();
             blocks = rest;
-            let first = spheres.len();
             for (local, c) in placed {
                 covered += c;
-                spheres.extend(local);
-            }
-            if let Some(r) = refiner.as_mut() {
-                r.insert_all(first as u32, &spheres[first..]);
+                for s in local {
+                    if let Some(r) = refiner.as_mut() {
+                        r.insert(spheres.len() as u32, s.center, s.radius);
+                    }
+                    spheres.push(s);
+                }
             }
         }
         progress.advance(covered);

@@ -67,48 +67,6 @@ impl<'a> Refiner<'a> {
         }
     }
 
-    /// Registers the placed spheres `new`, whose ids run from `first`: the same buckets, in
-    /// the same order, as [`insert`](Self::insert) one by one, filled layer by layer on all
-    /// threads (one by one, the insertion was a tenth of the packing's time on 16 threads).
-    pub(super) fn insert_all(&mut self, first: u32, new: &[Sphere]) {
-        use rayon::prelude::*;
-        if new.len() < 256 {
-            for (n, s) in new.iter().enumerate() {
-                self.insert(first + n as u32, s.center, s.radius);
-            }
-            return;
-        }
-        // Each layer of buckets gets the spheres that reach it, in id order.
-        type Reach = (u32, [i64; 3], [i64; 3]);
-        let mut layers: Vec<Vec<Reach>> = vec![Vec::new(); self.dims[2] as usize];
-        for (n, s) in new.iter().enumerate() {
-            let id = first + n as u32;
-            if s.radius > 8.0 * self.cell {
-                self.big.push(id);
-                continue;
-            }
-            let a = self.cell_of(s.center - s.radius);
-            let b = self.cell_of(s.center + s.radius);
-            for z in a[2]..=b[2] {
-                layers[z as usize].push((id, a, b));
-            }
-        }
-        let nx = self.dims[0];
-        let layer = (self.dims[0] * self.dims[1]) as usize;
-        self.buckets
-            .par_chunks_mut(layer)
-            .zip(layers.par_iter())
-            .for_each(|(cells, reach)| {
-                for &(id, a, b) in reach {
-                    for y in a[1]..=b[1] {
-                        for x in a[0]..=b[0] {
-                            cells[(x + nx * y) as usize].push(id);
-                        }
-                    }
-                }
-            });
-    }
-
     /// Free radius at `c` (distance to the surface and to every placed sphere) and the nearest
     /// obstacle point, given an upper bound of the free radius (`f64::INFINITY` for none): the
     /// surface is searched within the bound only, which prunes most of the triangle tree. The

@@ -42,7 +42,10 @@ pub(super) fn pack(
     let grid = field.grid;
     let h = grid.h;
     let remaining = Remaining::new(bounds);
-    let exact: Vec<AtomicBool> = (0..bounds.len()).map(|_| AtomicBool::new(false)).collect();
+    let exact: Vec<AtomicBool> = (0..bounds.len())
+        .into_par_iter()
+        .map(|_| AtomicBool::new(false))
+        .collect();
     let rows = Rows::of(field);
     let floor = floor(opts, grid);
     let mut refiner = (opts.refine_steps > 0).then(|| Refiner::new(grid, bvh, opts.refine_steps));
@@ -54,19 +57,14 @@ pub(super) fn pack(
     } else {
         0.0
     };
-    let live: Vec<u32> = (0..bounds.len() as u32)
-        .into_par_iter()
-        .filter(|&p| {
-            let v = bounds[p as usize];
-            v > 0.0 && v >= floor
-        })
-        .collect();
+    let live = |v: f64| v > 0.0 && v >= floor;
     // The bands' ends are `floor / RATIO^n`: the same for any upper bounds, so the spheres do
     // not depend on how tight the bounds are (a voxel whose bound lies in a higher band is
     // made exact there and waits for its own band).
-    let largest = live
+    let largest = bounds
         .par_iter()
-        .map(|&p| bounds[p as usize])
+        .copied()
+        .filter(|&v| live(v))
         .reduce(|| 0.0, f64::max);
     let edge = |n: i32| floor / RATIO.powi(n);
     let mut n = 0;
@@ -80,11 +78,15 @@ pub(super) fn pack(
     // The live voxels by the band of their remaining distance. Distances only shrink, so a
     // voxel only moves to lower bands: each band looks at its own voxels, not at all of them.
     let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); n as usize + 1];
-    sort_into(&mut buckets, &live, |p| {
-        let v = bounds[p as usize];
-        Some(band_of(v))
-    });
-    drop(live);
+    sort_into(
+        &mut buckets,
+        bounds.len(),
+        |i| i as u32,
+        |p| {
+            let v = bounds[p as usize];
+            live(v).then(|| band_of(v))
+        },
+    );
     progress.start("packing spheres", field.inside.len() as u64);
     let mut spheres: Vec<Sphere> = Vec::new();
     for band in (0..=n as usize).rev() {
@@ -149,26 +151,37 @@ pub(super) fn pack(
         progress.advance(covered);
         // Every voxel left in this band's range was packed down below `low` (or covered):
         // the live ones move to the bands of their remaining distances.
-        sort_into(&mut buckets, &held, |p| {
-            let v = remaining.get(p as usize);
-            (v > 0.0 && v >= floor).then(|| band_of(v))
-        });
+        sort_into(
+            &mut buckets,
+            held.len(),
+            |i| held[i],
+            |p| {
+                let v = remaining.get(p as usize);
+                live(v).then(|| band_of(v))
+            },
+        );
     }
     progress.finish();
     spheres
 }
 
-/// Appends each of `voxels` to the bucket `band(voxel)` gives (none: dropped), on all threads;
-/// the order within a bucket is of no consequence (a band's voxels are sorted by block, and
-/// a block's queue orders them totally).
-fn sort_into(buckets: &mut [Vec<u32>], voxels: &[u32], band: impl Fn(u32) -> Option<usize> + Sync) {
+/// Appends each of the `count` voxels `voxel(0..count)` to the bucket `band(voxel)` gives
+/// (none: dropped), on all threads; the order within a bucket is of no consequence (a band's
+/// voxels are sorted by block, and a block's queue orders them totally).
+fn sort_into(
+    buckets: &mut [Vec<u32>],
+    count: usize,
+    voxel: impl Fn(usize) -> u32 + Sync,
+    band: impl Fn(u32) -> Option<usize> + Sync,
+) {
     const CHUNK: usize = 1 << 16;
     let n = buckets.len();
-    let parts: Vec<Vec<Vec<u32>>> = voxels
-        .par_chunks(CHUNK)
-        .map(|chunk| {
+    let parts: Vec<Vec<Vec<u32>>> = (0..count.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
             let mut local = vec![Vec::new(); n];
-            for &p in chunk {
+            for i in c * CHUNK..((c + 1) * CHUNK).min(count) {
+                let p = voxel(i);
                 if let Some(b) = band(p) {
                     local[b].push(p);
                 }

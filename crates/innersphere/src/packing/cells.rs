@@ -19,7 +19,13 @@ pub(super) struct Remaining(Vec<AtomicU64>);
 
 impl Remaining {
     pub(super) fn new(values: &[f64]) -> Remaining {
-        Remaining(values.iter().map(|v| AtomicU64::new(v.to_bits())).collect())
+        use rayon::prelude::*;
+        Remaining(
+            values
+                .par_iter()
+                .map(|v| AtomicU64::new(v.to_bits()))
+                .collect(),
+        )
     }
     #[inline]
     pub(super) fn get(&self, pos: usize) -> f64 {
@@ -48,25 +54,40 @@ pub(super) struct Rows {
 
 impl Rows {
     pub(super) fn of(field: Voxels<'_>) -> Rows {
+        use rayon::prelude::*;
+        const CHUNK: usize = 1 << 16;
         let [nx, ny, nz] = field.grid.dims;
         let rows = ny as usize * nz as usize;
-        let mut start = vec![0u32; rows + 1];
-        let mut run_start = vec![0u32; rows + 1];
-        let mut runs = Vec::new();
-        let mut prev = u32::MAX;
-        for (pos, &c) in field.inside.iter().enumerate() {
-            let r = (c / nx) as usize;
-            start[r + 1] += 1;
-            if prev == u32::MAX || c != prev + 1 || c / nx != prev / nx {
-                run_start[r + 1] += 1;
-                runs.push((c % nx, pos as u32));
+        let inside = field.inside;
+        // Where each run of consecutive cells starts (row, first i, position), on all threads.
+        let starts: Vec<(u32, u32, u32)> = (0..inside.len().div_ceil(CHUNK))
+            .into_par_iter()
+            .flat_map_iter(|c| {
+                let span = c * CHUNK..((c + 1) * CHUNK).min(inside.len());
+                span.filter_map(|pos| {
+                    let c = inside[pos];
+                    let new_run = pos == 0 || {
+                        let prev = inside[pos - 1];
+                        c != prev + 1 || c / nx != prev / nx
+                    };
+                    new_run.then_some((c / nx, c % nx, pos as u32))
+                })
+                .collect::<Vec<_>>()
+            })
+            .collect();
+        // Rows without voxels start where the next row with voxels does.
+        let mut start = vec![inside.len() as u32; rows + 1];
+        let mut run_start = vec![starts.len() as u32; rows + 1];
+        let mut next_row = 0usize;
+        for (n, &(r, _, pos)) in starts.iter().enumerate() {
+            let r = r as usize;
+            while next_row <= r {
+                start[next_row] = pos;
+                run_start[next_row] = n as u32;
+                next_row += 1;
             }
-            prev = c;
         }
-        for r in 0..rows {
-            start[r + 1] += start[r];
-            run_start[r + 1] += run_start[r];
-        }
+        let runs = starts.into_iter().map(|(_, i, pos)| (i, pos)).collect();
         Rows {
             start,
             run_start,

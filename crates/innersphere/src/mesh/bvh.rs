@@ -269,8 +269,19 @@ impl TriangleBvh {
                 }
             } else {
                 let (l, r) = (node + 1, n.start as usize);
-                let dl = self.lower_bound_sq(l, p);
-                let dr = self.lower_bound_sq(r, p);
+                // The box first: a child it already prunes needs no slab (whose value would
+                // only matter for the bound a miss returns).
+                let bound = |i: usize| {
+                    let b = self.nodes[i].dist_sq(p);
+                    if !BOUND && b > best {
+                        b
+                    } else {
+                        let s = self.slabs[i].lower_bound(p);
+                        b.max(s * s)
+                    }
+                };
+                let dl = bound(l);
+                let dr = bound(r);
                 let (near, dn, far, df) = if dl <= dr {
                     (l, dl, r, dr)
                 } else {

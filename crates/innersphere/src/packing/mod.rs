@@ -220,11 +220,15 @@ fn floor(opts: &PackingOptions, grid: &VoxelGrid) -> f64 {
 
 /// The exact distance of `voxel` to the surface, given `value` = min(its bound, gaps to the
 /// spheres) and the bound's triangle `slot`: min(value, exact) (the exact distance is at most
-/// the bound).
+/// the bound). Only triangles nearer than `value` can change it: the search is pruned by it
+/// (with a slack for rounding) where it is below the slot's distance.
 #[inline]
 fn exact_distance(bvh: &TriangleBvh, voxel: DVec3, slot: u32, value: f64) -> f64 {
+    let reach = bvh
+        .slot_distance_sq(voxel, slot)
+        .min(value * value * (1.0 + 1e-12));
     let e = bvh
-        .closest_point(voxel, bvh.slot_distance_sq(voxel, slot))
+        .closest_point(voxel, reach)
         .map_or(value, |c| c.dist_sq.sqrt());
     value.min(e)
 }

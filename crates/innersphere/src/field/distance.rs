@@ -138,17 +138,18 @@ pub fn bounds(
     let (inside, method) = classify(mesh, &grid, progress)?;
     let s = BOUND_STRIDE;
     let cd = grid.dims.map(|d| (d + s) / s + 1);
-    let node_of = |c: u32| -> usize {
-        let [i, j, k] = grid.coords(c as usize);
+    let node_of = |[i, j, k]: [u32; 3]| -> usize {
         let [a, b, cc] = [i, j, k].map(|x| (x + s / 2) / s);
         a as usize + cd[0] as usize * (b as usize + cd[1] as usize * cc as usize)
     };
     // The lattice nodes next to an inside voxel, ascending (marked on all threads).
     let cells = cd.iter().map(|&d| d as usize).product();
     let marked: Vec<AtomicBool> = (0..cells).map(|_| AtomicBool::new(false)).collect();
-    inside
-        .par_iter()
-        .for_each(|&c| marked[node_of(c)].store(true, Relaxed));
+    inside.par_chunks(POINTS_PER_TASK * 16).for_each(|chunk| {
+        for (_, ijk) in with_coords(&grid, chunk) {
+            marked[node_of(ijk)].store(true, Relaxed);
+        }
+    });
     let nodes: Vec<u32> = (0..cells as u32)
         .into_par_iter()
         .filter(|&n| marked[n as usize].load(Relaxed))
@@ -190,13 +191,11 @@ pub fn bounds(
     let (bound, slot): (Vec<f64>, Vec<u32>) = inside
         .par_chunks(POINTS_PER_TASK * 16)
         .flat_map_iter(|chunk| {
-            let out: Vec<(f64, u32)> = chunk
-                .iter()
-                .map(|&c| {
-                    let slot = node_slot[node_of(c)];
+            let out: Vec<(f64, u32)> = with_coords(&grid, chunk)
+                .map(|(_, [i, j, k])| {
+                    let slot = node_slot[node_of([i, j, k])];
                     (
-                        bvh.slot_distance_sq(grid.center_of(c as usize), slot)
-                            .sqrt(),
+                        bvh.slot_distance_sq(grid.center(i, j, k), slot).sqrt(),
                         slot,
                     )
                 })
@@ -212,6 +211,25 @@ pub fn bounds(
         bound,
         slot,
         method,
+    })
+}
+
+/// Each of `cells` (linear indices, ascending) with its coordinates: the next cell of a row
+/// steps `i` by one, so only a new row costs the divisions of [`VoxelGrid::coords`] (they were
+/// most of the time of a voxel's bound).
+fn with_coords<'a>(
+    grid: &'a VoxelGrid,
+    cells: &'a [u32],
+) -> impl Iterator<Item = (u32, [u32; 3])> + 'a {
+    let nx = grid.dims[0];
+    let mut last: Option<(u32, [u32; 3])> = None;
+    cells.iter().map(move |&c| {
+        let ijk = match last {
+            Some((p, [i, j, k])) if c == p + 1 && i + 1 < nx => [i + 1, j, k],
+            _ => grid.coords(c as usize),
+        };
+        last = Some((c, ijk));
+        (c, ijk)
     })
 }
 

@@ -95,31 +95,24 @@ impl Rows {
         }
     }
 
-    /// The positions of the inside voxels of row `r` with `lo ≤ i ≤ hi` (`0 ≤ lo`).
+    /// Calls `f(first position, first i, count)` for each run of row `r` within
+    /// `lo ≤ i ≤ hi` (`0 ≤ lo`), in order: the voxels' `i` without reading `inside`.
     #[inline]
-    fn span(&self, r: usize, lo: i64, hi: i64) -> std::ops::Range<usize> {
+    fn for_each_run(&self, r: usize, lo: i64, hi: i64, mut f: impl FnMut(usize, i64, usize)) {
         let end = self.start[r + 1] as usize;
         let runs = &self.runs[self.run_start[r] as usize..self.run_start[r + 1] as usize];
-        let len = |n: usize| runs.get(n + 1).map_or(end, |x| x.1 as usize) - runs[n].1 as usize;
-        // The first position with i ≥ lo: in the first run that reaches lo.
-        let mut first = end;
         for (n, &(i0, p0)) in runs.iter().enumerate() {
             let (i0, p0) = (i64::from(i0), p0 as usize);
-            if i0 + len(n) as i64 > lo {
-                first = p0 + (lo - i0).max(0) as usize;
+            if i0 > hi {
                 break;
             }
-        }
-        // One past the last position with i ≤ hi: in the last run that starts by hi.
-        let mut last = first;
-        for (n, &(i0, p0)) in runs.iter().enumerate().rev() {
-            let (i0, p0) = (i64::from(i0), p0 as usize);
-            if i0 <= hi {
-                last = p0 + ((hi - i0 + 1) as usize).min(len(n));
-                break;
+            let len = runs.get(n + 1).map_or(end, |x| x.1 as usize) - p0;
+            let a = lo.max(i0);
+            let b = hi.min(i0 + len as i64 - 1);
+            if a <= b {
+                f(p0 + (a - i0) as usize, a, (b - a + 1) as usize);
             }
         }
-        first..last.max(first)
     }
 }
 
@@ -163,26 +156,27 @@ pub(super) fn cover(
             }
             let span = ((reach_sq - dyz).sqrt() / h).floor() as i64 + pad;
             let (lo, hi) = ((ci - span).max(0), (ci + span).min(dims[0] as i64 - 1));
-            let row = grid.index(0, j as u32, k as u32) as u32;
             let r = j as usize + dims[1] as usize * k as usize;
-            for pos in rows.span(r, lo, hi) {
-                let slot = remaining.get(pos);
-                if slot < 0.0 {
-                    continue;
-                }
-                let i = field.inside[pos] - row;
-                let dx = grid.origin.x + i as f64 * h - center.x;
-                let d_sq = dx * dx + dyz;
-                if d_sq <= r_sq {
-                    remaining.set(pos, -1.0);
-                    covered += 1;
-                } else {
-                    let gap = d_sq.sqrt() - radius;
-                    if gap < slot {
-                        remaining.set(pos, gap);
+            rows.for_each_run(r, lo, hi, |first, i0, count| {
+                for n in 0..count {
+                    let pos = first + n;
+                    let slot = remaining.get(pos);
+                    if slot < 0.0 {
+                        continue;
+                    }
+                    let dx = grid.origin.x + (i0 + n as i64) as f64 * h - center.x;
+                    let d_sq = dx * dx + dyz;
+                    if d_sq <= r_sq {
+                        remaining.set(pos, -1.0);
+                        covered += 1;
+                    } else {
+                        let gap = d_sq.sqrt() - radius;
+                        if gap < slot {
+                            remaining.set(pos, gap);
+                        }
                     }
                 }
-            }
+            });
         }
         covered
     };
@@ -201,9 +195,10 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
-        /// A row segment's positions are exactly the inside voxels of the row within it.
+        /// A row segment's runs hold exactly the inside voxels of the row within it, with
+        /// their `i`.
         #[test]
-        fn span_is_the_row_segment(
+        fn runs_are_the_row_segment(
             cells in proptest::collection::btree_set(0u32..6 * 5 * 4, 0..120),
             lo in 0i64..7,
             width in -1i64..7,
@@ -220,8 +215,13 @@ mod tests {
                         (c / 6) as usize == r && i >= lo && i <= hi
                     })
                     .collect();
-                let got: Vec<usize> = rows.span(r, lo, hi).collect();
-                prop_assert_eq!(got, want, "row {}", r);
+                let mut runs = Vec::new();
+                rows.for_each_run(r, lo, hi, |first, i0, count| {
+                    runs.extend((0..count).map(|n| (first + n, i0 + n as i64)));
+                });
+                let with_i: Vec<(usize, i64)> =
+                    want.iter().map(|&p| (p, i64::from(inside[p] % 6))).collect();
+                prop_assert_eq!(runs, with_i, "runs of row {}", r);
             }
         }
     }

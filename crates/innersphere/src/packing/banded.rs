@@ -74,7 +74,7 @@ pub(super) fn pack(
     // Band `m ≥ 1` is `[edge(m − 1), edge(m))`, the first (`n`) also holds its top; with
     // `n = 0` one band takes everything down to the floor.
     let edges: Vec<f64> = (0..n).map(edge).collect();
-    let band_of = |v: f64| edges.partition_point(|&e| e <= v);
+    let band_of = |v: f64| band_of(&edges, v);
     // The live voxels by the band of their remaining distance. Distances only shrink, so a
     // voxel only moves to lower bands: each band looks at its own voxels, not at all of them.
     let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); n as usize + 1];
@@ -163,6 +163,13 @@ pub(super) fn pack(
     }
     progress.finish();
     spheres
+}
+
+/// The band of a remaining distance `v` (at least the floor, `edges[0]`): band `m ≥ 1` is
+/// `[edges[m − 1], edges[m])`, the last one (`edges.len()`) also holds everything above; a
+/// value on an edge starts the band above it.
+fn band_of(edges: &[f64], v: f64) -> usize {
+    edges.partition_point(|&e| e <= v)
 }
 
 /// Appends each of the `count` voxels `voxel(0..count)` to the bucket `band(voxel)` gives
@@ -264,5 +271,21 @@ impl Band<'_> {
             );
         }
         (local, covered)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::band_of;
+
+    #[test]
+    fn a_value_on_an_edge_starts_the_band_above_it() {
+        let edges = [0.05, 0.05 / 0.9, 0.05 / 0.81];
+        assert_eq!(band_of(&edges, 0.05), 1);
+        assert_eq!(band_of(&edges, 0.052), 1);
+        assert_eq!(band_of(&edges, 0.05 / 0.9), 2);
+        assert_eq!(band_of(&edges, 0.05 / 0.81), 3);
+        assert_eq!(band_of(&edges, 4.0), 3);
+        assert_eq!(band_of(&[], 4.0), 0);
     }
 }

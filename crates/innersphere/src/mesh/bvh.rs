@@ -269,17 +269,9 @@ impl TriangleBvh {
                 }
             } else {
                 let (l, r) = (node + 1, n.start as usize);
-                // The box first: a child it already prunes needs no slab (whose value would
-                // only matter for the bound a miss returns).
-                let bound = |i: usize| {
-                    let b = self.nodes[i].dist_sq(p);
-                    if !BOUND && b > best {
-                        b
-                    } else {
-                        let s = self.slabs[i].lower_bound(p);
-                        b.max(s * s)
-                    }
-                };
+                // Without a bound to return, a child its box already prunes needs no slab.
+                let bound =
+                    |i: usize| self.bound_above(i, p, if BOUND { f64::INFINITY } else { best });
                 let dl = bound(l);
                 let dr = bound(r);
                 let (near, dn, far, df) = if dl <= dr {
@@ -328,8 +320,19 @@ impl TriangleBvh {
     /// larger of the box and slab bounds.
     #[inline]
     pub fn lower_bound_sq(&self, i: usize, p: DVec3) -> f64 {
+        self.bound_above(i, p, f64::INFINITY)
+    }
+
+    /// [`lower_bound_sq`](Self::lower_bound_sq), or only the box's bound where that is
+    /// already above `cut` (the node is pruned either way; the slab is not read).
+    #[inline]
+    fn bound_above(&self, i: usize, p: DVec3, cut: f64) -> f64 {
+        let b = self.nodes[i].dist_sq(p);
+        if b > cut {
+            return b;
+        }
         let s = self.slabs[i].lower_bound(p);
-        self.nodes[i].dist_sq(p).max(s * s)
+        b.max(s * s)
     }
 
     /// Squared distance from `p` to the triangle in slot `slot` (`f64::INFINITY` for a slot

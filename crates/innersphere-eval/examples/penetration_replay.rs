@@ -4,7 +4,8 @@
 //!
 //! `cargo run --release -p innersphere-eval --example penetration_replay -- A.ist B.ist
 //! MOTION.csv` with `PASSES` (default 3), `LINEARIZE=1` (the area and the 6×6 stiffness, as
-//! the haptic contact model asks), `TOP=N` (the N slowest frames).
+//! the haptic contact model asks), `TOP=N` (the N slowest frames, with their node-pair
+//! tests), `PATCHES=N` (`max_patches`, default 8; 0 shows what the patches cost).
 
 use innersphere::{Pair, PenetrationOptions, Pose, SharedTree, SphereTree};
 use std::time::Instant;
@@ -21,6 +22,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let passes = env("PASSES").unwrap_or(3).max(1);
     let opts = PenetrationOptions {
         linearize: env("LINEARIZE").unwrap_or(0) != 0,
+        max_patches: env("PATCHES").unwrap_or(8),
         ..Default::default()
     };
     let n = m.frames.len();
@@ -29,6 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let mut best = vec![f64::INFINITY; n];
     let mut pairs = vec![0usize; n];
+    let mut visits = vec![0u64; n];
     let mut pair = Pair::new(a, b);
     for _ in 0..passes {
         pair.reset();
@@ -36,6 +39,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let t = Instant::now();
             let p = pair.penetration_with(&Pose::IDENTITY, &f.pose, &opts);
             best[i] = best[i].min(t.elapsed().as_secs_f64() * 1e6);
+            visits[i] = p.visits;
             pairs[i] = std::hint::black_box(p).pairs;
         }
     }
@@ -56,7 +60,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&i, &j| best[j].total_cmp(&best[i]));
     for &i in order.iter().take(env("TOP").unwrap_or(0)) {
-        println!("frame {i}: {:.1} µs, {} leaf pairs", best[i], pairs[i]);
+        println!(
+            "frame {i}: {:.1} µs, {} leaf pairs, {} tests",
+            best[i], pairs[i], visits[i]
+        );
     }
     Ok(())
 }

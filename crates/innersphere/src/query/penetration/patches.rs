@@ -67,20 +67,18 @@ impl Default for PatchLanes {
 }
 
 impl PatchLanes {
-    /// Adds the lanes of `t` where `on`.
+    /// Adds the pair in lane `l` of `t` to lane `l` (each lane sums the pairs that came in
+    /// it, in the order they came).
     #[inline(always)]
-    fn add(&mut self, t: &Terms4, on: [bool; W]) {
-        for (l, &on) in on.iter().enumerate() {
-            let v = if on { t.v[l] } else { 0.0 };
-            self.vol[l] += v;
-            for k in 0..3 {
-                self.vg[k][l] += t.p[k][l] * v;
-                self.vu[k][l] += t.u[k][l] * v;
-            }
-            let depth = if on { t.depth[l] } else { 0.0 };
-            self.depth[l] = self.depth[l].max(depth);
-            self.pairs[l] += on as u32;
+    fn add_lane(&mut self, t: &Terms4, l: usize) {
+        let v = t.v[l];
+        self.vol[l] += v;
+        for k in 0..3 {
+            self.vg[k][l] += t.p[k][l] * v;
+            self.vu[k][l] += t.u[k][l] * v;
         }
+        self.depth[l] = self.depth[l].max(t.depth[l]);
+        self.pairs[l] += 1;
     }
 
     /// The lanes added up in order.
@@ -148,15 +146,10 @@ impl Patches {
         if opens {
             return self.add_opening(t, n, best, bd);
         }
-        // Patch by patch, the lanes that join it.
-        let mut left: [bool; W] = std::array::from_fn(|l| l < n);
-        while let Some(first) = left.iter().position(|&x| x) {
-            let k = best[first];
-            let on: [bool; W] = std::array::from_fn(|l| left[l] && best[l] == k);
-            self.sums[k].add(t, on);
-            for l in 0..W {
-                left[l] &= !on[l];
-            }
+        // Lane by lane into its patch's lane: no branch on how the lanes group (grouping
+        // them into one masked add per patch cost 3–5 % more on deep frames).
+        for (l, &k) in best.iter().enumerate().take(n) {
+            self.sums[k].add_lane(t, l);
         }
     }
 
@@ -178,7 +171,7 @@ impl Patches {
             if best == usize::MAX || (bd > self.r2 && self.sums.len() < self.max) {
                 best = self.open_at(p);
             }
-            self.sums[best].add(t, std::array::from_fn(|i| i == l));
+            self.sums[best].add_lane(t, l);
         }
     }
 

@@ -96,6 +96,29 @@ impl NodeSlab {
     }
 }
 
+/// How near the nearest triangle [`TriangleBvh::near_point`] must come: a triangle at
+/// distance `d` will do when `d·(1 − rel) − abs` is at most the nearest triangle's distance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Near {
+    /// Absolute margin (model units, ≥ 0).
+    pub abs: f64,
+    /// Relative margin (0 ≤ rel < 1).
+    pub rel: f64,
+}
+
+impl Near {
+    /// No margin: the nearest triangle's distance.
+    pub const EXACT: Near = Near { abs: 0.0, rel: 0.0 };
+
+    /// The squared distance below which something must lie to beat a triangle at squared
+    /// distance `best` by the margin.
+    #[inline]
+    fn cut(self, best: f64) -> f64 {
+        let s = (best.sqrt() * (1.0 - self.rel) - self.abs).max(0.0);
+        s * s
+    }
+}
+
 /// The answer of [`TriangleBvh::closest_point`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Closest {
@@ -212,7 +235,8 @@ impl TriangleBvh {
     /// [`closest_point_on_triangle`], bit for bit, whatever the bound; ties keep the first
     /// triangle found.
     pub fn closest_point(&self, p: DVec3, upper_bound_sq: f64) -> Option<Closest> {
-        self.search::<false>(p, upper_bound_sq).ok()
+        self.search::<false, false>(p, upper_bound_sq, Near::EXACT)
+            .ok()
     }
 
     /// [`closest_point`](Self::closest_point), but when no triangle is within the bound it
@@ -220,15 +244,24 @@ impl TriangleBvh {
     /// often more (the nearest box, slab or triangle that the search pruned). The same
     /// search; only the pruned bounds are kept.
     pub fn closest_point_or_bound(&self, p: DVec3, upper_bound_sq: f64) -> Result<Closest, f64> {
-        self.search::<true>(p, upper_bound_sq)
+        self.search::<true, false>(p, upper_bound_sq, Near::EXACT)
     }
 
     /// The search of [`closest_point`](Self::closest_point). With `BOUND` a miss returns the
     /// smallest squared distance that was pruned (at least `upper_bound_sq`); without, the
-    /// pruned distances are not tracked.
+    /// pruned distances are not tracked. With `NEAR` a triangle `near` of the nearest will
+    /// do: the search prunes what cannot come nearer than `near.cut` of the best so far.
     #[inline(always)]
-    fn search<const BOUND: bool>(&self, p: DVec3, upper_bound_sq: f64) -> Result<Closest, f64> {
+    fn search<const BOUND: bool, const NEAR: bool>(
+        &self,
+        p: DVec3,
+        upper_bound_sq: f64,
+        near: Near,
+    ) -> Result<Closest, f64> {
         let mut best = upper_bound_sq;
+        // What a node or triangle must be below to be looked at.
+        let cut_of = |best: f64| if NEAR { near.cut(best) } else { best };
+        let mut cut = cut_of(best);
         let mut found: Option<(usize, DVec3)> = None;
         // The smallest squared distance that was pruned (kept only with `BOUND`).
         let mut pruned = f64::INFINITY;
@@ -236,7 +269,7 @@ impl TriangleBvh {
             return Err(f64::INFINITY);
         };
         let d = root.dist_sq(p);
-        if d.is_nan() || d > best {
+        if d.is_nan() || d > cut {
             return Err(if d.is_nan() { upper_bound_sq } else { d });
         }
         let mut stack = [(0u32, 0.0f64); MAX_DEPTH + 2];
@@ -252,7 +285,7 @@ impl TriangleBvh {
                     let lo = a.min(b).min(c);
                     let hi = a.max(b).max(c);
                     let bd = (lo - p).max(p - hi).max(DVec3::ZERO).length_squared();
-                    if bd > best {
+                    if bd > cut {
                         if BOUND {
                             pruned = pruned.min(bd);
                         }
@@ -262,6 +295,7 @@ impl TriangleBvh {
                     let d = (p - q).length_squared();
                     if d < best || (found.is_none() && d <= best) {
                         best = d;
+                        cut = cut_of(best);
                         found = Some((s + slot, q));
                     } else if BOUND {
                         pruned = pruned.min(d);
@@ -271,7 +305,7 @@ impl TriangleBvh {
                 let (l, r) = (node + 1, n.start as usize);
                 // Without a bound to return, a child its box already prunes needs no slab.
                 let bound =
-                    |i: usize| self.bound_above(i, p, if BOUND { f64::INFINITY } else { best });
+                    |i: usize| self.bound_above(i, p, if BOUND { f64::INFINITY } else { cut });
                 let dl = bound(l);
                 let dr = bound(r);
                 let (near, dn, far, df) = if dl <= dr {
@@ -279,13 +313,13 @@ impl TriangleBvh {
                 } else {
                     (r, dr, l, dl)
                 };
-                if df <= best {
+                if df <= cut {
                     stack[sp] = (far as u32, df);
                     sp += 1;
                 } else if BOUND {
                     pruned = pruned.min(df);
                 }
-                if dn <= best {
+                if dn <= cut {
                     next = Some(near);
                 } else if BOUND {
                     pruned = pruned.min(dn);
@@ -307,7 +341,7 @@ impl TriangleBvh {
                     }
                     sp -= 1;
                     let (idx, d) = stack[sp];
-                    if d <= best {
+                    if d <= cut {
                         node = idx as usize;
                         break;
                     }
@@ -350,6 +384,15 @@ impl TriangleBvh {
     /// but prunes most of the tree from the start.
     pub fn closest_point_from(&self, p: DVec3, hint_slot: u32) -> Option<Closest> {
         self.closest_point(p, self.slot_distance_sq(p, hint_slot))
+    }
+
+    /// A triangle `near` of the nearest one to `p` (among those within the squared bound
+    /// `upper_bound_sq`; `None` when none is, or when none beats the bound by `near`'s
+    /// margin): for upper bounds of distances, where the nearest triangle is not needed and
+    /// a near one is much cheaper to find far from the surface (the search prunes what
+    /// cannot beat the best so far by the margin).
+    pub fn near_point(&self, p: DVec3, upper_bound_sq: f64, near: Near) -> Option<Closest> {
+        self.search::<false, true>(p, upper_bound_sq, near).ok()
     }
 
     /// Squared distance from `p` to the nearest triangle (`f64::INFINITY` when empty).
@@ -747,6 +790,44 @@ mod tests {
                         }
                     }
                     None => prop_assert!(r > bound * (1.0 - 1e-12), "missed {} <= {}", r, bound),
+                }
+            }
+        }
+    }
+
+    proptest! {
+        /// A near triangle is a real triangle within the margin of the nearest; with no
+        /// margin it is the nearest; a miss means the bound was not beaten by the margin.
+        #[test]
+        fn near_point_is_within_its_margin(
+            tris in prop::collection::vec((v3(1.0), v3(0.3), v3(0.3)), 1..120),
+            pts in prop::collection::vec(v3(1.5), 1..20),
+            abs in prop::sample::select(vec![0.0, 0.01, 0.1]),
+            rel in prop::sample::select(vec![0.0, 0.1, 0.5]),
+            bound in prop::sample::select(vec![f64::INFINITY, 0.01, 0.5]),
+        ) {
+            let tris: Vec<[DVec3; 3]> = tris.iter().map(|&(a, b, c)| [a, a + b, a + c]).collect();
+            let bvh = TriangleBvh::from_triangles(&tris);
+            let near = Near { abs, rel };
+            for &p in &pts {
+                let r = brute(&tris, p).sqrt();
+                let slack = 1e-9 * (1.0 + r);
+                match bvh.near_point(p, bound, near) {
+                    Some(c) => {
+                        let t = tris[c.triangle as usize];
+                        prop_assert_eq!(point_triangle_distance_sq(p, t[0], t[1], t[2]), c.dist_sq);
+                        prop_assert!(c.dist_sq <= bound);
+                        let d = c.dist_sq.sqrt();
+                        prop_assert!(d >= r - slack);
+                        prop_assert!(d * (1.0 - rel) - abs <= r + slack, "{} vs {}", d, r);
+                        if abs == 0.0 && rel == 0.0 {
+                            prop_assert_eq!(Some(c), bvh.closest_point(p, bound));
+                        }
+                    }
+                    None => {
+                        let b = bound.sqrt();
+                        prop_assert!(b * (1.0 - rel) - abs <= r + slack, "missed {} < {}", r, b);
+                    }
                 }
             }
         }

@@ -132,12 +132,12 @@ const NEAR_REL: f64 = 0.1;
 
 /// Classifies the cells of `grid` ([`classify`]) and gives every inside voxel an upper bound
 /// of its distance: the distance to a triangle near the nearest node of a lattice
-/// `BOUND_STRIDE` (3) voxels apart (within [`NEAR_REL`] of the closest one, found with the
-/// tree `bvh` of `mesh`). The bound is a real triangle's
-/// distance, so at least the exact distance, and often equal to it: a 27th of the queries of
-/// [`compute`], and cheaper ones, the rest point–triangle distances. (On the jaw, 2 cores:
-/// stride 2 spends 0.7 s more on the nodes; stride 4 saves 0.2 s there and loses it to the
-/// packing's extra exact queries.)
+/// `BOUND_STRIDE` (3) voxels apart (within a tenth of the closest triangle's distance, found
+/// with the tree `bvh` of `mesh`). The bound is a real triangle's distance, so at least the
+/// exact distance, and often equal to it: a 27th of the queries of [`compute`], and cheaper
+/// ones, the rest point–triangle distances. (On the jaw, 2 cores: stride 2 spends 0.3–0.5 s
+/// more on the nodes; stride 4 saves 0.1–0.2 s there and loses it to the packing's extra
+/// exact queries.)
 pub fn bounds(
     mesh: &Mesh,
     bvh: &TriangleBvh,

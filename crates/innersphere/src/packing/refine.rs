@@ -153,6 +153,21 @@ impl<'a> Refiner<'a> {
         extra: &[Sphere],
         cap: f64,
     ) -> (DVec3, f64) {
+        self.refine_with::<true>(v, rho, spheres, extra, cap)
+    }
+
+    /// [`refine`](Self::refine); with `SHORTCUT` a candidate within the free radius of the
+    /// obstacle that refused the last one is refused without a search (without, a search
+    /// per step: the same centres, which the tests check).
+    #[inline(always)]
+    fn refine_with<const SHORTCUT: bool>(
+        &self,
+        v: DVec3,
+        rho: f64,
+        spheres: &[Sphere],
+        extra: &[Sphere],
+        cap: f64,
+    ) -> (DVec3, f64) {
         // The grid's remaining distance is the free radius at the voxel centre.
         let (mut f, mut q, _) = self.free(v, spheres, extra, rho);
         // The grid value is exact, but never trust a refinement that would shrink the sphere
@@ -173,7 +188,7 @@ impl<'a> Refiner<'a> {
                 break;
             }
             let cand = c + away * (step.min(0.5 * f) / len);
-            if wall.is_some_and(|w| self.distance(w, cand) <= f) {
+            if SHORTCUT && wall.is_some_and(|w| self.distance(w, cand) <= f) {
                 step *= 0.5;
                 continue;
             }
@@ -196,35 +211,6 @@ impl<'a> Refiner<'a> {
 mod tests {
     use super::*;
     use proptest::prelude::*;
-
-    impl Refiner<'_> {
-        /// [`Refiner::refine`] without the refused-candidate shortcut: a search per step.
-        fn refine_by_search(&self, v: DVec3, rho: f64, spheres: &[Sphere]) -> (DVec3, f64) {
-            let (mut f, mut q, _) = self.free(v, spheres, &[], rho);
-            if f.is_nan() || f < rho {
-                return (v, rho);
-            }
-            let mut c = v;
-            let mut step = 0.5 * self.h;
-            for _ in 0..self.steps {
-                let away = c - q;
-                let len = away.length();
-                if len <= 0.0 || step < self.h / 64.0 {
-                    break;
-                }
-                let cand = c + away * (step.min(0.5 * f) / len);
-                let (fc, qc, _) = self.free(cand, spheres, &[], f + (cand - c).length());
-                if fc > f && (cand - v).length() <= fc {
-                    c = cand;
-                    f = fc;
-                    q = qc;
-                } else {
-                    step *= 0.5;
-                }
-            }
-            (c, f)
-        }
-    }
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(24))]
@@ -253,7 +239,7 @@ mod tests {
                 if rho.is_nan() || rho <= 0.0 {
                     continue;
                 }
-                let want = refiner.refine_by_search(v, rho, &spheres);
+                let want = refiner.refine_with::<false>(v, rho, &spheres, &[], f64::INFINITY);
                 let got = refiner.refine(v, rho, &spheres, &[], f64::INFINITY);
                 prop_assert_eq!(got, want);
             }

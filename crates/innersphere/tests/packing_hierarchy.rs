@@ -326,7 +326,7 @@ fn packing_from_bounds_equals_packing_from_exact_distances() {
 
 /// The parallel packing on generated meshes, with and without refinement: every sphere lies
 /// within the surface's distance of its centre and none overlap, the spheres are the same on
-/// 1 and 4 threads, and they fill at least 97 % of the volume the global greedy order fills.
+/// 1, 4 and 16 threads, and they fill at least 97 % of the volume the global greedy order fills.
 #[test]
 fn parallel_packing_is_valid_thread_independent_and_as_full_as_the_global_order() {
     use innersphere::field::distance;
@@ -356,6 +356,11 @@ fn parallel_packing_is_valid_thread_independent_and_as_full_as_the_global_order(
             let one = on(1, &|| packing::pack_parallel(&bounds, &bvh, &opts, &Silent));
             let four = on(4, &|| packing::pack_parallel(&bounds, &bvh, &opts, &Silent));
             assert_eq!(one, four, "{opts:?}");
+            // Many threads on few blocks: each block makes up to 16 voxels exact at once.
+            let many = on(16, &|| {
+                packing::pack_parallel(&bounds, &bvh, &opts, &Silent)
+            });
+            assert_eq!(one, many, "{opts:?}");
             // The bounds' tightness changes nothing: exact distances as bounds, same spheres.
             let tight = distance::DistanceBounds {
                 bound: exact.dist.clone(),

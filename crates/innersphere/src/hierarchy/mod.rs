@@ -257,25 +257,12 @@ fn flatten(root: Draft, meta: TreeMeta) -> (SphereTree, f64, f64) {
         t.parent.push(parent);
         t.depth.push(depth);
     };
-    let mut ratio_sum = 0.0;
-    let mut ratio_n = 0usize;
-    let mut ratio_max = 1.0f64;
     push(&mut t, root.ball, NO_PARENT, 0);
     let mut queue = std::collections::VecDeque::new();
     queue.push_back((0usize, root));
     while let Some((n, draft)) = queue.pop_front() {
         if draft.children.is_empty() {
             continue;
-        }
-        if draft.children.len() <= 8 {
-            let balls: Vec<Ball> = draft.children.iter().map(|c| c.ball).collect();
-            let exact = enclosing::enclose_brute_force(&balls).1;
-            if exact > 0.0 {
-                let ratio = draft.ball.1 / exact;
-                ratio_sum += ratio;
-                ratio_n += 1;
-                ratio_max = ratio_max.max(ratio);
-            }
         }
         t.first_child[n] = t.len() as u32;
         t.child_count[n] = draft.children.len() as u8;
@@ -286,10 +273,38 @@ fn flatten(root: Draft, meta: TreeMeta) -> (SphereTree, f64, f64) {
             queue.push_back((id, child));
         }
     }
-    let mean = if ratio_n > 0 {
-        ratio_sum / ratio_n as f64
-    } else {
-        1.0
+    let (mean, max) = enclosing_ratios(&t);
+    (t, mean, max)
+}
+
+/// The mean and largest ratio of an inner node's radius to the exact minimal radius
+/// enclosing its children (nodes of at most 8 children, by subset enumeration, on all
+/// threads; summed in node order). The tree's f32 spheres are the draft's, which were
+/// rounded to f32 already.
+fn enclosing_ratios(t: &SphereTree) -> (f64, f64) {
+    use rayon::prelude::*;
+    let ball = |n: usize| -> Ball {
+        (
+            DVec3::new(f64::from(t.x[n]), f64::from(t.y[n]), f64::from(t.z[n])),
+            f64::from(t.r[n]),
+        )
     };
-    (t, mean, ratio_max)
+    let ratios: Vec<f64> = (0..t.len())
+        .into_par_iter()
+        .filter_map(|n| {
+            let count = usize::from(t.child_count[n]);
+            if count == 0 || count > 8 {
+                return None;
+            }
+            let first = t.first_child[n] as usize;
+            let balls: Vec<Ball> = (first..first + count).map(ball).collect();
+            let exact = enclosing::enclose_brute_force(&balls).1;
+            (exact > 0.0).then(|| ball(n).1 / exact)
+        })
+        .collect();
+    if ratios.is_empty() {
+        return (1.0, 1.0);
+    }
+    let max = ratios.iter().copied().fold(1.0f64, f64::max);
+    (ratios.iter().sum::<f64>() / ratios.len() as f64, max)
 }

@@ -134,6 +134,7 @@ pub(super) fn pack(
                 top,
                 cap,
                 pad,
+                batch: batch_size(these.len()),
             };
             let placed: Vec<(Vec<Sphere>, u64)> =
                 these.par_iter().map(|b| band.block(b, &spheres)).collect();
@@ -222,20 +223,41 @@ struct Band<'a> {
     /// The largest radius refinement can reach (a safeguard: it never binds).
     cap: f64,
     pad: i64,
+    /// How many voxels a block makes exact at once, on several threads (1: one at a time).
+    batch: usize,
+}
+
+/// The exact distances a block computes at once where a colour has fewer blocks than there
+/// are threads (the top bands: 1–30 blocks, whose exact distances of deep voxels are most of
+/// their time and would otherwise run on one thread each).
+fn batch_size(blocks: usize) -> usize {
+    const MOST: usize = 16;
+    rayon::current_num_threads()
+        .div_ceil(blocks.max(1))
+        .clamp(1, MOST)
 }
 
 impl Band<'_> {
     /// Packs one block greedily down to `low`; returns its spheres and the voxels covered.
+    ///
+    /// The voxel on top is made exact when it is not; with a `batch` above 1, so are the
+    /// next non-exact voxels below it, on several threads. Either way the voxel taken is the
+    /// first exact one on top: every value is at least its exact one, so that is the largest
+    /// exact value (ties: the smaller index) whenever the exact values are computed, and the
+    /// spheres are the same for any batch.
     fn block(&self, entries: &[(u64, Entry)], spheres: &[Sphere]) -> (Vec<Sphere>, u64) {
         let grid = self.field.grid;
+        let live = |v: f64| v > 0.0 && v >= self.low;
         let mut heap: BinaryHeap<Entry> = entries.iter().map(|e| e.1).collect();
         let mut local = Vec::new();
         let mut covered = 0;
+        let mut batch: Vec<u32> = Vec::new();
+        let mut made: Vec<(u32, f64)> = Vec::new();
         while let Some(Entry { value, cell }) = heap.pop() {
             let pos = cell as usize;
             let current = self.remaining.get(pos);
             if current != value {
-                if current > 0.0 && current >= self.low {
+                if live(current) {
                     heap.push(Entry {
                         value: current,
                         cell,
@@ -245,15 +267,53 @@ impl Band<'_> {
             }
             let [ci, cj, ck] = grid.coords(self.field.inside[pos] as usize);
             let voxel = grid.center(ci, cj, ck);
-            if !self.exact[pos].swap(true, Relaxed) {
-                let now = exact_distance(self.bvh, voxel, self.slots[pos], value);
-                if now != value {
-                    self.remaining.set(pos, now);
-                    if now > 0.0 && now >= self.low {
-                        heap.push(Entry { value: now, cell });
+            if !self.exact[pos].load(Relaxed) {
+                batch.clear();
+                batch.push(cell);
+                while batch.len() < self.batch {
+                    let Some(&next) = heap.peek() else { break };
+                    let now = self.remaining.get(next.cell as usize);
+                    if now != next.value {
+                        heap.pop();
+                        if live(now) {
+                            heap.push(Entry {
+                                value: now,
+                                cell: next.cell,
+                            });
+                        }
+                    } else if self.exact[next.cell as usize].load(Relaxed) {
+                        break;
+                    } else {
+                        heap.pop();
+                        batch.push(next.cell);
                     }
-                    continue;
                 }
+                let exact = |&c: &u32| {
+                    let p = c as usize;
+                    let [i, j, k] = grid.coords(self.field.inside[p] as usize);
+                    let v = self.remaining.get(p);
+                    (
+                        c,
+                        exact_distance(self.bvh, grid.center(i, j, k), self.slots[p], v),
+                    )
+                };
+                if batch.len() == 1 {
+                    made.clear();
+                    made.push(exact(&cell));
+                } else {
+                    batch.par_iter().map(exact).collect_into_vec(&mut made);
+                }
+                for &(c, now) in &made {
+                    self.exact[c as usize].store(true, Relaxed);
+                    self.remaining.set(c as usize, now);
+                    if live(now) {
+                        heap.push(Entry {
+                            value: now,
+                            cell: c,
+                        });
+                    }
+                }
+                continue;
             }
             let (center, radius) = match self.refiner {
                 Some(r) => r.refine(voxel, value, spheres, &local, self.cap),

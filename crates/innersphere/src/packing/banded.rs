@@ -229,12 +229,18 @@ struct Band<'a> {
 
 /// The exact distances a block computes at once where a colour has fewer blocks than there
 /// are threads (the top bands: 1–30 blocks, whose exact distances of deep voxels are most of
-/// their time and would otherwise run on one thread each).
+/// their time and would otherwise run on one thread each). Batches add almost no exact
+/// distances (the jaw's top bands: 1,092 against 1,092 in the first, 2,079 against 2,052 in
+/// the ninth).
 fn batch_size(blocks: usize) -> usize {
     const MOST: usize = 16;
-    rayon::current_num_threads()
-        .div_ceil(blocks.max(1))
-        .clamp(1, MOST)
+    /// Below this many threads batches do not pay (2 threads: 0-3 % slower packing).
+    const MIN_THREADS: usize = 8;
+    let threads = rayon::current_num_threads();
+    if threads < MIN_THREADS {
+        return 1;
+    }
+    threads.div_ceil(blocks.max(1)).clamp(1, MOST)
 }
 
 impl Band<'_> {

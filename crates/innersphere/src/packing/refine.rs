@@ -23,7 +23,7 @@ pub(super) struct Refiner<'a> {
     origin: DVec3,
     cell: f64,
     dims: [i64; 3],
-    buckets: Vec<Vec<u32>>,
+    buckets: Vec<smallvec::SmallVec<[u32; 4]>>,
     steps: u32,
     h: f64,
     /// Spheres too large to bucket cheaply: always checked.
@@ -40,7 +40,7 @@ impl<'a> Refiner<'a> {
             origin: grid.origin - DVec3::splat(grid.h),
             cell,
             dims,
-            buckets: vec![Vec::new(); n],
+            buckets: vec![smallvec::SmallVec::new(); n],
             steps,
             h: grid.h,
             big: Vec::new(),

@@ -24,6 +24,12 @@ use std::time::Instant;
 /// bodies). Rescale smaller meshes (metres to millimetres, ...).
 pub const MIN_EXTENT: f64 = 1e-6;
 
+/// Triangles per leaf of the build's triangle tree: its queries are points far from the
+/// surface (the distance bounds, the packing's exact distances, refinement), which larger
+/// leaves serve faster (2-core VM, jaw arches, 4 interleaved rounds: build medians 0.96–0.98×
+/// those with 4; 12 about as fast as 8, 2 slower). The spheres do not depend on it.
+const BUILD_LEAF_SIZE: usize = 8;
+
 /// The spacing of `f32` values at magnitude `x` (one unit in the last place).
 fn f32_spacing(x: f64) -> f64 {
     let f = (x.abs() as f32).min(f32::MAX);
@@ -199,7 +205,7 @@ pub fn build_tree(
 
     let t1 = Instant::now();
     progress.start("triangle tree", 1);
-    let bvh = TriangleBvh::new(&mesh);
+    let bvh = TriangleBvh::with_leaf_size(&mesh, BUILD_LEAF_SIZE);
     progress.finish();
     // Upper bounds of the voxels' distances; the packing makes exact only those it needs.
     let field = field::distance::bounds(&mesh, &bvh, grid, progress)?;

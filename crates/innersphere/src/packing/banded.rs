@@ -342,7 +342,26 @@ impl Band<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::band_of;
+    use super::{band_of, batch_size};
+
+    #[test]
+    fn batches_share_the_threads_among_the_blocks_from_eight_threads() {
+        let on = |threads: usize, blocks: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| batch_size(blocks))
+        };
+        assert_eq!(on(2, 1), 1);
+        assert_eq!(on(7, 1), 1);
+        assert_eq!(on(8, 1), 8);
+        assert_eq!(on(16, 0), 16);
+        assert_eq!(on(16, 3), 6);
+        assert_eq!(on(16, 16), 1);
+        assert_eq!(on(16, 500), 1);
+        assert_eq!(on(64, 1), 16);
+    }
 
     #[test]
     fn a_value_on_an_edge_starts_the_band_above_it() {

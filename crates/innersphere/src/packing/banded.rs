@@ -139,14 +139,13 @@ pub(super) fn pack(
             let placed: Vec<(Vec<Sphere>, u64)> =
                 these.par_iter().map(|b| band.block(b, &spheres)).collect();
             blocks = rest;
+            let first = spheres.len();
             for (local, c) in placed {
                 covered += c;
-                for s in local {
-                    if let Some(r) = refiner.as_mut() {
-                        r.insert(spheres.len() as u32, s.center, s.radius);
-                    }
-                    spheres.push(s);
-                }
+                spheres.extend(local);
+            }
+            if let Some(r) = refiner.as_mut() {
+                r.insert_all(first as u32, &spheres[first..], parallel_registration());
             }
         }
         progress.advance(covered);
@@ -182,13 +181,15 @@ fn sort_into(
     voxel: impl Fn(usize) -> u32 + Sync,
     band: impl Fn(u32) -> Option<usize> + Sync,
 ) {
-    const CHUNK: usize = 1 << 16;
+    // Enough chunks for every thread (a band's voxels can be few), none so small that its
+    // local buckets cost more than its voxels.
+    let chunk = (count / (4 * rayon::current_num_threads())).clamp(1 << 12, 1 << 16);
     let n = buckets.len();
-    let parts: Vec<Vec<Vec<u32>>> = (0..count.div_ceil(CHUNK))
+    let parts: Vec<Vec<Vec<u32>>> = (0..count.div_ceil(chunk))
         .into_par_iter()
         .map(|c| {
             let mut local = vec![Vec::new(); n];
-            for i in c * CHUNK..((c + 1) * CHUNK).min(count) {
+            for i in c * chunk..((c + 1) * chunk).min(count) {
                 let p = voxel(i);
                 if let Some(b) = band(p) {
                     local[b].push(p);
@@ -197,15 +198,28 @@ fn sort_into(
             local
         })
         .collect();
+    // Each bucket appends its parts on a thread of its own.
+    let mut adds: Vec<Vec<Vec<u32>>> = vec![Vec::new(); n];
     for part in parts {
-        for (bucket, mut add) in buckets.iter_mut().zip(part) {
-            if bucket.is_empty() {
-                *bucket = add;
-            } else {
-                bucket.append(&mut add);
+        for (to, add) in adds.iter_mut().zip(part) {
+            if !add.is_empty() {
+                to.push(add);
             }
         }
     }
+    buckets
+        .par_iter_mut()
+        .zip(adds)
+        .for_each(|(bucket, mut adds)| {
+            if bucket.is_empty() && adds.len() == 1 {
+                *bucket = adds.pop().unwrap_or_default();
+                return;
+            }
+            bucket.reserve(adds.iter().map(Vec::len).sum());
+            for add in adds {
+                bucket.extend_from_slice(&add);
+            }
+        });
 }
 
 /// What the blocks of one band share.
@@ -241,6 +255,12 @@ fn batch_size(blocks: usize) -> usize {
         return 1;
     }
     threads.div_ceil(blocks.max(1)).clamp(1, MOST)
+}
+
+/// Whether a colour's new spheres are registered for refinement on all threads: from 8
+/// threads (on 2 the slabs' passes over the spheres cost more than they share).
+fn parallel_registration() -> bool {
+    rayon::current_num_threads() >= 8
 }
 
 impl Band<'_> {

@@ -74,6 +74,64 @@ impl<'a> Refiner<'a> {
         }
     }
 
+    /// Registers `new`, the placed spheres with ids `first..`, as [`insert`](Self::insert)
+    /// one by one does (every cell lists its ids in ascending order), on all threads when
+    /// `parallel`: each thread fills the cells of its own z-slab of the grid.
+    pub(super) fn insert_all(&mut self, first: u32, new: &[Sphere], parallel: bool) {
+        /// Fewer spheres than this register faster on one thread.
+        const MIN_PARALLEL: usize = 512;
+        if !parallel || new.len() < MIN_PARALLEL {
+            for (id, s) in (first..).zip(new) {
+                self.insert(id, s.center, s.radius);
+            }
+            return;
+        }
+        use rayon::prelude::*;
+        let limit = 8.0 * self.cell;
+        self.big.extend(
+            (first..)
+                .zip(new)
+                .filter(|(_, s)| s.radius > limit)
+                .map(|(id, _)| id),
+        );
+        // Each sphere's cell box (none for the big ones), computed once for all slabs.
+        let boxes: Vec<Option<([i64; 3], [i64; 3])>> = new
+            .par_iter()
+            .map(|s| {
+                (s.radius <= limit).then(|| {
+                    (
+                        self.cell_of(s.center - s.radius),
+                        self.cell_of(s.center + s.radius),
+                    )
+                })
+            })
+            .collect();
+        let layer = (self.dims[0] * self.dims[1]) as usize;
+        let layers = self.dims[2] as usize;
+        let slab = layers.div_ceil(4 * rayon::current_num_threads()).max(1);
+        let nx = self.dims[0];
+        self.buckets
+            .par_chunks_mut(layer * slab)
+            .enumerate()
+            .for_each(|(n, cells)| {
+                let (z0, z1) = ((n * slab) as i64, ((n + 1) * slab) as i64 - 1);
+                for (id, b) in (first..).zip(&boxes) {
+                    let Some((a, b)) = b else { continue };
+                    if b[2] < z0 || a[2] > z1 {
+                        continue;
+                    }
+                    for z in a[2].max(z0)..=b[2].min(z1) {
+                        for y in a[1]..=b[1] {
+                            for x in a[0]..=b[0] {
+                                let i = (x + nx * (y + self.dims[1] * (z - z0))) as usize;
+                                cells[i].push(id);
+                            }
+                        }
+                    }
+                }
+            });
+    }
+
     /// Free radius at `c` (distance to the surface and to every placed sphere) and the nearest
     /// obstacle point, given an upper bound of the free radius (`f64::INFINITY` for none): the
     /// surface is searched within the bound only, which prunes most of the triangle tree. The
@@ -211,6 +269,40 @@ impl<'a> Refiner<'a> {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(8))]
+        /// Registering a colour's spheres by z-slab on all threads fills every cell with the
+        /// same ids in the same order as registering them one by one, big spheres included.
+        #[test]
+        fn registering_on_all_threads_equals_one_by_one(
+            balls in proptest::collection::vec((-0.9f64..0.9, -0.5f64..0.5, -0.35f64..0.35, 0.001f64..0.12), 512..900),
+            big in proptest::collection::vec((-0.5f64..0.5, 1.1f64..1.5), 0..4),
+            first in 0u32..1000,
+        ) {
+            let mesh = crate::shapes::ellipsoid(DVec3::new(1.0, 0.6, 0.4), 3);
+            let bvh = TriangleBvh::new(&mesh);
+            let (lo, hi) = mesh.bbox();
+            let grid = VoxelGrid::with_resolution(lo, hi, 64).unwrap();
+            let mut spheres: Vec<Sphere> = balls
+                .iter()
+                .map(|&(x, y, z, r)| Sphere { center: DVec3::new(x, y, z), radius: r })
+                .collect();
+            // A few spheres larger than 8 bucket cells (about 1.0 here), kept on the
+            // always-checked list.
+            for (k, &(x, r)) in big.iter().enumerate() {
+                spheres.insert(k * 97 % spheres.len(), Sphere { center: DVec3::new(x, 0.0, 0.0), radius: r });
+            }
+            let mut one = Refiner::new(&grid, &bvh, 8);
+            for (id, s) in (first..).zip(&spheres) {
+                one.insert(id, s.center, s.radius);
+            }
+            let mut all = Refiner::new(&grid, &bvh, 8);
+            all.insert_all(first, &spheres, true);
+            prop_assert_eq!(&all.big, &one.big);
+            prop_assert!(all.buckets == one.buckets);
+        }
+    }
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(24))]

@@ -160,7 +160,20 @@ pub fn build_tree(
     let t0 = Instant::now();
     validate_options(opts)?;
     mesh.validate()?;
-    let report = MeshReport::of(mesh);
+    // The mesh's report (serial: edges, components) is made while the triangle tree is
+    // built on the other threads; a mesh that must be flipped gets a tree of its own below.
+    // Its time counts to the distance field's stage, as when it is built there.
+    progress.start("triangle tree", 1);
+    let (report, (bvh, mut t_bvh)) = rayon::join(
+        || MeshReport::of(mesh),
+        || {
+            let t = Instant::now();
+            let bvh = TriangleBvh::with_leaf_size(mesh, BUILD_LEAF_SIZE);
+            (bvh, t.elapsed().as_secs_f64())
+        },
+    );
+    progress.finish();
+    let mut bvh = Some(bvh);
     let mut warnings = Vec::new();
     let mut mesh = std::borrow::Cow::Borrowed(mesh);
     match MeshVerdict::of(&report) {
@@ -171,6 +184,7 @@ pub fn build_tree(
                 report.volume
             ));
             mesh.to_mut().flip();
+            bvh = None;
         }
         MeshVerdict::Soup => {
             return Err(Error::InvalidMesh(format!(
@@ -201,15 +215,19 @@ pub fn build_tree(
         Resolution::Cells(n) => VoxelGrid::with_resolution(lo, hi, n)?,
     };
     check_f32_fit(lo, hi, grid.h, &mut warnings)?;
-    let t_prepare = t0.elapsed().as_secs_f64();
+    let t_prepare = (t0.elapsed().as_secs_f64() - t_bvh).max(0.0);
 
     let t1 = Instant::now();
-    progress.start("triangle tree", 1);
-    let bvh = TriangleBvh::with_leaf_size(&mesh, BUILD_LEAF_SIZE);
-    progress.finish();
+    let bvh = bvh.unwrap_or_else(|| {
+        progress.start("triangle tree", 1);
+        let bvh = TriangleBvh::with_leaf_size(&mesh, BUILD_LEAF_SIZE);
+        progress.finish();
+        t_bvh = 0.0;
+        bvh
+    });
     // Upper bounds of the voxels' distances; the packing makes exact only those it needs.
     let field = field::distance::bounds(&mesh, &bvh, grid, progress)?;
-    let t_field = t1.elapsed().as_secs_f64();
+    let t_field = t_bvh + t1.elapsed().as_secs_f64();
     if field.inside.is_empty() {
         return Err(Error::InvalidMesh(format!(
             "the mesh encloses no volume at voxel size {:.6} (no voxel centre lies inside; a triangle soup or a flat sheet?)",

@@ -205,22 +205,26 @@ pub fn bounds(
     for (&n, &slot) in nodes.iter().zip(&slots) {
         node_slot[n as usize] = slot;
     }
-    let (bound, slot): (Vec<f64>, Vec<u32>) = inside
-        .par_chunks(POINTS_PER_TASK * 16)
-        .flat_map_iter(|chunk| {
-            let out: Vec<(f64, u32)> = with_coords(&grid, chunk)
-                .map(|(_, [i, j, k])| {
-                    let slot = node_slot[node_of([i, j, k])];
-                    (
-                        bvh.slot_distance_sq(grid.center(i, j, k), slot).sqrt(),
-                        slot,
-                    )
-                })
-                .collect();
+    // Written in place chunk by chunk (collecting the chunks' pairs and unzipping them was a
+    // serial copy of the whole field).
+    let mut bound = vec![0.0; inside.len()];
+    let mut slot = vec![UNSET; inside.len()];
+    const CHUNK: usize = POINTS_PER_TASK * 16;
+    bound
+        .par_chunks_mut(CHUNK)
+        .zip(slot.par_chunks_mut(CHUNK))
+        .zip(inside.par_chunks(CHUNK))
+        .for_each(|((bound, slot), chunk)| {
+            for ((b, s), (_, [i, j, k])) in bound
+                .iter_mut()
+                .zip(slot.iter_mut())
+                .zip(with_coords(&grid, chunk))
+            {
+                *s = node_slot[node_of([i, j, k])];
+                *b = bvh.slot_distance_sq(grid.center(i, j, k), *s).sqrt();
+            }
             progress.advance(chunk.len() as u64);
-            out
-        })
-        .unzip();
+        });
     progress.finish();
     Ok(DistanceBounds {
         grid,

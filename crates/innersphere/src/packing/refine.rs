@@ -35,12 +35,18 @@ impl<'a> Refiner<'a> {
         let cell = 4.0 * grid.h;
         let dims = grid.dims.map(|d| (d as i64 + 3) / 4 + 1);
         let n = (dims[0] * dims[1] * dims[2]) as usize;
+        // About a million cells on the jaw: written on all threads.
+        use rayon::prelude::*;
+        let buckets = (0..n)
+            .into_par_iter()
+            .map(|_| smallvec::SmallVec::new())
+            .collect();
         Refiner {
             bvh,
             origin: grid.origin - DVec3::splat(grid.h),
             cell,
             dims,
-            buckets: vec![smallvec::SmallVec::new(); n],
+            buckets,
             steps,
             h: grid.h,
             big: Vec::new(),

@@ -41,8 +41,8 @@ pub enum Preset {
     /// 0.1 mm voxels, 0.05 mm minimum radius, 8 refinement steps. On the real arches:
     /// distance error p95 0.028 mm on the 5 s chew of `docs/RESULTS.md` (its bar: 0.03 mm)
     /// and 0.021–0.045 mm on four unseen motions, no missed contact deeper than 0.08 mm,
-    /// about 150k spheres, 2.4–2.9 s and 0.42 GB per arch on 2 cores (1.7–2.0× FCL's OBBRSS build
-    /// of an arch), 1.2–1.4 s on 16; a molar in 0.3 s (14k spheres).
+    /// about 150k spheres, 2.3–2.6 s and 0.38 GB per arch on 2 cores (1.6–1.8× FCL's OBBRSS build
+    /// of an arch), about 1 s on 16; a molar in 0.3 s (14k spheres).
     Jaw,
     /// Jaw scans in **millimetres**, the query benchmark's trees (`BENCHMARKS.md`): 0.15 mm
     /// voxels, 0.05 mm minimum radius, 8 refinement steps. About 110k spheres, 1.6 s and

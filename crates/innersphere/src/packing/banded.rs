@@ -226,10 +226,11 @@ fn sort_into(
 }
 
 /// `f` of every block, in block order, run on all threads with the blocks of most voxels
-/// taken first: a colour ends with its slowest block, and one started late runs alone. (A
-/// parallel iterator in block order left the lent 16-core Xeon's threads idle for a third
-/// of the mid bands' time.) Each thread takes the next block from a shared counter; `f`
-/// should not wait on other rayon tasks (a blocked thread could take up another taker).
+/// taken first: a colour ends with its slowest block, and one started late runs alone. (On
+/// the lent 16-core Xeon the jaw's blocks kept 49 % of the threads busy in block order, 63 %
+/// taken largest first; one profile each, `docs/results/build_profile_16core.txt`.) Each
+/// thread takes the next block from a shared counter; `f` should not wait on other rayon
+/// tasks (a blocked thread could take up another taker).
 fn largest_first<T: Send>(
     blocks: &[&[(u64, Entry)]],
     f: impl Fn(&[(u64, Entry)]) -> T + Sync,

@@ -164,7 +164,7 @@ pub fn build_tree(
     // built on the other threads; a mesh that must be flipped gets a tree of its own below.
     // Its time counts to the distance field's stage, as when it is built there.
     progress.start("triangle tree", 1);
-    let (report, (bvh, mut t_bvh)) = rayon::join(
+    let (report, (bvh, t_bvh)) = rayon::join(
         || MeshReport::of(mesh),
         || {
             let t = Instant::now();
@@ -218,13 +218,16 @@ pub fn build_tree(
     let t_prepare = (t0.elapsed().as_secs_f64() - t_bvh).max(0.0);
 
     let t1 = Instant::now();
-    let bvh = bvh.unwrap_or_else(|| {
-        progress.start("triangle tree", 1);
-        let bvh = TriangleBvh::with_leaf_size(&mesh, BUILD_LEAF_SIZE);
-        progress.finish();
-        t_bvh = 0.0;
-        bvh
-    });
+    // A flipped mesh's tree is built here, inside the field stage's own time.
+    let (bvh, t_bvh) = match bvh {
+        Some(bvh) => (bvh, t_bvh),
+        None => {
+            progress.start("triangle tree", 1);
+            let bvh = TriangleBvh::with_leaf_size(&mesh, BUILD_LEAF_SIZE);
+            progress.finish();
+            (bvh, 0.0)
+        }
+    };
     // Upper bounds of the voxels' distances; the packing makes exact only those it needs.
     let field = field::distance::bounds(&mesh, &bvh, grid, progress)?;
     let t_field = t_bvh + t1.elapsed().as_secs_f64();

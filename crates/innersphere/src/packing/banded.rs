@@ -240,7 +240,7 @@ fn largest_first<T: Send>(
     order.sort_by_key(|&i| std::cmp::Reverse(blocks[i].len()));
     let next = AtomicUsize::new(0);
     let takers = rayon::current_num_threads().min(blocks.len());
-    let done: Vec<Vec<(usize, T)>> = (0..takers)
+    let mut done: Vec<(usize, T)> = (0..takers)
         .into_par_iter()
         .map(|_| {
             let mut mine = Vec::new();
@@ -251,12 +251,10 @@ fn largest_first<T: Send>(
             }
             mine
         })
+        .flatten()
         .collect();
-    let mut out: Vec<Option<T>> = std::iter::repeat_with(|| None).take(blocks.len()).collect();
-    for (i, t) in done.into_iter().flatten() {
-        out[i] = Some(t);
-    }
-    out.into_iter().flatten().collect()
+    done.sort_unstable_by_key(|&(i, _)| i);
+    done.into_iter().map(|(_, t)| t).collect()
 }
 
 /// What the blocks of one band share.

@@ -62,9 +62,14 @@ impl<'a> Refiner<'a> {
         ]
     }
 
+    /// Whether a sphere of radius `r` is too large to bucket cheaply (kept in `big`).
+    fn is_big(&self, r: f64) -> bool {
+        r > 8.0 * self.cell
+    }
+
     /// Registers a placed sphere.
     pub(super) fn insert(&mut self, id: u32, c: DVec3, r: f64) {
-        if r > 8.0 * self.cell {
+        if self.is_big(r) {
             self.big.push(id);
             return;
         }
@@ -93,18 +98,17 @@ impl<'a> Refiner<'a> {
             return;
         }
         use rayon::prelude::*;
-        let limit = 8.0 * self.cell;
-        self.big.extend(
-            (first..)
-                .zip(new)
-                .filter(|(_, s)| s.radius > limit)
-                .map(|(id, _)| id),
-        );
+        let big: Vec<u32> = (first..)
+            .zip(new)
+            .filter(|(_, s)| self.is_big(s.radius))
+            .map(|(id, _)| id)
+            .collect();
+        self.big.extend(big);
         // Each sphere's cell box (none for the big ones), computed once for all slabs.
         let boxes: Vec<Option<([i64; 3], [i64; 3])>> = new
             .par_iter()
             .map(|s| {
-                (s.radius <= limit).then(|| {
+                (!self.is_big(s.radius)).then(|| {
                     (
                         self.cell_of(s.center - s.radius),
                         self.cell_of(s.center + s.radius),

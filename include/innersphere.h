@@ -337,6 +337,73 @@ typedef struct ist_distance_result {
 } ist_distance_result;
 
 /*
+ Options of ist_refined_distance (ist_refine_options_default: the library's defaults).
+ */
+typedef struct ist_refine_options {
+  /*
+   Radius of the balls searched around the spheres' closest points, as a multiple of the
+   larger closest leaf's radius (plus `margin`); ≥ 0.
+   */
+  double radius_scale;
+  /*
+   Added to the radius, in model units; negative: half the larger voxel size of the
+   two trees.
+   */
+  double margin;
+  /*
+   Skip what cannot beat the best so far by more than this fraction of it; in [0, 1).
+   */
+  double rel_tolerance;
+  /*
+   Most triangle-BVH node pairs searched (≥ 1); past it `complete` is 0.
+   */
+  uint64_t max_node_pairs;
+} ist_refine_options;
+
+/*
+ Result of ist_refined_distance (world frame).
+ */
+typedef struct ist_refined_distance_result {
+  /*
+   Distance between the meshes as refined from the sphere distance: never below the
+   exact mesh distance, never above `sphere_distance`; 0 when they touch.
+   */
+  double distance;
+  /*
+   1 when the bodies touch (two triangles cross, or the sphere packings overlap).
+   */
+  int contact;
+  /*
+   1 when a triangle pair nearer than the spheres was found (the points lie on it).
+   */
+  int refined;
+  /*
+   1 when the local search ended within its budget.
+   */
+  int complete;
+  /*
+   Closest point on A.
+   */
+  double point_a[3];
+  /*
+   Closest point on B.
+   */
+  double point_b[3];
+  /*
+   A's triangle of `point_a` (index in A's mesh), UINT32_MAX unless refined.
+   */
+  uint32_t tri_a;
+  /*
+   B's triangle of `point_b`, UINT32_MAX unless refined.
+   */
+  uint32_t tri_b;
+  /*
+   The sphere distance that was refined (as ist_distance's `distance`).
+   */
+  double sphere_distance;
+} ist_refined_distance_result;
+
+/*
  Result of ist_penetration_within (world frame): what a time-critical penetration query
  found within its node-pair budget.
  */
@@ -609,6 +676,21 @@ int ist_pair_reset(struct ist_pair *pair);
 int ist_distance(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, struct ist_distance_result *out);
 
 /*
+ The library's default options of ist_refined_distance.
+ */
+struct ist_refine_options ist_refine_options_default(void);
+
+/*
+ The distance between the meshes, refined from the sphere distance by the exact distance
+ of the triangles near its closest points (world frame). Both trees need their meshes
+ (ist_tree_with_mesh): IST_ERR_INVALID_ARGUMENT otherwise. `opts` NULL: the defaults.
+
+ # Safety
+ Every pointer but `opts` is NULL or valid; `opts` is NULL or points to options.
+ */
+int ist_refined_distance(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, const struct ist_refine_options *opts, struct ist_refined_distance_result *out);
+
+/*
  First contact: `*in_contact` = 1 when the packings overlap, else 0.
 
  # Safety
@@ -720,6 +802,17 @@ struct ist_tree *ist_tree_load(const char *path);
 struct ist_tree *ist_tree_build(const char *mesh_path, const struct ist_build_options *opts);
 
 /*
+ A new handle to the same tree with the mesh it was built from (a mesh file), for
+ ist_refined_distance; `tree` itself is unchanged (pairs made from it have no mesh). About
+ a second per jaw arch. NULL on error: a file that is not a mesh, or not this tree's
+ source (IST_ERR_MESH).
+
+ # Safety
+ `tree` is NULL or a live tree; `mesh_path` is NULL or a NUL-terminated string.
+ */
+struct ist_tree *ist_tree_with_mesh(const struct ist_tree *tree, const char *mesh_path);
+
+/*
  Writes `tree` to `path` (whole or not at all; never over an input of the same call).
 
  # Safety
@@ -739,7 +832,8 @@ size_t ist_tree_leaf_count(const struct ist_tree *tree);
  Frees a tree (NULL is accepted). Pairs built on it keep their own reference.
 
  # Safety
- `tree` is NULL or from ist_tree_load / ist_tree_build, not freed before.
+ `tree` is NULL or from ist_tree_load / ist_tree_build / ist_tree_with_mesh, not freed
+ before.
  */
 void ist_tree_free(struct ist_tree *tree);
 

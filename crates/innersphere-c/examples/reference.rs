@@ -63,6 +63,9 @@ fn make(dir: &Path) {
         .unwrap()
         .save(dir.join("b.ist"))
         .unwrap();
+    // The meshes, for the refined distance.
+    innersphere::mesh::io::save_stl(&upper, &dir.join("a.stl")).unwrap();
+    innersphere::mesh::io::save_stl(&lower, &dir.join("b.stl")).unwrap();
     // Poses of A and B: apart, near, touching, overlapping, turned.
     let mut s = String::new();
     let a0 = Pose::IDENTITY;
@@ -99,6 +102,12 @@ fn make(dir: &Path) {
 fn answer(dir: &Path) -> String {
     let a = SharedTree::new(SphereTree::load(dir.join("a.ist")).unwrap());
     let b = SharedTree::new(SphereTree::load(dir.join("b.ist")).unwrap());
+    let mesh = |f: &str| innersphere::Mesh::load(dir.join(f)).unwrap();
+    let (ma, mb) = (
+        a.clone().with_mesh(&mesh("a.stl")).unwrap(),
+        b.clone().with_mesh(&mesh("b.stl")).unwrap(),
+    );
+    let mut refined = Pair::new(ma, mb);
     let mut out = String::new();
     let mut pair = Pair::new(a.clone(), b.clone());
     for (i, p) in read_poses(&dir.join("poses.txt")).iter().enumerate() {
@@ -111,6 +120,20 @@ fn answer(dir: &Path) -> String {
             d.overlapping as i32,
             v(d.point_a),
             v(d.point_b)
+        );
+        let r = refined.refined_distance(&pa, &pb).unwrap();
+        let _ = writeln!(
+            out,
+            "{i} refined {} {} {} {} {} {} {} {} {}",
+            bits(r.distance),
+            r.intersecting as i32,
+            r.refined as i32,
+            r.complete as i32,
+            v(r.point_a),
+            v(r.point_b),
+            r.tri_a,
+            r.tri_b,
+            bits(r.spheres.distance)
         );
         let c = pair.contact(&pa, &pb);
         let _ = writeln!(out, "{i} contact {}", c.contact.is_some() as i32);

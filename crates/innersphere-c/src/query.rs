@@ -5,11 +5,11 @@ use crate::error::{pointer, status, Fail};
 use crate::tree::ist_tree;
 use crate::types::{
     ist_budgeted_result, ist_contact_point, ist_distance_result, ist_patch, ist_penetration_result,
-    ist_pose,
+    ist_pose, ist_refine_options, ist_refined_distance_result,
 };
 use crate::{mutable, reference};
 use innersphere::query::{Paper, TraversalOptions};
-use innersphere::{MultipointOptions, Pair, PenetrationOptions, Pose};
+use innersphere::{MultipointOptions, Pair, PenetrationOptions, Pose, RefineOptions};
 use std::ffi::c_int;
 
 /// A pair of trees with the temporal coherence of one motion (opaque; one thread at a time).
@@ -86,6 +86,60 @@ pub unsafe extern "C" fn ist_distance(
             contact: d.overlapping as c_int,
             point_a: d.point_a.to_array(),
             point_b: d.point_b.to_array(),
+        };
+        Ok(())
+    })
+}
+
+/// The library's default options of ist_refined_distance.
+#[no_mangle]
+pub extern "C" fn ist_refine_options_default() -> ist_refine_options {
+    let o = RefineOptions::default();
+    ist_refine_options {
+        radius_scale: o.radius_scale,
+        margin: o.margin,
+        rel_tolerance: o.rel_tolerance,
+        max_node_pairs: o.max_node_pairs,
+    }
+}
+
+/// The distance between the meshes, refined from the sphere distance by the exact distance
+/// of the triangles near its closest points (world frame). Both trees need their meshes
+/// (ist_tree_with_mesh): IST_ERR_INVALID_ARGUMENT otherwise. `opts` NULL: the defaults.
+///
+/// # Safety
+/// Every pointer but `opts` is NULL or valid; `opts` is NULL or points to options.
+#[no_mangle]
+pub unsafe extern "C" fn ist_refined_distance(
+    pair: *mut ist_pair,
+    pose_a: *const ist_pose,
+    pose_b: *const ist_pose,
+    opts: *const ist_refine_options,
+    out: *mut ist_refined_distance_result,
+) -> c_int {
+    status(|| {
+        let (pair, a, b) = unsafe { args(pair, pose_a, pose_b) }?;
+        let out = unsafe { mutable(out, "out") }?;
+        let o = match unsafe { opts.as_ref() } {
+            None => RefineOptions::default(),
+            Some(o) => RefineOptions {
+                radius_scale: o.radius_scale,
+                margin: o.margin,
+                rel_tolerance: o.rel_tolerance,
+                max_node_pairs: o.max_node_pairs,
+            },
+        };
+        let r = pair.refined_distance_with(&a, &b, &o)?;
+        *out = ist_refined_distance_result {
+            distance: r.distance,
+            contact: r.intersecting as c_int,
+            refined: r.refined as c_int,
+            complete: r.complete as c_int,
+            point_a: r.point_a.to_array(),
+            point_b: r.point_b.to_array(),
+            tri_a: r.tri_a,
+            tri_b: r.tri_b,
+            sphere_distance: r.spheres.distance,
         };
         Ok(())
     })

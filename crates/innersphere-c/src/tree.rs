@@ -92,6 +92,28 @@ pub unsafe extern "C" fn ist_tree_build(
     })
 }
 
+/// A new handle to the same tree with the mesh it was built from (a mesh file), for
+/// ist_refined_distance; `tree` itself is unchanged (pairs made from it have no mesh). About
+/// a second per jaw arch. NULL on error: a file that is not a mesh, or not this tree's
+/// source (IST_ERR_MESH).
+///
+/// # Safety
+/// `tree` is NULL or a live tree; `mesh_path` is NULL or a NUL-terminated string.
+#[no_mangle]
+pub unsafe extern "C" fn ist_tree_with_mesh(
+    tree: *const ist_tree,
+    mesh_path: *const c_char,
+) -> *mut ist_tree {
+    pointer(|| {
+        let t = unsafe { reference(tree, "tree") }?;
+        let path = unsafe { path_arg(mesh_path, "mesh_path") }?;
+        let mesh = Mesh::load(&path)?;
+        Ok(Box::new(ist_tree {
+            tree: t.tree.clone().with_mesh(&mesh)?,
+        }))
+    })
+}
+
 /// Writes `tree` to `path` (whole or not at all; never over an input of the same call).
 ///
 /// # Safety
@@ -118,7 +140,8 @@ pub unsafe extern "C" fn ist_tree_leaf_count(tree: *const ist_tree) -> usize {
 /// Frees a tree (NULL is accepted). Pairs built on it keep their own reference.
 ///
 /// # Safety
-/// `tree` is NULL or from ist_tree_load / ist_tree_build, not freed before.
+/// `tree` is NULL or from ist_tree_load / ist_tree_build / ist_tree_with_mesh, not freed
+/// before.
 #[no_mangle]
 pub unsafe extern "C" fn ist_tree_free(tree: *mut ist_tree) {
     if !tree.is_null() {

@@ -63,6 +63,47 @@ pub struct ist_distance_result {
     pub point_b: [f64; 3],
 }
 
+/// Options of ist_refined_distance (ist_refine_options_default: the library's defaults).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ist_refine_options {
+    /// Radius of the balls searched around the spheres' closest points, as a multiple of the
+    /// larger closest leaf's radius (plus `margin`); ≥ 0.
+    pub radius_scale: f64,
+    /// Added to the radius, in model units; negative: half the larger voxel size of the
+    /// two trees.
+    pub margin: f64,
+    /// Skip what cannot beat the best so far by more than this fraction of it; in [0, 1).
+    pub rel_tolerance: f64,
+    /// Most triangle-BVH node pairs searched (≥ 1); past it `complete` is 0.
+    pub max_node_pairs: u64,
+}
+
+/// Result of ist_refined_distance (world frame).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ist_refined_distance_result {
+    /// Distance between the meshes as refined from the sphere distance: never below the
+    /// exact mesh distance, never above `sphere_distance`; 0 when they touch.
+    pub distance: f64,
+    /// 1 when the bodies touch (two triangles cross, or the sphere packings overlap).
+    pub contact: c_int,
+    /// 1 when a triangle pair nearer than the spheres was found (the points lie on it).
+    pub refined: c_int,
+    /// 1 when the local search ended within its budget.
+    pub complete: c_int,
+    /// Closest point on A.
+    pub point_a: [f64; 3],
+    /// Closest point on B.
+    pub point_b: [f64; 3],
+    /// A's triangle of `point_a` (index in A's mesh), UINT32_MAX unless refined.
+    pub tri_a: u32,
+    /// B's triangle of `point_b`, UINT32_MAX unless refined.
+    pub tri_b: u32,
+    /// The sphere distance that was refined (as ist_distance's `distance`).
+    pub sphere_distance: f64,
+}
+
 /// Result of ist_penetration (world frame).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

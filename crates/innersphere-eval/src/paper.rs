@@ -323,17 +323,21 @@ pub fn run(
                 "{h},{},{},{},{},{},{},{},{},{},{}",
                 ta.leaf_count(),
                 tb.leaf_count(),
-                acc.abs_err_p50,
-                acc.abs_err_p95,
-                acc.abs_err_max,
-                acc.rel_err_p50,
-                acc.rel_err_p95,
-                acc.missed_contacts,
-                acc.missed_contacts_deep,
-                acc.false_contacts
+                acc.errors.abs_err_p50,
+                acc.errors.abs_err_p95,
+                acc.errors.abs_err_max,
+                acc.errors.rel_err_p50,
+                acc.errors.rel_err_p95,
+                acc.errors.missed_contacts,
+                acc.errors.missed_contacts_deep,
+                acc.errors.false_contacts
             );
-            err_series[0].points.push((leaves as f64, acc.abs_err_p50));
-            err_series[1].points.push((leaves as f64, acc.abs_err_p95));
+            err_series[0]
+                .points
+                .push((leaves as f64, acc.errors.abs_err_p50));
+            err_series[1]
+                .points
+                .push((leaves as f64, acc.errors.abs_err_p95));
         }
     }
     out.csv("fig6_speed_vs_leaves.csv", &speed)?;
@@ -608,6 +612,6 @@ pub fn run(
         proximity_p99_us: stats(prox)[1],
         exact_p99_us: stats(exact_first)[1],
         backtracking_speedup_in_contact: sf[3] / sbk[3],
-        main_abs_err_p95: acc.map_or(f64::NAN, |a| a.abs_err_p95),
+        main_abs_err_p95: acc.map_or(f64::NAN, |a| a.errors.abs_err_p95),
     })
 }

@@ -20,7 +20,7 @@
 
 use crate::motion::Motion;
 use innersphere::exact::{self, ExactDistance, ExactMesh, ExactScratch};
-use innersphere::{MultipointOptions, Pair, Pose, SharedTree};
+use innersphere::{MultipointOptions, Pair, Pose, RefineOptions, SharedTree};
 use std::time::Instant;
 
 /// The query kinds a replay can run.
@@ -35,6 +35,9 @@ pub enum QueryKind {
     Multipoint,
     /// Penetration volume, force and torque ([`Pair::penetration`]).
     Penetration,
+    /// The sphere distance refined to the meshes ([`Pair::refined_distance`]; the trees
+    /// need their meshes, [`SharedTree::with_mesh`]).
+    RefinedDistance,
 }
 
 impl QueryKind {
@@ -45,7 +48,19 @@ impl QueryKind {
         QueryKind::Multipoint,
         QueryKind::Penetration,
     ];
+
+    /// Every kind a replay can time, the refined distance last.
+    pub const WITH_REFINED: [QueryKind; KINDS] = [
+        QueryKind::Distance,
+        QueryKind::Contact,
+        QueryKind::Multipoint,
+        QueryKind::Penetration,
+        QueryKind::RefinedDistance,
+    ];
 }
+
+/// How many query kinds a replay can time (the length of the per-frame arrays).
+pub const KINDS: usize = 5;
 
 /// Options of a replay.
 #[derive(Debug, Clone)]
@@ -67,6 +82,8 @@ pub struct ReplayOptions {
     /// included, feeds the best-of-N statistics (each frame's fastest pass). See the
     /// [module docs](self).
     pub passes: usize,
+    /// Options of the refined distance.
+    pub refine: RefineOptions,
 }
 
 impl Default for ReplayOptions {
@@ -78,6 +95,7 @@ impl Default for ReplayOptions {
             every: 1,
             deep: 0.1,
             passes: 1,
+            refine: RefineOptions::default(),
         }
     }
 }
@@ -121,26 +139,9 @@ pub struct Accuracy {
     pub frames: usize,
     /// Of those, frames where the meshes are separated.
     pub separated_frames: usize,
-    /// Absolute distance error on separated frames: median, 95th percentile, maximum.
-    pub abs_err_p50: f64,
-    /// See `abs_err_p50`.
-    pub abs_err_p95: f64,
-    /// See `abs_err_p50`.
-    pub abs_err_max: f64,
-    /// The paper's relative error (absolute error / exact distance): median, 95th percentile.
-    pub rel_err_p50: f64,
-    /// See `rel_err_p50`.
-    pub rel_err_p95: f64,
-    /// Frames where the meshes intersect but the trees say separated.
-    pub missed_contacts: usize,
-    /// Missed contacts where the meshes interpenetrate by more than `deep`.
-    pub missed_contacts_deep: usize,
-    /// The deepest interpenetration among the missed contacts (model units, mm for the jaw
-    /// scans; 0 when none): how deep a contact the trees can miss.
-    #[serde(rename = "missed_contacts_max_depth_mm")]
-    pub missed_contacts_max_depth: f64,
-    /// Frames where the trees overlap but the meshes are separated.
-    pub false_contacts: usize,
+    /// The sphere distance's errors ([`Pair::distance`]; flattened into the JSON).
+    #[serde(flatten)]
+    pub errors: Errors,
     /// Frames between a compared frame and the one the exact method's warm start comes from
     /// (the previous compared frame: [`ReplayOptions::every`]; the first starts cold).
     pub exact_warm_start_frames: usize,
@@ -159,12 +160,103 @@ pub struct Accuracy {
     pub exact_best_of_passes_max_us: f64,
     /// Whether every pass of the exact method gave the first pass's answers.
     pub exact_passes_agree: bool,
+    /// The refined distance's accuracy ([`Pair::refined_distance`]), when it was timed.
+    pub refined: Option<RefinedAccuracy>,
     /// Our exact proximity's single-pass 99th-percentile time over the same compared frames
     /// (µs; NaN when the distance query was not timed), the like-for-like partner of
     /// `exact_p99_us`.
     pub distance_p99_us: f64,
     /// `exact_p99_us / distance_p99_us`: how many times faster our proximity is at p99 than
     /// the exact mesh distance on the same frames, both single pass.
+    pub speedup_p99: f64,
+}
+
+/// A distance's errors against the exact mesh distance on the compared frames.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct Errors {
+    /// Absolute distance error on separated frames: median, 95th percentile, maximum.
+    pub abs_err_p50: f64,
+    /// See `abs_err_p50`.
+    pub abs_err_p95: f64,
+    /// See `abs_err_p50`.
+    pub abs_err_max: f64,
+    /// The paper's relative error (absolute error / exact distance): median, 95th percentile.
+    pub rel_err_p50: f64,
+    /// See `rel_err_p50`.
+    pub rel_err_p95: f64,
+    /// Frames where the meshes intersect but the distance says separated.
+    pub missed_contacts: usize,
+    /// Missed contacts where the meshes interpenetrate by more than `deep`.
+    pub missed_contacts_deep: usize,
+    /// The deepest interpenetration among the missed contacts (model units, mm for the jaw
+    /// scans; 0 when none): how deep a contact it can miss.
+    #[serde(rename = "missed_contacts_max_depth_mm")]
+    pub missed_contacts_max_depth: f64,
+    /// Frames where it says touching but the meshes are separated.
+    pub false_contacts: usize,
+}
+
+/// [`Errors`] gathered frame by frame.
+#[derive(Default)]
+struct Tally {
+    abs: Vec<f64>,
+    rel: Vec<f64>,
+    e: Errors,
+}
+
+impl Tally {
+    /// One compared frame: the exact answer `e`, ours (`distance`, `contact`), the meshes'
+    /// interpenetration depth when asked for (a missed contact), `deep` the bar.
+    fn frame(
+        &mut self,
+        e: &ExactDistance,
+        distance: f64,
+        contact: bool,
+        depth: impl FnOnce() -> f64,
+        deep: f64,
+    ) {
+        if e.intersecting {
+            if !contact {
+                let d = depth();
+                self.e.missed_contacts += 1;
+                self.e.missed_contacts_max_depth = self.e.missed_contacts_max_depth.max(d);
+                self.e.missed_contacts_deep += usize::from(d > deep);
+            }
+        } else {
+            self.e.false_contacts += usize::from(contact);
+            let err = (distance - e.distance).abs();
+            self.abs.push(err);
+            if e.distance > 0.0 {
+                self.rel.push(err / e.distance);
+            }
+        }
+    }
+
+    fn finish(self) -> Errors {
+        let (abs, rel) = (sorted(self.abs), sorted(self.rel));
+        Errors {
+            abs_err_p50: percentile(&abs, 0.5),
+            abs_err_p95: percentile(&abs, 0.95),
+            abs_err_max: abs.last().copied().unwrap_or(f64::NAN),
+            rel_err_p50: percentile(&rel, 0.5),
+            rel_err_p95: percentile(&rel, 0.95),
+            ..self.e
+        }
+    }
+}
+
+/// The refined distance against the exact mesh distance, on the same compared frames as
+/// [`Accuracy`] (whose top-level figures are the sphere distance's).
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct RefinedAccuracy {
+    /// Its errors (flattened into the JSON).
+    #[serde(flatten)]
+    pub errors: Errors,
+    /// Compared frames whose local search ran out of its budget.
+    pub incomplete_frames: usize,
+    /// Its single-pass 99th-percentile time over the compared frames (µs).
+    pub p99_us: f64,
+    /// `exact_p99_us / p99_us`, both single pass on the same frames.
     pub speedup_p99: f64,
 }
 
@@ -182,18 +274,20 @@ pub struct FrameRow {
     pub contact: Option<bool>,
     /// Each timed kind's own answer on this frame in the first pass, in
     /// [`ReplayOptions::kinds`] order; `None` if not run.
-    pub answers: [Option<KindAnswer>; 4],
+    pub answers: [Option<KindAnswer>; KINDS],
     /// Time of each kind in this frame in the first pass (µs), in [`ReplayOptions::kinds`]
     /// order; NaN if not run.
-    pub us: [f64; 4],
+    pub us: [f64; KINDS],
     /// Time of each kind in this frame, fastest of the passes (µs); NaN if not run.
-    pub best_of_passes_us: [f64; 4],
+    pub best_of_passes_us: [f64; KINDS],
     /// Exact mesh distance (NaN when not compared).
     pub exact_distance: f64,
     /// Whether the meshes intersect (`None` when not compared).
     pub exact_intersecting: Option<bool>,
     /// Time of the exact mesh distance in the first pass (µs; NaN when not compared).
     pub exact_us: f64,
+    /// Whether the refined distance's local search ran out of its budget (first pass).
+    pub refine_incomplete: bool,
 }
 
 /// What one query kind answered on one frame.
@@ -201,14 +295,14 @@ pub struct FrameRow {
 pub struct KindAnswer {
     /// Whether this kind found the bodies in contact (distance: the sphere sets overlap;
     /// contact: a contact found; multipoint: at least one contact; penetration: at least one
-    /// overlapping leaf pair).
+    /// overlapping leaf pair; refined distance: the meshes touch).
     pub in_contact: bool,
     /// Distance: the sphere-set distance (0 when overlapping). Contact and multipoint: 0 in
     /// contact, else their proved lower bound on the separation. Penetration: the penetration
-    /// volume (model units³).
+    /// volume (model units³). Refined distance: the refined distance (0 in contact).
     pub value: f64,
     /// Multipoint: contacts found. Penetration: overlapping leaf pairs. Distance and contact:
-    /// 1 in contact, else 0.
+    /// 1 in contact, else 0. Refined distance: triangle pairs measured.
     pub count: usize,
 }
 
@@ -228,6 +322,11 @@ impl KindAnswer {
                 "penetration_volume",
                 "penetration_pairs",
             ],
+            QueryKind::RefinedDistance => &[
+                "refined_distance_in_contact",
+                "refined_distance",
+                "refined_distance_triangle_pairs",
+            ],
         }
     }
 
@@ -237,7 +336,9 @@ impl KindAnswer {
         match kind {
             QueryKind::Distance | QueryKind::Contact => vec![c, self.value.to_string()],
             QueryKind::Multipoint => vec![c, self.count.to_string(), self.value.to_string()],
-            QueryKind::Penetration => vec![c, self.value.to_string(), self.count.to_string()],
+            QueryKind::Penetration | QueryKind::RefinedDistance => {
+                vec![c, self.value.to_string(), self.count.to_string()]
+            }
         }
     }
 }
@@ -276,7 +377,10 @@ impl ReplayReport {
             head.extend(KindAnswer::columns(k).iter().map(|c| c.to_string()));
         }
         for &k in &kinds {
-            let k = format!("{k:?}").to_lowercase();
+            let k = match k {
+                QueryKind::RefinedDistance => "refined_distance".to_string(),
+                k => format!("{k:?}").to_lowercase(),
+            };
             head.push(format!("{k}_us_1pass"));
             if best {
                 head.push(format!("{k}_us_best_of_{}", self.passes));
@@ -399,8 +503,8 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
             frame: i,
             t: f.t,
             distance: f64::NAN,
-            us: [f64::NAN; 4],
-            best_of_passes_us: [f64::NAN; 4],
+            us: [f64::NAN; KINDS],
+            best_of_passes_us: [f64::NAN; KINDS],
             exact_distance: f64::NAN,
             exact_us: f64::NAN,
             ..Default::default()
@@ -410,7 +514,7 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
     let mut kinds = Vec::new();
     let mut times = vec![0.0; n];
     let mut answers = vec![Answer::default(); n];
-    for (slot, &kind) in opts.kinds.iter().enumerate().take(4) {
+    for (slot, &kind) in opts.kinds.iter().enumerate().take(KINDS) {
         let mut first = vec![0.0; n];
         let mut first_answers = vec![Answer::default(); n];
         let mut best = vec![f64::INFINITY; n];
@@ -431,6 +535,9 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
             row.us[slot] = first[i];
             row.best_of_passes_us[slot] = best[i];
             row.answers[slot] = Some(first_answers[i].answer);
+            if kind == QueryKind::RefinedDistance {
+                row.refine_incomplete = first_answers[i].incomplete;
+            }
             if kind == QueryKind::Distance {
                 row.distance = first_answers[i].answer.value;
                 row.contact = Some(first_answers[i].answer.in_contact);
@@ -482,42 +589,39 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
             exact_passes_agree: timed.passes_agree,
             ..Default::default()
         };
-        let (mut abs, mut rel) = (Vec::new(), Vec::new());
+        let mut spheres = Tally::default();
+        let refined_slot = opts
+            .kinds
+            .iter()
+            .take(KINDS)
+            .position(|&k| k == QueryKind::RefinedDistance);
+        let mut refined = refined_slot.map(|_| (Tally::default(), RefinedAccuracy::default()));
+        let mut rus = Vec::new();
+        let mut depth_of =
+            |f: &crate::motion::Frame| exact::penetration_depth(ma, &id, mb, &f.pose, &mut scratch);
         for (j, (i, f)) in motion.frames.iter().enumerate().step_by(every).enumerate() {
             let e = timed.answers[j];
             rows[i].exact_distance = e.distance;
             rows[i].exact_intersecting = Some(e.intersecting);
             rows[i].exact_us = timed.first[j];
             acc.frames += 1;
-            let tree_contact = rows[i].contact == Some(true);
-            if e.intersecting {
-                if !tree_contact {
-                    acc.missed_contacts += 1;
-                    let depth = exact::penetration_depth(ma, &id, mb, &f.pose, &mut scratch);
-                    acc.missed_contacts_max_depth = acc.missed_contacts_max_depth.max(depth);
-                    if depth > opts.deep {
-                        acc.missed_contacts_deep += 1;
-                    }
+            acc.separated_frames += usize::from(!e.intersecting);
+            // The meshes' interpenetration depth, measured once per frame at most.
+            let mut depth = None;
+            if let (Some((tally, r)), Some(slot)) = (refined.as_mut(), refined_slot) {
+                rus.push(rows[i].us[slot]);
+                if let Some(ans) = rows[i].answers[slot] {
+                    let d = || *depth.get_or_insert_with(|| depth_of(f));
+                    tally.frame(&e, ans.value, ans.in_contact, d, opts.deep);
                 }
-            } else {
-                acc.separated_frames += 1;
-                if tree_contact {
-                    acc.false_contacts += 1;
-                }
-                let err = (rows[i].distance - e.distance).abs();
-                abs.push(err);
-                if e.distance > 0.0 {
-                    rel.push(err / e.distance);
-                }
+                r.incomplete_frames += usize::from(rows[i].refine_incomplete);
             }
+            let tree_contact = rows[i].contact == Some(true);
+            let d = || *depth.get_or_insert_with(|| depth_of(f));
+            spheres.frame(&e, rows[i].distance, tree_contact, d, opts.deep);
         }
-        let (abs, rel) = (sorted(abs), sorted(rel));
+        acc.errors = spheres.finish();
         let (first, best) = (sorted(timed.first), sorted(timed.best));
-        acc.abs_err_p50 = percentile(&abs, 0.5);
-        acc.abs_err_p95 = percentile(&abs, 0.95);
-        acc.abs_err_max = abs.last().copied().unwrap_or(f64::NAN);
-        acc.rel_err_p50 = percentile(&rel, 0.5);
-        acc.rel_err_p95 = percentile(&rel, 0.95);
         acc.exact_p50_us = percentile(&first, 0.5);
         acc.exact_p99_us = percentile(&first, 0.99);
         acc.exact_max_us = first.last().copied().unwrap_or(f64::NAN);
@@ -526,7 +630,7 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
         acc.distance_p99_us = match opts
             .kinds
             .iter()
-            .take(4)
+            .take(KINDS)
             .position(|&k| k == QueryKind::Distance)
         {
             Some(slot) => {
@@ -536,6 +640,12 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
             None => f64::NAN,
         };
         acc.speedup_p99 = acc.exact_p99_us / acc.distance_p99_us;
+        if let Some((tally, mut r)) = refined {
+            r.errors = tally.finish();
+            r.p99_us = percentile(&sorted(rus), 0.99);
+            r.speedup_p99 = acc.exact_p99_us / r.p99_us;
+            acc.refined = Some(r);
+        }
         acc
     });
     ReplayReport {
@@ -609,6 +719,8 @@ pub(crate) fn time_exact<C: FnMut() -> f64>(
 struct Answer {
     answer: KindAnswer,
     visits: u64,
+    /// The refined distance's search ran out of budget.
+    incomplete: bool,
 }
 
 impl PartialEq for Answer {
@@ -656,6 +768,7 @@ fn replay_pass<C: FnMut() -> f64>(
                             count: usize::from(r.overlapping),
                         },
                         visits: r.visits,
+                        incomplete: false,
                     },
                     t1,
                 )
@@ -671,6 +784,7 @@ fn replay_pass<C: FnMut() -> f64>(
                             count: usize::from(r.in_contact()),
                         },
                         visits: r.visits,
+                        incomplete: false,
                     },
                     t1,
                 )
@@ -686,6 +800,7 @@ fn replay_pass<C: FnMut() -> f64>(
                             count: r.count,
                         },
                         visits: r.visits,
+                        incomplete: false,
                     },
                     t1,
                 )
@@ -701,9 +816,36 @@ fn replay_pass<C: FnMut() -> f64>(
                             count: r.pairs,
                         },
                         visits: r.visits,
+                        incomplete: false,
                     },
                     t1,
                 )
+            }
+            QueryKind::RefinedDistance => {
+                let r = std::hint::black_box(pair.refined_distance_with(&id, &pb, &opts.refine));
+                let t1 = clock();
+                let answer = match r {
+                    Ok(r) => Answer {
+                        answer: KindAnswer {
+                            in_contact: r.intersecting,
+                            value: r.distance,
+                            count: r.triangle_pairs as usize,
+                        },
+                        visits: r.spheres.visits + r.node_pairs,
+                        incomplete: !r.complete,
+                    },
+                    // Trees without meshes: no answer (`ist replay` refuses this first).
+                    Err(_) => Answer {
+                        answer: KindAnswer {
+                            in_contact: false,
+                            value: f64::NAN,
+                            count: 0,
+                        },
+                        visits: 0,
+                        incomplete: true,
+                    },
+                };
+                (answer, t1)
             }
         };
         times[i] = t1 - t0;

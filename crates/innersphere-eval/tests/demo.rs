@@ -22,7 +22,7 @@ fn the_demo_builds_and_replays_the_generated_tooth_pair() {
     let acc = rep.accuracy.unwrap();
     assert!(acc.frames >= 100 && acc.separated_frames > 0, "{acc:?}");
     assert_eq!(
-        acc.false_contacts, 0,
+        acc.errors.false_contacts, 0,
         "inner spheres never reach outside the meshes"
     );
 }

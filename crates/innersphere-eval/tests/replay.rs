@@ -156,13 +156,16 @@ fn replay_of_two_balls_matches_the_closed_form() {
     let acc = report.accuracy.unwrap();
     assert_eq!(acc.frames, 20);
     assert_eq!(acc.separated_frames, 10);
-    assert_eq!(acc.missed_contacts, 0);
-    assert_eq!(acc.missed_contacts_max_depth, 0.0);
-    assert_eq!(acc.false_contacts, 0);
+    assert_eq!(acc.errors.missed_contacts, 0);
+    assert_eq!(acc.errors.missed_contacts_max_depth, 0.0);
+    assert_eq!(acc.errors.false_contacts, 0);
     // The icosphere is inscribed in the ball: the meshes are a little farther apart than the
     // balls, by at most twice the polyhedron's deviation from the sphere.
-    assert!(acc.abs_err_max < 0.005, "{acc:?}");
-    assert!(acc.abs_err_p50 <= acc.abs_err_p95 && acc.abs_err_p95 <= acc.abs_err_max);
+    assert!(acc.errors.abs_err_max < 0.005, "{acc:?}");
+    assert!(
+        acc.errors.abs_err_p50 <= acc.errors.abs_err_p95
+            && acc.errors.abs_err_p95 <= acc.errors.abs_err_max
+    );
     // The like-for-like speed comparison: our distance p99 over the compared frames (here
     // all 20) is the distance query's own p99, and the speed-up is the ratio of the two p99s.
     let dist = report
@@ -210,7 +213,7 @@ fn replay_of_two_balls_matches_the_closed_form() {
     assert!(acc3.exact_passes_agree);
     assert!(acc3.exact_best_of_passes_p99_us <= acc3.exact_p99_us);
     assert!(acc3.exact_best_of_passes_max_us <= acc3.exact_max_us);
-    assert!(acc3.abs_err_max <= acc.abs_err_max);
+    assert!(acc3.errors.abs_err_max <= acc.errors.abs_err_max);
     // Our distance on the compared frames only, single pass.
     let ours: Vec<f64> = three.rows.iter().step_by(3).map(|r| r.us[0]).collect();
     assert_eq!(acc3.distance_p99_us, percentile(&ours, 0.99));
@@ -434,7 +437,7 @@ fn replay_reports_the_deepest_missed_contact() {
         &ReplayOptions::default(),
     );
     let acc = report.accuracy.unwrap();
-    assert_eq!(acc.missed_contacts, 4, "{acc:?}");
+    assert_eq!(acc.errors.missed_contacts, 4, "{acc:?}");
     let mut scratch = innersphere::exact::ExactScratch::new();
     let deepest = innersphere::exact::penetration_depth(
         &exact,
@@ -443,6 +446,6 @@ fn replay_reports_the_deepest_missed_contact() {
         &Pose::from_translation(DVec3::new(1.7, 0.0, 0.0)),
         &mut scratch,
     );
-    assert_eq!(acc.missed_contacts_max_depth, deepest);
+    assert_eq!(acc.errors.missed_contacts_max_depth, deepest);
     assert!((0.28..=0.3 + 1e-9).contains(&deepest), "{deepest}");
 }

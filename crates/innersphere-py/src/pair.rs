@@ -6,7 +6,7 @@ use innersphere::glam::DVec3;
 use innersphere::query::{BatchOptions, Paper, TraversalOptions};
 use innersphere::{
     ContactResult, Distance, DistanceOptions, MultipointOptions, Patch, Penetration,
-    PenetrationOptions, Pose,
+    PenetrationOptions, Pose, RefineOptions,
 };
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -496,6 +496,54 @@ impl Pair {
         d.set_item("force", vec3(py, w.force))?;
         d.set_item("torque", vec3(py, w.torque_b))?;
         d.set_item("visits", w.visits)?;
+        Ok(d)
+    }
+
+    /// The distance between the meshes: the sphere distance refined by the exact distance of
+    /// the triangles near its closest points (never below the exact mesh distance, never
+    /// above the sphere distance). Both trees need their meshes (Tree.with_mesh): ValueError
+    /// otherwise. Returns a dict with the keys of `ist query --json --query
+    /// refined-distance`: distance, contact, refined, complete, point_a (3,), point_b (3,),
+    /// triangle_a, triangle_b (None unless refined), sphere_distance, radius, node_pairs,
+    /// triangle_pairs, visits.
+    #[pyo3(signature = (pose_b, *, pose_a=None, radius_scale=1.0, rel_tol=1e-3, max_node_pairs=4096))]
+    fn refined_distance<'py>(
+        &self,
+        py: Python<'py>,
+        pose_b: &Bound<'py, PyAny>,
+        pose_a: Option<&Bound<'py, PyAny>>,
+        radius_scale: f64,
+        rel_tol: f64,
+        max_node_pairs: u64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let pb = pose(pose_b, "pose_b")?;
+        let pa = pose_or_identity(pose_a, "pose_a")?;
+        let opts = RefineOptions {
+            radius_scale,
+            rel_tolerance: rel_tol,
+            max_node_pairs,
+            ..Default::default()
+        };
+        let mut guard = self.lock()?;
+        let inner: &mut innersphere::Pair = &mut guard;
+        let r = py
+            .detach(|| inner.refined_distance_with(&pa, &pb, &opts))
+            .map_err(error)?;
+        let tri = |t: u32| (t != u32::MAX).then_some(t);
+        let d = PyDict::new(py);
+        d.set_item("distance", r.distance)?;
+        d.set_item("contact", r.intersecting)?;
+        d.set_item("refined", r.refined)?;
+        d.set_item("complete", r.complete)?;
+        d.set_item("point_a", vec3(py, r.point_a))?;
+        d.set_item("point_b", vec3(py, r.point_b))?;
+        d.set_item("triangle_a", tri(r.tri_a))?;
+        d.set_item("triangle_b", tri(r.tri_b))?;
+        d.set_item("sphere_distance", r.spheres.distance)?;
+        d.set_item("radius", r.radius)?;
+        d.set_item("node_pairs", r.node_pairs)?;
+        d.set_item("triangle_pairs", r.triangle_pairs)?;
+        d.set_item("visits", r.spheres.visits)?;
         Ok(d)
     }
 

@@ -358,6 +358,26 @@ impl Tree {
         Ok(Tree::new(tree, None))
     }
 
+    /// The same tree with the mesh it was built from (a mesh file path, a (vertices, faces)
+    /// pair or a trimesh.Trimesh), for Pair.refined_distance; this tree is unchanged. About
+    /// a second per jaw arch. Raises ValueError when the mesh is not this tree's source
+    /// (bounding box and volume against the tree's meta).
+    fn with_mesh(&self, py: Python<'_>, mesh: &Bound<'_, PyAny>) -> PyResult<Tree> {
+        let mesh = mesh_like(py, mesh, "mesh", true)?;
+        let shared = self.shared.clone();
+        let shared = py.detach(|| shared.with_mesh(&mesh)).map_err(error)?;
+        Ok(Tree {
+            shared,
+            report: self.report.clone(),
+        })
+    }
+
+    /// True when the tree carries its mesh (Tree.with_mesh).
+    #[getter]
+    fn has_mesh(&self) -> bool {
+        self.shared.mesh().is_some()
+    }
+
     /// Writes the tree file (the same tree always gives the same bytes), through a temporary
     /// file renamed into place. Raises OSError when it cannot be written.
     fn save(&self, py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<()> {

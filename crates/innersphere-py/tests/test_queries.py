@@ -189,3 +189,43 @@ def test_pair_keeps_its_trees(trees):
     pair = innersphere.Pair(*trees)
     assert pair.tree_a is trees[0] and pair.tree_b is trees[1]
     assert "Pair(" in repr(pair)
+
+
+@pytest.fixture(scope="module")
+def mesh_files(meshes, tmp_path_factory):
+    """The two trees' meshes as OBJ files (the exact floats): what `ist query --meshes`
+    and Tree.with_mesh both read."""
+    from helpers import write_obj
+
+    d = tmp_path_factory.mktemp("meshes")
+    a, b = d / "box.obj", d / "ellipsoid.obj"
+    write_obj(a, *meshes["box"])
+    write_obj(b, *meshes["ellipsoid"])
+    return a, b
+
+
+@pytest.mark.parametrize("i", range(len(POSES)))
+def test_refined_distance_equals_cli(trees, tree_files, mesh_files, ist, i):
+    want = ist.query(*tree_files, POSES[i], "refined-distance", "--meshes", *mesh_files)
+    pair = innersphere.Pair(trees[0].with_mesh(str(mesh_files[0])), trees[1].with_mesh(mesh_files[1]))
+    got = pair.refined_distance(POSES[i])
+    for k in ("distance", "sphere_distance", "radius", "point_a", "point_b"):
+        same(got[k], want[k])
+    for k in ("contact", "refined", "complete", "triangle_a", "triangle_b", "node_pairs", "triangle_pairs", "visits"):
+        assert got[k] == want[k], k
+    assert got["distance"] <= got["sphere_distance"]
+
+
+def test_refined_distance_needs_the_trees_meshes(trees, meshes):
+    a, b = trees
+    assert not a.has_mesh
+    with pytest.raises(ValueError, match="with_mesh"):
+        innersphere.Pair(a, b).refined_distance(POSES[0])
+    with pytest.raises(ValueError, match="not the mesh"):
+        a.with_mesh(meshes["ellipsoid"])
+    am, bm = a.with_mesh(meshes["box"]), b.with_mesh(meshes["ellipsoid"])
+    assert am.has_mesh and not a.has_mesh
+    with pytest.raises(ValueError, match="radius_scale"):
+        innersphere.Pair(am, bm).refined_distance(POSES[0], radius_scale=-1.0)
+    r = innersphere.Pair(am, bm).refined_distance(POSES[2])
+    assert r["distance"] <= r["sphere_distance"] and not r["contact"]

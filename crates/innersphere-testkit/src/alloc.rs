@@ -7,7 +7,8 @@
 
 use innersphere::query::TraversalOptions;
 use innersphere::{
-    DistanceOptions, MultipointOptions, Pair, PenetrationOptions, Pose, SharedTree, Tracking,
+    DistanceOptions, MultipointOptions, Pair, PenetrationOptions, Pose, RefineOptions, SharedTree,
+    Tracking,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -82,6 +83,8 @@ pub enum Kind {
     Multipoint(MultipointOptions),
     Penetration(PenetrationOptions),
     Budgeted(u64),
+    /// Run only on trees with their meshes ([`SharedTree::with_mesh`]); skipped on others.
+    Refined(RefineOptions),
 }
 
 /// Every query kind and option of the public API (all combinations that change the path a
@@ -152,6 +155,19 @@ pub fn kinds() -> Vec<Kind> {
     for budget in [0, 10, 200, 1000, 10_000, 100_000, u64::MAX] {
         v.push(Kind::Budgeted(budget));
     }
+    for (radius_scale, rel_tolerance, max_node_pairs) in [
+        (0.5, 1e-3, 4096),
+        (1.0, 0.0, 4096),
+        (3.0, 0.0, 16),
+        (0.0, 0.5, 1),
+    ] {
+        v.push(Kind::Refined(RefineOptions {
+            radius_scale,
+            rel_tolerance,
+            max_node_pairs,
+            ..Default::default()
+        }));
+    }
     v
 }
 
@@ -181,6 +197,15 @@ pub fn run(kind: &Kind, pair: &mut Pair, pa: &Pose, pb: &Pose) -> f64 {
         Kind::Budgeted(budget) => {
             let r = pair.penetration_within(pa, pb, *budget);
             r.volume + r.upper_bound
+        }
+        Kind::Refined(o) => {
+            if pair.tree_a().mesh().is_none() || pair.tree_b().mesh().is_none() {
+                return 0.0;
+            }
+            match pair.refined_distance_with(pa, pb, o) {
+                Ok(r) => r.distance + r.point_a.x + r.node_pairs as f64,
+                Err(_) => f64::NAN,
+            }
         }
     }
 }

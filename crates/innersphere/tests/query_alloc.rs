@@ -117,6 +117,36 @@ fn queries_allocate_nothing_from_the_first_frame() {
     }
 }
 
+/// The refined distance (the trees with their meshes: the demo's tooth pair) allocates
+/// nothing from the first frame, pressed in and pulled apart, with every option of the
+/// matrix; the other kinds on the same trees too.
+#[test]
+fn the_refined_distance_allocates_nothing_from_the_first_frame() {
+    let (upper, lower) = innersphere::shapes::tooth_pair(3);
+    let opts = innersphere::BuildOptions {
+        resolution: innersphere::Resolution::Cells(24),
+        ..Default::default()
+    };
+    let tree = |m: &innersphere::Mesh| {
+        SharedTree::new(SphereTree::build(m, &opts).unwrap())
+            .with_mesh(m)
+            .unwrap()
+    };
+    let (a, b) = (tree(&upper), tree(&lower));
+    let [m1, m2] = contact_motions(a.tree(), b.tree());
+    // Apart as well: the local search runs only while the spheres are.
+    let apart: Vec<(Pose, Pose)> = (0..200)
+        .map(|i| {
+            let s = i as f64 / 200.0 * std::f64::consts::TAU;
+            let t = DVec3::new(0.8 * s.cos(), 0.5 * s.sin(), -0.2 - 0.6 * (1.0 + s.sin()));
+            (Pose::IDENTITY, Pose::from_translation(t))
+        })
+        .collect();
+    let m1: Vec<(Pose, Pose)> = m1.into_iter().chain(apart.iter().copied()).collect();
+    let m2: Vec<(Pose, Pose)> = apart.into_iter().chain(m2).collect();
+    assert_allocation_free("tooth pair with meshes", &a, &b, &m1, &m2);
+}
+
 /// Whether `kind` keeps something whose size a deep overlap, not the trees, decides: the
 /// fronts, the best-first queue and the budgeted queue beyond its reservation.
 fn grows_in_deep_overlap(kind: &Kind) -> bool {
@@ -126,6 +156,7 @@ fn grows_in_deep_overlap(kind: &Kind) -> bool {
         Kind::Penetration(o) => o.tracking != Tracking::Traversal,
         Kind::Distance(o) => o.best_first,
         Kind::Budgeted(budget) => *budget >= 4096,
+        Kind::Refined(_) => false,
         Kind::DistanceTraversal(_) | Kind::Backtracking(_) => false,
     }
 }

@@ -137,8 +137,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         if let Some(acc) = &rep.accuracy {
             println!(
                 "distance error against the exact mesh distance ({} separated frames): p50 {:.4}, p95 {:.4}, max {:.4} {unit}; missed contacts {} ({} deeper than 0.1 {unit}), false contacts {}",
-                acc.separated_frames, acc.abs_err_p50, acc.abs_err_p95, acc.abs_err_max,
-                acc.missed_contacts, acc.missed_contacts_deep, acc.false_contacts
+                acc.separated_frames, acc.errors.abs_err_p50, acc.errors.abs_err_p95, acc.errors.abs_err_max,
+                acc.errors.missed_contacts, acc.errors.missed_contacts_deep, acc.errors.false_contacts
             );
         }
     }

@@ -2,7 +2,9 @@
 
 use anyhow::Context;
 use innersphere::query::TraversalOptions;
-use innersphere::{DistanceOptions, MultipointOptions, Pair, PenetrationOptions, Pose};
+use innersphere::{
+    DistanceOptions, MultipointOptions, Pair, PenetrationOptions, Pose, RefineOptions, SharedTree,
+};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -25,6 +27,10 @@ pub enum Kind {
     DistanceTraversal,
     /// The paper's backtracking traversal (on a fresh pair: the distance traversal).
     Backtracking,
+    /// The distance between the meshes: the sphere distance refined by the exact distance
+    /// of the triangles near its closest points (needs the meshes: a body given as a mesh,
+    /// --meshes, or the mesh a tree file names as its source).
+    RefinedDistance,
 }
 
 /// Arguments of `ist query`.
@@ -69,6 +75,14 @@ pub struct Args {
     /// Distance: relative error tolerance (a fraction of the distance).
     #[arg(long, default_value_t = 0.0)]
     rel_tol: f64,
+    /// Refined distance: the meshes of A and B (default: a body's own mesh when given as
+    /// one, else the mesh its tree was built from, where that file still holds it).
+    #[arg(long, num_args = 2, value_names = ["MESH_A", "MESH_B"])]
+    meshes: Option<Vec<PathBuf>>,
+    /// Refined distance: radius of the balls searched around the closest points, as a
+    /// multiple of the larger closest leaf's radius (plus half the voxel size).
+    #[arg(long, default_value_t = innersphere::RefineOptions::default().radius_scale)]
+    refine_radius_scale: f64,
     /// Print JSON.
     #[arg(long)]
     json: bool,
@@ -99,8 +113,19 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     if args.k == 0 {
         anyhow::bail!("--k must be at least 1 (the most contacts multipoint reports)");
     }
-    let a = crate::bodies::load(&args.a, &args.body)?;
-    let b = crate::bodies::load(&args.b, &args.body)?;
+    let refine = RefineOptions {
+        radius_scale: args.refine_radius_scale,
+        ..Default::default()
+    };
+    refine.check().context("--refine-radius-scale")?;
+    let (a, mesh_a) = crate::bodies::load_body(&args.a, &args.body)?;
+    let (b, mesh_b) = crate::bodies::load_body(&args.b, &args.body)?;
+    let (mut a, mut b) = (SharedTree::new(a), SharedTree::new(b));
+    if args.query == Kind::RefinedDistance {
+        let given = args.meshes.as_deref().unwrap_or(&[]);
+        a = with_mesh(a, given.first(), mesh_a, "A")?;
+        b = with_mesh(b, given.get(1), mesh_b, "B")?;
+    }
     let pose_a = Pose::IDENTITY;
     let mut pair = Pair::new(a, b);
     let t0 = std::time::Instant::now();
@@ -139,6 +164,49 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                     p.leaf_a,
                     p.leaf_b,
                     p.visits,
+                    secs * 1e6
+                ),
+            )
+        }
+        Kind::RefinedDistance => {
+            let r = pair.refined_distance_with(&pose_a, &pose_b, &refine)?;
+            let secs = t0.elapsed().as_secs_f64();
+            let tri = |t: u32| (t != u32::MAX).then_some(t);
+            (
+                json!({
+                    "query": "refined-distance",
+                    "distance_is_lower_bound": false,
+                    "distance": r.distance,
+                    "contact": r.intersecting,
+                    "refined": r.refined,
+                    "complete": r.complete,
+                    "point_a": v3(r.point_a),
+                    "point_b": v3(r.point_b),
+                    "triangle_a": tri(r.tri_a),
+                    "triangle_b": tri(r.tri_b),
+                    "sphere_distance": r.spheres.distance,
+                    "radius": r.radius,
+                    "node_pairs": r.node_pairs,
+                    "triangle_pairs": r.triangle_pairs,
+                    "visits": r.spheres.visits,
+                    "seconds": secs,
+                }),
+                format!(
+                    "distance {:.6} units ({}), closest points A {:?} B {:?} (units){}; the sphere distance {:.6}, refined within {:.4} units of its closest points ({} triangle-node pairs, {} triangle pairs{}), {:.1} µs",
+                    r.distance,
+                    if r.intersecting { "touching" } else { "separated" },
+                    v3(r.point_a),
+                    v3(r.point_b),
+                    if r.refined {
+                        format!(", triangles {}/{}", r.tri_a, r.tri_b)
+                    } else {
+                        String::new()
+                    },
+                    r.spheres.distance,
+                    r.radius,
+                    r.node_pairs,
+                    r.triangle_pairs,
+                    if r.complete { "" } else { ", out of budget" },
                     secs * 1e6
                 ),
             )
@@ -336,4 +404,28 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         println!("{summary}");
     }
     Ok(0)
+}
+
+/// `tree` with its mesh for the refined distance: `given` (--meshes), else the body's own
+/// mesh, else the mesh the tree names as its source; an error that says which to give.
+fn with_mesh(
+    tree: SharedTree,
+    given: Option<&PathBuf>,
+    own: Option<innersphere::Mesh>,
+    body: &str,
+) -> anyhow::Result<SharedTree> {
+    let mesh = match (given, own) {
+        (Some(p), _) => crate::files::load_mesh(p)?,
+        (None, Some(m)) => m,
+        (None, None) => match &tree.meta.source {
+            Some(src) => src.load().with_context(|| {
+                format!("body {body}'s tree names its mesh, but it cannot be used: give --meshes MESH_A MESH_B")
+            })?,
+            None => anyhow::bail!(
+                "--query refined-distance needs the meshes: body {body}'s tree does not name the mesh it was built from; give --meshes MESH_A MESH_B"
+            ),
+        },
+    };
+    tree.with_mesh(&mesh)
+        .with_context(|| format!("body {body}'s mesh"))
 }

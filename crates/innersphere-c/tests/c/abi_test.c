@@ -57,6 +57,17 @@ static char* join(const char* dir, const char* file) {
 static void answers(const char* dir, ist_tree* a, ist_tree* b) {
     ist_pair* pair = ist_pair_new(a, b);
     CHECK(pair != NULL, "ist_pair_new");
+    char* mesh_a = join(dir, "a.stl");
+    char* mesh_b = join(dir, "b.stl");
+    ist_tree* am = ist_tree_with_mesh(a, mesh_a);
+    ist_tree* bm = ist_tree_with_mesh(b, mesh_b);
+    free(mesh_a);
+    free(mesh_b);
+    CHECK(am != NULL && bm != NULL, "ist_tree_with_mesh");
+    ist_pair* refined = ist_pair_new(am, bm);
+    CHECK(refined != NULL, "ist_pair_new with meshes");
+    ist_tree_free(am);
+    ist_tree_free(bm);
     char* path = join(dir, "poses.txt");
     FILE* f = fopen(path, "r");
     free(path);
@@ -69,6 +80,16 @@ static void answers(const char* dir, ist_tree* a, ist_tree* b) {
         printf(" %d", d.contact);
         v3(d.point_a);
         v3(d.point_b);
+        printf("\n");
+        ist_refined_distance_result r;
+        CHECK(ist_refined_distance(refined, &pa, &pb, NULL, &r) == IST_OK, "refined distance");
+        printf("%d refined", i);
+        bits(r.distance);
+        printf(" %d %d %d", r.contact, r.refined, r.complete);
+        v3(r.point_a);
+        v3(r.point_b);
+        printf(" %u %u", r.tri_a, r.tri_b);
+        bits(r.sphere_distance);
         printf("\n");
         int in_contact = -1;
         CHECK(ist_contact(pair, &pa, &pb, &in_contact) == IST_OK, "contact");
@@ -156,6 +177,7 @@ static void answers(const char* dir, ist_tree* a, ist_tree* b) {
     CHECK(max <= 1e-12, "energy to the hand rose to %g J", max);
     ist_haptic_free(h);
     ist_pair_free(pair);
+    ist_pair_free(refined);
 }
 
 /* The haptic loop with its collision thread, paced at 1 kHz along DIR/device.txt: every
@@ -315,6 +337,37 @@ static void errors(const char* dir, ist_tree* a, ist_tree* b) {
     ist_penetration_result pr;
     CHECK(ist_penetration_with_stiffness(pair, &id, &id, 1e308, &pr) == IST_ERR_INVALID_ARGUMENT,
           "stiffness 1e308");
+    /* The refined distance: trees without meshes, a mesh that is not the tree's, bad
+     * options. */
+    ist_refined_distance_result rd;
+    CHECK(ist_refined_distance(pair, &id, &id, NULL, &rd) == IST_ERR_INVALID_ARGUMENT &&
+              strstr(ist_last_error(), "mesh"),
+          "refined distance without meshes");
+    char* mesh_b = join(dir, "b.stl");
+    CHECK(ist_tree_with_mesh(a, mesh_b) == NULL && ist_last_status() == IST_ERR_MESH &&
+              strstr(ist_last_error(), "not the mesh"),
+          "B's mesh given to A");
+    CHECK(ist_tree_with_mesh(a, NULL) == NULL && ist_last_status() == IST_ERR_NULL, "NULL mesh");
+    ist_tree* bm = ist_tree_with_mesh(b, mesh_b);
+    free(mesh_b);
+    char* mesh_a = join(dir, "a.stl");
+    ist_tree* am = ist_tree_with_mesh(a, mesh_a);
+    free(mesh_a);
+    ist_pair* rp = ist_pair_new(am, bm);
+    ist_refine_options ro = ist_refine_options_default();
+    CHECK(ro.radius_scale > 0 && ro.max_node_pairs > 0, "default refine options");
+    ro.max_node_pairs = 0;
+    CHECK(ist_refined_distance(rp, &id, &id, &ro, &rd) == IST_ERR_INVALID_ARGUMENT,
+          "max_node_pairs 0");
+    ro = ist_refine_options_default();
+    ro.radius_scale = NAN;
+    CHECK(ist_refined_distance(rp, &id, &id, &ro, &rd) == IST_ERR_INVALID_ARGUMENT,
+          "NaN radius scale");
+    CHECK(ist_refined_distance(rp, &id, &id, NULL, NULL) == IST_ERR_NULL, "NULL out");
+    CHECK(ist_refined_distance(rp, &id, &nan_pose, NULL, &rd) == IST_ERR_POSE, "NaN pose");
+    ist_pair_free(rp);
+    ist_tree_free(am);
+    ist_tree_free(bm);
     ist_pair_free(pair);
     ist_pair_free(NULL);
     ist_tree_free(NULL);

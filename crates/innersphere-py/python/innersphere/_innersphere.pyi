@@ -93,6 +93,13 @@ class Tree:
     def save(self, path: _PathLike) -> None:
         """Writes the tree file (through a temporary file renamed into place). Raises
         OSError when it cannot be written."""
+    def with_mesh(self, mesh: _MeshLike) -> "Tree":
+        """The same tree with the mesh it was built from (path, (vertices, faces) or a
+        trimesh.Trimesh), for ``Pair.refined_distance``. Raises ValueError when the mesh is
+        not the tree's source."""
+    @property
+    def has_mesh(self) -> bool:
+        """True when the tree carries its mesh (``Tree.with_mesh``)."""
     def to_bytes(self) -> bytes:
         """The tree file's bytes."""
     @staticmethod
@@ -258,6 +265,20 @@ class Pair:
     ) -> Dict[str, Any]:
         """Time-critical penetration volume within budget node-pair tests: a dict of volume,
         upper_bound, complete, max_depth, normal, force, torque, visits."""
+    def refined_distance(
+        self,
+        pose_b: _PoseLike,
+        *,
+        pose_a: Optional[_PoseLike] = None,
+        radius_scale: float = 1.0,
+        rel_tol: float = 1e-3,
+        max_node_pairs: int = 4096,
+    ) -> Dict[str, Any]:
+        """The distance between the meshes, refined from the sphere distance by the exact
+        distance of the triangles near its closest points (both trees need their meshes:
+        ``Tree.with_mesh``): a dict of distance, contact, refined, complete, point_a,
+        point_b, triangle_a, triangle_b, sphere_distance, radius, node_pairs,
+        triangle_pairs, visits."""
     def distance_traversal(self, pose_b: _PoseLike, *, pose_a: Optional[_PoseLike] = None) -> bool:
         """The paper's distance traversal: whether the packings overlap."""
     def backtracking(self, pose_b: _PoseLike, *, pose_a: Optional[_PoseLike] = None) -> bool:

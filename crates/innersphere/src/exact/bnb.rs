@@ -47,9 +47,13 @@ impl Best {
     }
 }
 
-/// Distance between every triangle pair of two leaves (known not to cross).
+/// Distance between every triangle pair of two leaves that may beat `best` by more than
+/// the fraction `1 − √keep` of it (`keep` = 1: any improvement), filtered by their boxes
+/// and planes. With `crossings` the pairs whose boxes meet are tested for crossing first
+/// (else the leaves are known not to cross).
 #[inline]
-fn leaf_distance(
+#[allow(clippy::too_many_arguments)]
+pub(super) fn leaf_distance(
     a: &ExactMesh,
     b: &ExactMesh,
     na: &BvhNode,
@@ -57,6 +61,8 @@ fn leaf_distance(
     f: &Frame,
     best: &mut Best,
     stats: &mut ExactStats,
+    keep: f64,
+    crossings: bool,
 ) {
     stats.leaf_pairs += 1;
     let (ta, tb) = (a.bvh(), b.bvh());
@@ -88,19 +94,19 @@ fn leaf_distance(
             for j in 0..chunk.len() {
                 let (blo, bhi) = bb[j];
                 let gap = (alo - bhi).max(blo - ahi).max(DVec3::ZERO);
-                let mut lb = gap.length_squared();
-                if !(lb < best.d2) {
+                let g2 = gap.length_squared();
+                if !(g2 < best.d2 * keep) {
                     continue;
                 }
                 let y = &tbuf[j];
-                lb = lb
+                let lb = g2
                     .max(plane_gap_sq(x[0], nx, y))
                     .max(plane_gap_sq(y[0], nbuf[j], x));
-                if !(lb < best.d2) {
+                if !(lb < best.d2 * keep) {
                     continue;
                 }
                 stats.triangle_pairs += 1;
-                let r = triangle_distance_hint(x, y, false);
+                let r = triangle_distance_hint(x, y, crossings && g2 == 0.0);
                 let sb = (sb0 + chunk_i * LEAF_SIZE + j) as u32;
                 best.offer(&r, (sa0 + i) as u32, sb);
             }
@@ -161,7 +167,7 @@ pub(super) fn bnb_heap(
         let nb = &tb.nodes[ib as usize];
         let (p1, p2, d1, d2) = match (na.is_leaf(), nb.is_leaf()) {
             (true, true) => {
-                leaf_distance(a, b, na, nb, f, best, stats);
+                leaf_distance(a, b, na, nb, f, best, stats, 1.0, false);
                 continue;
             }
             (la, lb_leaf) => {

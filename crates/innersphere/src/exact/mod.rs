@@ -47,6 +47,7 @@ mod distance;
 mod frame;
 mod gaps;
 mod intersects;
+pub(crate) mod local;
 mod mesh;
 mod overlap;
 mod penetration;

@@ -76,7 +76,7 @@ impl ExactScratch {
 
 /// A node pair on the best-first queue, smallest lower bound on top.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct HeapItem(pub(super) f64, pub(super) u32, pub(super) u32);
+pub(crate) struct HeapItem(pub(crate) f64, pub(crate) u32, pub(crate) u32);
 impl Eq for HeapItem {}
 impl PartialOrd for HeapItem {
     fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {

@@ -12,6 +12,7 @@
 //! | query | method | answer |
 //! |---|---|---|
 //! | exact distance of the sphere sets (branch and bound, depth or best first) | [`Pair::distance`] | distance, closest points, leaf pair |
+//! | the sphere distance refined to the meshes' triangles near its closest points (ours) | [`Pair::refined_distance`] | distance, closest points on the surfaces, triangles |
 //! | first contact from a kinetic front (ours) | [`Pair::contact`] | contact yes/no, a contact, a separation bound |
 //! | multipoint (the paper's III-C, or ours from the front) | [`Pair::multipoint`] | up to `k` contacts, one per split-depth node pair |
 //! | penetration volume, force, torque, patches (ours) | [`Pair::penetration`] | exact volume of the intersection of the sphere unions |
@@ -42,6 +43,7 @@ mod multipoint;
 mod pair;
 mod paper;
 mod penetration;
+mod refined;
 mod search;
 
 pub mod brute;
@@ -62,3 +64,4 @@ pub use penetration::{
     ContactStiffness, Patch, Penetration, PenetrationOptions, Tracking, AUTO_FRONT_NODES,
     MAX_STIFFNESS,
 };
+pub use refined::{RefineOptions, RefinedDistance};

@@ -13,21 +13,26 @@ use super::kernel::Ctx;
 use super::multipoint::{self, Multipoint, MultipointOptions, MultipointScratch};
 use super::paper::{self, TraversalOptions};
 use super::penetration::{self, Patch, Penetration, PenetrationOptions, PenetrationScratch};
+use super::refined::{self, RefineOptions, RefineScratch, RefinedDistance, Surfaces};
 use super::search::block_front::BlockFront;
 use super::search::descent::Descent;
 use super::search::front::Front;
-use crate::error::Result;
+use crate::error::{Error, Result};
+use crate::exact::ExactMesh;
+use crate::mesh::Mesh;
 use crate::pose::Pose;
 use crate::tree::SphereTree;
 use std::sync::Arc;
 
 /// A tree ready for queries: the tree and its query-side facts ([`TreeInfo`], computed once
-/// in O(nodes)), both shared read-only. Clone it (two reference counts) to give the same
-/// tree to many [`Pair`]s and threads without computing its facts again.
+/// in O(nodes)), both shared read-only, and optionally the mesh it was built from (for
+/// [`Pair::refined_distance`]). Clone it (a few reference counts) to give the same tree to
+/// many [`Pair`]s and threads without computing its facts again.
 #[derive(Debug, Clone)]
 pub struct SharedTree {
     tree: Arc<SphereTree>,
     info: Arc<TreeInfo>,
+    mesh: Option<Arc<ExactMesh>>,
 }
 
 impl SharedTree {
@@ -35,7 +40,35 @@ impl SharedTree {
     pub fn new(tree: impl Into<Arc<SphereTree>>) -> SharedTree {
         let tree = tree.into();
         let info = Arc::new(TreeInfo::new(&tree));
-        SharedTree { tree, info }
+        SharedTree {
+            tree,
+            info,
+            mesh: None,
+        }
+    }
+
+    /// The same tree with the mesh it was built from, prepared for exact queries (its
+    /// triangle BVH: about a second per jaw arch), for [`Pair::refined_distance`]. Refuses a
+    /// mesh that is not the tree's source (bounding box and volume against the tree's
+    /// meta, as `ist check` does).
+    pub fn with_mesh(self, mesh: &Mesh) -> Result<SharedTree> {
+        self.with_exact_mesh(Arc::new(ExactMesh::new(mesh)?))
+    }
+
+    /// [`SharedTree::with_mesh`] with a mesh already prepared (shared, not copied).
+    pub fn with_exact_mesh(mut self, mesh: Arc<ExactMesh>) -> Result<SharedTree> {
+        if let Some(why) = crate::tree::check::source_mismatch(&self.tree, mesh.mesh()) {
+            return Err(Error::InvalidMesh(format!(
+                "not the mesh this tree was built from: {why}"
+            )));
+        }
+        self.mesh = Some(mesh);
+        Ok(self)
+    }
+
+    /// The mesh given with [`SharedTree::with_mesh`], if any.
+    pub fn mesh(&self) -> Option<&Arc<ExactMesh>> {
+        self.mesh.as_ref()
     }
 
     /// The tree.
@@ -101,6 +134,7 @@ pub struct Pair {
     backtrack: Option<(u32, u32)>,
     multipoint: MultipointScratch,
     penetration: PenetrationScratch,
+    refine: RefineScratch,
 }
 
 impl Pair {
@@ -172,6 +206,7 @@ impl Pair {
             backtrack: None,
             multipoint: MultipointScratch::new(),
             penetration: PenetrationScratch::new(),
+            refine: RefineScratch::new(),
             a,
             b,
         }
@@ -230,6 +265,67 @@ impl Pair {
             &mut self.distance,
             &opts,
         )
+    }
+
+    /// The distance between the two meshes, refined from the sphere distance (ours): the
+    /// exact distance of the triangles near the closest leaf pair, never below the exact
+    /// mesh distance and never above the sphere distance ([`RefineOptions::default`]).
+    /// Needs both trees' meshes ([`SharedTree::with_mesh`]); an error without them.
+    ///
+    /// On the jaw preset's trees it takes the sphere distance's error against the exact
+    /// mesh distance from 0.02–0.045 mm to a few µm at p95 (docs/RESULTS.md).
+    pub fn refined_distance(&mut self, pose_a: &Pose, pose_b: &Pose) -> Result<RefinedDistance> {
+        self.refined_distance_with(pose_a, pose_b, &RefineOptions::default())
+    }
+
+    /// [`Pair::refined_distance`] with options: the balls searched, the local search's
+    /// budget. Bad options are an error.
+    pub fn refined_distance_with(
+        &mut self,
+        pose_a: &Pose,
+        pose_b: &Pose,
+        opts: &RefineOptions,
+    ) -> Result<RefinedDistance> {
+        opts.check()?;
+        let (Some(ma), Some(mb)) = (self.a.mesh.clone(), self.b.mesh.clone()) else {
+            return Err(Error::InvalidOption(
+                "the refined distance needs the meshes of both trees (SharedTree::with_mesh)"
+                    .into(),
+            ));
+        };
+        let spheres = self.distance(pose_a, pose_b);
+        let radius = |t: &SphereTree, leaf: u32| {
+            let n = leaf as usize;
+            if n < t.r.len() {
+                t.r[n] as f64
+            } else {
+                0.0
+            }
+        };
+        let surfaces = Surfaces {
+            a: &ma,
+            b: &mb,
+            leaf_radii: (
+                radius(&self.a.tree, spheres.leaf_a),
+                radius(&self.b.tree, spheres.leaf_b),
+            ),
+            default_margin: 0.5
+                * self
+                    .a
+                    .tree
+                    .meta
+                    .voxel_size
+                    .max(self.b.tree.meta.voxel_size)
+                    .max(0.0),
+        };
+        Ok(refined::refine(
+            spheres,
+            &surfaces,
+            pose_a,
+            pose_b,
+            opts,
+            &mut self.refine,
+        ))
     }
 
     /// First contact (ours): whether the packings overlap, with one overlapping leaf pair,

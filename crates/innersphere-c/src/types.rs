@@ -70,8 +70,8 @@ pub struct ist_refine_options {
     /// Radius of the balls searched around the spheres' closest points, as a multiple of the
     /// larger closest leaf's radius (plus `margin`); ≥ 0.
     pub radius_scale: f64,
-    /// Added to the radius, in model units; negative: half the larger voxel size of the
-    /// two trees.
+    /// Added to the radius, in model units; negative: the larger voxel size of the two
+    /// trees.
     pub margin: f64,
     /// Skip what cannot beat the best so far by more than this fraction of it; in [0, 1).
     pub rel_tolerance: f64,

@@ -6,7 +6,7 @@
 //! distance. Writes one CSV per figure and a PNG chart of each.
 
 use super::plot::{line_chart, Chart, Series};
-use super::replay::{replay, time_exact, Accuracy, ReplayOptions};
+use super::replay::{replay, time_exact, Accuracy, QueryKind, ReplayOptions};
 use crate::motion::Motion;
 use innersphere::build::{build_tree, BuildOptions, Resolution};
 use innersphere::exact::ExactMesh;
@@ -16,6 +16,7 @@ use innersphere::query::TraversalOptions;
 use innersphere::{Error, MultipointOptions, Pair, Pose, Result, SharedTree};
 use std::fmt::Write as _;
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Every file [`run`] may write into its output folder (so that a caller can check before
@@ -194,27 +195,29 @@ impl Out<'_> {
     }
 }
 
-/// Distance error and contact disagreement of the trees against the exact meshes on every
-/// `every`-th frame (a replay that times nothing).
-fn accuracy(
+/// The main trees' accuracy along the motion against the exact meshes, the refined
+/// distance's too (`Accuracy::refined`; the trees carry the meshes).
+fn accuracy_refined(
     ta: &SharedTree,
     tb: &SharedTree,
     motion: &Motion,
-    exact: (&ExactMesh, &ExactMesh),
+    exact: (&Arc<ExactMesh>, &Arc<ExactMesh>),
     every: usize,
-) -> Option<Accuracy> {
-    replay(
-        ta,
-        tb,
+) -> Result<Option<Accuracy>> {
+    let ta = ta.clone().with_exact_mesh(exact.0.clone())?;
+    let tb = tb.clone().with_exact_mesh(exact.1.clone())?;
+    Ok(replay(
+        &ta,
+        &tb,
         motion,
-        Some(exact),
+        Some((exact.0, exact.1)),
         &ReplayOptions {
-            kinds: vec![],
+            kinds: vec![QueryKind::RefinedDistance],
             every,
             ..Default::default()
         },
     )
-    .accuracy
+    .accuracy)
 }
 
 /// What [`run`] measured, in brief (the CSV files hold everything).
@@ -234,6 +237,8 @@ pub struct PaperSummary {
     pub backtracking_speedup_in_contact: f64,
     /// Distance error p95 of the main trees (model units).
     pub main_abs_err_p95: f64,
+    /// The refined distance's error p95 on the main trees (model units).
+    pub main_refined_abs_err_p95: f64,
 }
 
 /// Runs the whole evaluation of the pair (`mesh_a` fixed, `mesh_b` moved by `motion`) and
@@ -259,8 +264,8 @@ pub fn run(
         dir: out,
         files: Vec::new(),
     };
-    let ea = ExactMesh::new(mesh_a)?;
-    let eb = ExactMesh::new(mesh_b)?;
+    let ea = Arc::new(ExactMesh::new(mesh_a)?);
+    let eb = Arc::new(ExactMesh::new(mesh_b)?);
     let id = Pose::IDENTITY;
 
     // Figs. 6 and 9: speed and error against leaf count.
@@ -268,7 +273,7 @@ pub fn run(
         "voxel,leaves_a,leaves_b,depth_a,depth_b,build_s,query,p50_us,p99_us,max_us,mean_us\n",
     );
     let mut error = String::from(
-        "voxel,leaves_a,leaves_b,abs_err_p50,abs_err_p95,abs_err_max,rel_err_p50,rel_err_p95,missed_contacts,missed_contacts_deep,false_contacts\n",
+        "voxel,leaves_a,leaves_b,abs_err_p50,abs_err_p95,abs_err_max,rel_err_p50,rel_err_p95,missed_contacts,missed_contacts_deep,false_contacts,missed_contacts_max_depth,refined_abs_err_p50,refined_abs_err_p95,refined_abs_err_max,refined_missed_contacts,refined_missed_contacts_max_depth,refined_incomplete_frames,refined_p99_us\n",
     );
     let mut speed_series: Vec<Series> = SWEEP_KINDS
         .iter()
@@ -284,6 +289,14 @@ pub fn run(
         },
         Series {
             name: "abs error p95".into(),
+            points: vec![],
+        },
+        Series {
+            name: "refined distance: abs error p95".into(),
+            points: vec![],
+        },
+        Series {
+            name: "refined distance: abs error max".into(),
             points: vec![],
         },
     ];
@@ -317,10 +330,11 @@ pub fn run(
             );
             speed_series[k].points.push((leaves as f64, mean));
         }
-        if let Some(acc) = accuracy(&ta, &tb, motion, (&ea, &eb), opts.every) {
+        if let Some(acc) = accuracy_refined(&ta, &tb, motion, (&ea, &eb), opts.every)? {
+            let r = acc.refined.clone().unwrap_or_default();
             let _ = writeln!(
                 error,
-                "{h},{},{},{},{},{},{},{},{},{},{}",
+                "{h},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1}",
                 ta.leaf_count(),
                 tb.leaf_count(),
                 acc.errors.abs_err_p50,
@@ -330,8 +344,22 @@ pub fn run(
                 acc.errors.rel_err_p95,
                 acc.errors.missed_contacts,
                 acc.errors.missed_contacts_deep,
-                acc.errors.false_contacts
+                acc.errors.false_contacts,
+                acc.errors.missed_contacts_max_depth,
+                r.errors.abs_err_p50,
+                r.errors.abs_err_p95,
+                r.errors.abs_err_max,
+                r.errors.missed_contacts,
+                r.errors.missed_contacts_max_depth,
+                r.incomplete_frames,
+                r.p99_us
             );
+            err_series[2]
+                .points
+                .push((leaves as f64, r.errors.abs_err_p95));
+            err_series[3]
+                .points
+                .push((leaves as f64, r.errors.abs_err_max));
             err_series[0]
                 .points
                 .push((leaves as f64, acc.errors.abs_err_p50));
@@ -603,7 +631,7 @@ pub fn run(
         &series,
     )?;
 
-    let acc = accuracy(&ta, &tb, motion, (&ea, &eb), opts.every);
+    let acc = accuracy_refined(&ta, &tb, motion, (&ea, &eb), opts.every)?;
     let prox = &kinds[2].1.first;
     let exact_first = &kinds[kinds.len() - 1].1.first;
     Ok(PaperSummary {
@@ -612,6 +640,9 @@ pub fn run(
         proximity_p99_us: stats(prox)[1],
         exact_p99_us: stats(exact_first)[1],
         backtracking_speedup_in_contact: sf[3] / sbk[3],
-        main_abs_err_p95: acc.map_or(f64::NAN, |a| a.errors.abs_err_p95),
+        main_abs_err_p95: acc.as_ref().map_or(f64::NAN, |a| a.errors.abs_err_p95),
+        main_refined_abs_err_p95: acc
+            .and_then(|a| a.refined)
+            .map_or(f64::NAN, |r| r.errors.abs_err_p95),
     })
 }

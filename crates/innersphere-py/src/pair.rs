@@ -506,7 +506,7 @@ impl Pair {
     /// refined-distance`: distance, contact, refined, complete, point_a (3,), point_b (3,),
     /// triangle_a, triangle_b (None unless refined), sphere_distance, radius, node_pairs,
     /// triangle_pairs, visits.
-    #[pyo3(signature = (pose_b, *, pose_a=None, radius_scale=1.0, rel_tol=1e-3, max_node_pairs=4096))]
+    #[pyo3(signature = (pose_b, *, pose_a=None, radius_scale=0.5, rel_tol=1e-3, max_node_pairs=4096))]
     fn refined_distance<'py>(
         &self,
         py: Python<'py>,

@@ -591,6 +591,10 @@ function showPose(p) {
 function showContact(s) {
   // Panel.
   $('distance').textContent = `${num(s.distance)} mm`;
+  // A state says whether its distance is the meshes' (refined) or the sphere packings'.
+  if (s.distance_refined !== undefined) {
+    $('distance-label').textContent = s.distance_refined ? 'distance (meshes)' : 'distance (spheres)';
+  }
   $('volume').textContent = `${num(s.volume)} mm³`;
   $('max-depth').textContent = `${num(s.max_depth)} mm`;
   $('force').textContent = `${num(len3(s.force))} N`;

@@ -39,6 +39,7 @@ pub(crate) fn state(s: &LoopState, motion_seconds: Option<f64>) -> Value {
         "pose_b": s.pose_b.to_array(),
         "target_b": s.target_b.to_array(),
         "distance": s.distance,
+        "distance_refined": s.distance_refined,
         "contact": s.contact,
         "point_a": v3(s.point_a),
         "point_b": v3(s.point_b),

@@ -558,10 +558,22 @@ fn pose(app: &App, v: &Value) -> Resp {
             ..Default::default()
         },
     );
+    let r = crate::sim::refined(&mut pair, &p);
     json_response(
         200,
         &json!({
             "pose_b": p.to_array(),
+            // The refined distance between the meshes where the trees carry them (as
+            // `ist query --query refined-distance` answers), else null.
+            "refined_distance": r.map(|r| json!({
+                "distance": r.distance,
+                "contact": r.intersecting,
+                "refined": r.refined,
+                "complete": r.complete,
+                "point_a": r.point_a.to_array(),
+                "point_b": r.point_b.to_array(),
+                "sphere_distance": r.spheres.distance,
+            })),
             "distance": d.distance,
             "contact": d.overlapping,
             "point_a": d.point_a.to_array(),

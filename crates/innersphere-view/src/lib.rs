@@ -66,7 +66,7 @@ impl Scene {
             &upper,
             &lower,
         )?;
-        Ok(Scene {
+        let scene = Scene {
             a: SharedTree::new(a),
             b: SharedTree::new(b),
             mesh_a: Some(upper),
@@ -76,6 +76,29 @@ impl Scene {
             teeth_b: None,
             splint: None,
             start: None,
-        })
+        };
+        Ok(scene.refining_with_meshes().0)
+    }
+
+    /// The scene whose trees carry the drawn meshes when both are the trees' own, so that
+    /// the distance shown is the refined distance between the meshes
+    /// ([`innersphere::Pair::refined_distance`]); else unchanged, with the reason (meshes
+    /// missing, or not the ones the trees were built from). Prepares both meshes for exact
+    /// queries (about a second per jaw arch).
+    pub fn refining_with_meshes(mut self) -> (Scene, Option<String>) {
+        let (Some(ma), Some(mb)) = (&self.mesh_a, &self.mesh_b) else {
+            return (self, Some("the distance is the spheres': no meshes".into()));
+        };
+        match (self.a.clone().with_mesh(ma), self.b.clone().with_mesh(mb)) {
+            (Ok(a), Ok(b)) => {
+                self.a = a;
+                self.b = b;
+                (self, None)
+            }
+            (Err(e), _) | (_, Err(e)) => {
+                let why = format!("the distance is the spheres': {e}");
+                (self, Some(why))
+            }
+        }
     }
 }

@@ -62,8 +62,11 @@ pub struct LoopState {
     pub pose_b: Pose,
     /// B's target: the page's or the motion's pose (the device's in haptic mode).
     pub target_b: Pose,
-    /// Distance of the sphere packings (0 in contact).
+    /// Distance apart (0 in contact): between the meshes when the trees carry them
+    /// (`distance_refined`), else between the sphere packings.
     pub distance: f64,
+    /// True when `distance` and the closest points are the refined distance's.
+    pub distance_refined: bool,
     /// True when they overlap.
     pub contact: bool,
     /// Closest point on A.
@@ -129,6 +132,7 @@ impl LoopState {
             pose_b: pose,
             target_b: pose,
             distance: 0.0,
+            distance_refined: false,
             contact: false,
             point_a: DVec3::ZERO,
             point_b: DVec3::ZERO,
@@ -274,7 +278,8 @@ fn target_of(motion: Option<&Motion>, c: &Control, motion_t: f64) -> Pose {
 
 /// One tick's queries with B at `pose_b`, into `state`: penetration first, the distance only
 /// while apart (in contact it is 0, and the patches say where), so that one query runs per
-/// tick where the work is largest.
+/// tick where the work is largest. The distance is refined to the meshes when the trees
+/// carry them.
 fn observe(
     pair: &mut Pair,
     pose_b: &Pose,
@@ -289,12 +294,19 @@ fn observe(
         let c = pair.patches().first().map_or(DVec3::ZERO, |q| q.point);
         state.point_a = c;
         state.point_b = c;
+    } else if let Some(r) = refined(pair, pose_b) {
+        state.distance = r.distance;
+        state.contact = r.intersecting;
+        state.point_a = r.point_a;
+        state.point_b = r.point_b;
+        state.distance_refined = true;
     } else {
         let d = pair.distance_with(&Pose::IDENTITY, pose_b, dist);
         state.distance = d.distance;
         state.contact = d.overlapping;
         state.point_a = d.point_a;
         state.point_b = d.point_b;
+        state.distance_refined = false;
     }
     state.volume = p.volume;
     state.max_depth = p.max_depth;
@@ -304,6 +316,15 @@ fn observe(
     for (s, q) in state.patches.iter_mut().zip(pair.patches()) {
         *s = *q;
     }
+}
+
+/// The refined distance at `pose_b` when both trees carry their meshes.
+pub(crate) fn refined(pair: &mut Pair, pose_b: &Pose) -> Option<innersphere::RefinedDistance> {
+    let meshes = pair.tree_a().mesh().is_some() && pair.tree_b().mesh().is_some();
+    if !meshes {
+        return None;
+    }
+    pair.refined_distance(&Pose::IDENTITY, pose_b).ok()
 }
 
 /// Seconds in microseconds, the unit of the state's times.
@@ -644,7 +665,7 @@ mod tests {
         let dist = DistanceOptions::default();
         let mut pair = Pair::new(scene.a.clone(), scene.b.clone());
         let mut reference = Pair::new(scene.a, scene.b);
-        let (mut touched, mut apart) = (0, 0);
+        let (mut touched, mut apart, mut refined) = (0, 0, 0);
         for pose in motion.poses().step_by(10) {
             let mut state = LoopState::initial(Pose::IDENTITY);
             observe(&mut pair, &pose, &pen, &dist, &mut state);
@@ -670,17 +691,22 @@ mod tests {
                 assert_ne!(state.point_a, DVec3::ZERO);
             } else {
                 apart += 1;
-                let d = reference.distance_with(&Pose::IDENTITY, &pose, &dist);
+                // The demo's trees carry their meshes: the distance is the refined one.
+                let d = reference.refined_distance(&Pose::IDENTITY, &pose).unwrap();
+                assert!(state.distance_refined);
                 assert_eq!(
                     (state.distance, state.contact, state.point_a, state.point_b),
-                    (d.distance, d.overlapping, d.point_a, d.point_b)
+                    (d.distance, d.intersecting, d.point_a, d.point_b)
                 );
-                assert!(state.distance > 0.0);
+                // Meshes that touch where the spheres do not: distance 0, in contact.
+                assert!(state.distance <= d.spheres.distance);
+                assert_eq!(state.distance == 0.0, state.contact);
+                refined += usize::from(d.refined && !d.intersecting);
             }
         }
         assert!(
-            touched > 5 && apart > 5,
-            "{touched} in contact, {apart} apart"
+            touched > 5 && apart > 5 && refined > 5,
+            "{touched} in contact, {apart} apart, {refined} refined"
         );
     }
 }

@@ -117,6 +117,13 @@ fn a_posted_pose_is_answered_as_a_fresh_pair_answers() {
             },
         );
         assert!(close(&v["distance"], d.distance), "{v}");
+        // The demo's trees carry their meshes: the refined distance as well.
+        let r = Pair::new(s.scene.a.clone(), s.scene.b.clone())
+            .refined_distance(&Pose::IDENTITY, &pose)
+            .unwrap();
+        assert!(close(&v["refined_distance"]["distance"], r.distance), "{v}");
+        assert_eq!(v["refined_distance"]["contact"], r.intersecting);
+        assert!(r.distance <= d.distance.max(0.0));
         assert_eq!(v["contact"], d.overlapping);
         assert!(close(&v["volume"], q.volume));
         assert!(close(&v["max_depth"], q.max_depth));

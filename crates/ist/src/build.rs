@@ -43,8 +43,9 @@ pub enum PresetArg {
     /// half a voxel, 8 refinement steps (the library's recommendation for unknown units).
     Fine,
     /// Jaw scans in mm, accuracy-calibrated: 0.1 mm voxels, 0.05 mm minimum radius, 8
-    /// refinement steps (p95 error 0.028 mm on the arches along a chew, ~2.3–2.6 s and ~0.38 GB
-    /// per arch on 2 cores, ~1 s on 16).
+    /// refinement steps (p95 error 0.028 mm on the arches along a chew, ≤ 0.0008 mm refined to
+    /// the meshes by `ist query --query refined-distance`; ~2.3–2.6 s and ~0.38 GB per arch on
+    /// 2 cores, ~1 s on 16).
     Jaw,
     /// Jaw scans in mm, the query benchmark's trees: 0.15 mm voxels, 0.05 mm minimum radius,
     /// 8 refinement steps (~1.6 s and 0.18 GB per arch on 2 cores, 1.8× faster than jaw; p95

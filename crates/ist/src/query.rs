@@ -80,9 +80,13 @@ pub struct Args {
     #[arg(long, num_args = 2, value_names = ["MESH_A", "MESH_B"])]
     meshes: Option<Vec<PathBuf>>,
     /// Refined distance: radius of the balls searched around the closest points, as a
-    /// multiple of the larger closest leaf's radius (plus half the voxel size).
+    /// multiple of the larger closest leaf's radius (plus --refine-margin).
     #[arg(long, default_value_t = innersphere::RefineOptions::default().radius_scale)]
     refine_radius_scale: f64,
+    /// Refined distance: added to the balls' radius, in model units, ≥ 0 (default: the
+    /// larger voxel size of the two trees).
+    #[arg(long)]
+    refine_margin: Option<f64>,
     /// Print JSON.
     #[arg(long)]
     json: bool,
@@ -115,9 +119,16 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     }
     let refine = RefineOptions {
         radius_scale: args.refine_radius_scale,
+        margin: args.refine_margin.unwrap_or(-1.0),
         ..Default::default()
     };
     refine.check().context("--refine-radius-scale")?;
+    if let Some(m) = args.refine_margin {
+        anyhow::ensure!(
+            m >= 0.0 && m.is_finite(),
+            "--refine-margin must be a finite length ≥ 0, got {m}"
+        );
+    }
     let (a, mesh_a) = crate::bodies::load_body(&args.a, &args.body)?;
     let (b, mesh_b) = crate::bodies::load_body(&args.b, &args.body)?;
     let (mut a, mut b) = (SharedTree::new(a), SharedTree::new(b));

@@ -47,9 +47,13 @@ pub struct Args {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
     passes: u32,
     /// Refined distance: radius of the balls searched around the closest points, as a
-    /// multiple of the larger closest leaf's radius (plus half the voxel size).
+    /// multiple of the larger closest leaf's radius (plus --refine-margin).
     #[arg(long, default_value_t = innersphere::RefineOptions::default().radius_scale)]
     refine_radius_scale: f64,
+    /// Refined distance: added to the balls' radius, in model units, ≥ 0 (default: the
+    /// larger voxel size of the two trees).
+    #[arg(long)]
+    refine_margin: Option<f64>,
     /// Write one row per frame to this CSV file.
     #[arg(long)]
     csv: Option<PathBuf>,
@@ -78,10 +82,17 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     );
     innersphere::RefineOptions {
         radius_scale: args.refine_radius_scale,
+        margin: args.refine_margin.unwrap_or(-1.0),
         ..Default::default()
     }
     .check()
     .context("--refine-radius-scale")?;
+    if let Some(m) = args.refine_margin {
+        anyhow::ensure!(
+            m >= 0.0 && m.is_finite(),
+            "--refine-margin must be a finite length ≥ 0, got {m}"
+        );
+    }
     if let Some(csv) = &args.csv {
         let mut inputs = vec![args.a.as_path(), args.b.as_path(), args.motion.as_path()];
         inputs.extend(args.exact.iter().flatten().map(|p| p.as_path()));
@@ -150,6 +161,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         passes: args.passes as usize,
         refine: innersphere::RefineOptions {
             radius_scale: args.refine_radius_scale,
+            margin: args.refine_margin.unwrap_or(-1.0),
             ..Default::default()
         },
         ..Default::default()

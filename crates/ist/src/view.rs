@@ -72,7 +72,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         teeth(&args.teeth_a, "--teeth-a")?,
         teeth(&args.teeth_b, "--teeth-b")?,
     );
-    let mut scene = if args.demo {
+    let scene = if args.demo {
         if args.a.is_some() || args.b.is_some() {
             anyhow::bail!("--demo takes no tree files");
         }
@@ -131,6 +131,16 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         }
     };
     let meshes = scene.mesh_a.is_some() && scene.mesh_b.is_some();
+    // The distance shown: between the meshes where they are the trees' own.
+    let (mut scene, why) = if args.demo {
+        (scene, None)
+    } else {
+        scene.refining_with_meshes()
+    };
+    match why {
+        None => eprintln!("distance: between the meshes (refined from the spheres)"),
+        Some(why) => eprintln!("{why}"),
+    }
     if !meshes && (args.contact_map || teeth_a.is_some() || teeth_b.is_some()) {
         anyhow::bail!(
             "--contact-map, --teeth-a and --teeth-b need both meshes (--mesh-a and --mesh-b)"

@@ -217,6 +217,107 @@ fn query_gives_the_distance_of_the_posed_trees() {
     assert_eq!(r["distance"], 0.0);
 }
 
+/// `--query refined-distance` finds each tree's mesh from its file (or takes --meshes) and
+/// gives the meshes' exact distance here (the balls hold the few large triangles); without
+/// the meshes, or with another body's, it says what to give.
+#[test]
+fn query_refines_the_distance_to_the_meshes() {
+    let dir = fixture("refined");
+    let (box_ist, ball_ist) = (dir.path("box.ist"), dir.path("ball.ist"));
+    let pose = "3 0.1 0 1 0 0 0";
+    let exact = {
+        let load = |f: &str| {
+            innersphere::exact::ExactMesh::new(&innersphere::Mesh::load(dir.path(f)).unwrap())
+                .unwrap()
+        };
+        let (a, b) = (load("box.stl"), load("ball.obj"));
+        let mut scratch = innersphere::exact::ExactScratch::new();
+        innersphere::exact::distance(
+            &a,
+            &Pose::IDENTITY,
+            &b,
+            &pose.parse().unwrap(),
+            &mut scratch,
+        )
+        .distance
+    };
+    let q = |extra: &[&str], want: i32| {
+        let mut args = vec![
+            "query",
+            s(&box_ist),
+            s(&ball_ist),
+            "--pose-b",
+            pose,
+            "--query",
+            "refined-distance",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        ist_json(&args, want)
+    };
+    let r = q(&[], 0);
+    let d = r["distance"].as_f64().unwrap();
+    assert!((d - exact).abs() <= 1e-9, "refined {d}, exact {exact}: {r}");
+    assert!(d < r["sphere_distance"].as_f64().unwrap(), "{r}");
+    assert_eq!(
+        (
+            r["refined"].clone(),
+            r["contact"].clone(),
+            r["complete"].clone()
+        ),
+        (true.into(), false.into(), true.into())
+    );
+    assert!(r["triangle_a"].as_u64().unwrap() < 12, "{r}");
+    let given = q(
+        &[
+            "--meshes",
+            s(&dir.path("box.stl")),
+            s(&dir.path("ball.obj")),
+        ],
+        0,
+    );
+    assert_eq!(given["distance"], r["distance"]);
+    // Another body's mesh, a bad margin, and replay's refined kind without meshes.
+    let out = ist(&[
+        "query",
+        s(&box_ist),
+        s(&ball_ist),
+        "--query",
+        "refined-distance",
+        "--meshes",
+        s(&dir.path("ball.obj")),
+        s(&dir.path("ball.obj")),
+    ]);
+    assert_eq!(code(&out), 2);
+    assert!(stderr(&out).contains("not the mesh"), "{}", stderr(&out));
+    let out = ist(&[
+        "query",
+        s(&box_ist),
+        s(&ball_ist),
+        "--query",
+        "refined-distance",
+        "--refine-margin=-1",
+    ]);
+    assert_eq!(code(&out), 2);
+    assert!(stderr(&out).contains("--refine-margin"), "{}", stderr(&out));
+    std::fs::write(
+        dir.path("m.csv"),
+        "t,tx,ty,tz,qw,qx,qy,qz\n0,3,0,0,1,0,0,0\n",
+    )
+    .unwrap();
+    let out = ist(&[
+        "replay",
+        s(&box_ist),
+        s(&ball_ist),
+        "--motion",
+        s(&dir.path("m.csv")),
+        "--query",
+        "refined-distance",
+    ]);
+    assert_eq!(code(&out), 2);
+    assert!(stderr(&out).contains("--exact"), "{}", stderr(&out));
+}
+
 #[test]
 fn errors_exit_with_code_2() {
     let dir = fixture("errors");

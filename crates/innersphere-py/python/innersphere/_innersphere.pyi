@@ -270,7 +270,7 @@ class Pair:
         pose_b: _PoseLike,
         *,
         pose_a: Optional[_PoseLike] = None,
-        radius_scale: float = 1.0,
+        radius_scale: float = 0.5,
         rel_tol: float = 1e-3,
         max_node_pairs: int = 4096,
     ) -> Dict[str, Any]:

@@ -39,8 +39,10 @@ pub enum Preset {
     Fine,
     /// Jaw scans in **millimetres**, the accuracy-calibrated setting of `docs/RESULTS.md`:
     /// 0.1 mm voxels, 0.05 mm minimum radius, 8 refinement steps. On the real arches:
-    /// distance error p95 0.028 mm on the 5 s chew of `docs/RESULTS.md` (its bar: 0.03 mm)
-    /// and 0.021–0.045 mm on four unseen motions, no missed contact deeper than 0.08 mm,
+    /// sphere distance error p95 0.028 mm on the 5 s chew of `docs/RESULTS.md` (its bar:
+    /// 0.03 mm) and 0.021–0.045 mm on four unseen motions, no missed contact deeper than
+    /// 0.09 mm; refined to the meshes ([`Pair::refined_distance`](crate::Pair::refined_distance))
+    /// p95 0.00003–0.0008 mm on six motions, no missed contact deeper than 0.025 mm;
     /// about 150k spheres, 2.3–2.6 s and 0.38 GB per arch on 2 cores (1.6–1.8× FCL's OBBRSS build
     /// of an arch), about 1 s on 16; a molar in 0.3 s (14k spheres).
     Jaw,

@@ -309,7 +309,7 @@ impl Pair {
                 radius(&self.a.tree, spheres.leaf_a),
                 radius(&self.b.tree, spheres.leaf_b),
             ),
-            default_margin: 0.5
+            default_margin: 1.0
                 * self
                     .a
                     .tree

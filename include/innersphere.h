@@ -346,8 +346,8 @@ typedef struct ist_refine_options {
    */
   double radius_scale;
   /*
-   Added to the radius, in model units; negative: half the larger voxel size of the
-   two trees.
+   Added to the radius, in model units; negative: the larger voxel size of the two
+   trees.
    */
   double margin;
   /*

@@ -25,7 +25,8 @@ use innersphere::{
 use innersphere_motion::{generate, Scenario};
 use rayon::prelude::*;
 
-/// The generated tooth pair, both trees and three generated motions (B in A's frame).
+/// The generated tooth pair, both trees (with their meshes) and three generated motions (B in
+/// A's frame).
 struct Fixture {
     a: SharedTree,
     b: SharedTree,
@@ -43,8 +44,13 @@ fn fixture() -> &'static Fixture {
             resolution: Resolution::Cells(64),
             ..BuildOptions::default()
         };
-        let a = SharedTree::new(SphereTree::build(&ma, &opts).expect("builds"));
-        let b = SharedTree::new(SphereTree::build(&mb, &opts).expect("builds"));
+        // With their meshes, for the refined distance.
+        let tree = |m| {
+            SharedTree::new(SphereTree::build(m, &opts).expect("builds"))
+                .with_mesh(m)
+                .expect("its own mesh")
+        };
+        let (a, b) = (tree(&ma), tree(&mb));
         let motions = Scenario::ALL
             .iter()
             .enumerate()
@@ -92,6 +98,12 @@ fn all_answers(pair: &mut Pair, pa: &Pose, pb: &Pose) -> u64 {
     let p = pair.penetration(pa, pb);
     format!("{p:?}{:?}", pair.patches()).hash(&mut h);
     format!("{:?}", pair.penetration_within(pa, pb, BUDGET)).hash(&mut h);
+    format!(
+        "{:?}",
+        pair.refined_distance(pa, pb)
+            .expect("the trees carry their meshes")
+    )
+    .hash(&mut h);
     h.finish()
 }
 

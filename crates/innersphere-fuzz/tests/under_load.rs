@@ -321,7 +321,7 @@ const SOAK_FRAMES: usize = 1_000_000;
 const SAMPLE_EVERY: usize = 997;
 
 #[test]
-#[ignore = "heavy: a million frames (about 5 s); CI runs it with --ignored"]
+#[ignore = "heavy: a million frames (about 20 s on 2 cores); CI runs it with --ignored"]
 fn a_soak_of_a_million_frames_allocates_nothing_and_does_not_drift() {
     let f = fixture();
     let cycle: Vec<Pose> = f.motions.iter().flatten().copied().collect();

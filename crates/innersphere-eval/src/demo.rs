@@ -52,21 +52,24 @@ pub fn replay_pair(pair: &DemoPair, seconds: f64) -> Result<crate::replay::Repla
     replay_motion(pair, &motion)
 }
 
-/// Replays `motion` through every query kind, with the exact mesh distance as reference on
-/// every 10th frame.
+/// Replays `motion` through every query kind, the distance refined to the meshes among
+/// them, with the exact mesh distance as reference on every 10th frame.
 pub fn replay_motion(
     pair: &DemoPair,
     motion: &crate::motion::Motion,
 ) -> Result<crate::replay::ReplayReport> {
-    let ea = innersphere::exact::ExactMesh::new(&pair.a.0)?;
-    let eb = innersphere::exact::ExactMesh::new(&pair.b.0)?;
+    let ea = std::sync::Arc::new(innersphere::exact::ExactMesh::new(&pair.a.0)?);
+    let eb = std::sync::Arc::new(innersphere::exact::ExactMesh::new(&pair.b.0)?);
+    let ta = pair.a.1.clone().with_exact_mesh(ea.clone())?;
+    let tb = pair.b.1.clone().with_exact_mesh(eb.clone())?;
     let opts = crate::replay::ReplayOptions {
+        kinds: crate::replay::QueryKind::WITH_REFINED.to_vec(),
         every: 10,
         ..Default::default()
     };
     Ok(crate::replay::replay(
-        &pair.a.1,
-        &pair.b.1,
+        &ta,
+        &tb,
         motion,
         Some((&ea, &eb)),
         &opts,

@@ -140,6 +140,13 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 acc.separated_frames, acc.errors.abs_err_p50, acc.errors.abs_err_p95, acc.errors.abs_err_max,
                 acc.errors.missed_contacts, acc.errors.missed_contacts_deep, acc.errors.false_contacts
             );
+            if let Some(r) = &acc.refined {
+                println!(
+                    "the distance refined to the meshes (RefinedDistance): p50 {:.5}, p95 {:.5}, max {:.5} {unit}; missed contacts {} (the deepest {:.4} {unit}), false contacts {}",
+                    r.errors.abs_err_p50, r.errors.abs_err_p95, r.errors.abs_err_max,
+                    r.errors.missed_contacts, r.errors.missed_contacts_max_depth, r.errors.false_contacts
+                );
+            }
         }
     }
     Ok(0)

@@ -158,6 +158,33 @@ fn the_default_refinement_is_much_nearer_than_the_spheres() {
     );
 }
 
+/// A reset pair answers as a fresh one (the last answer's triangle pair, which bounds the
+/// next search, is forgotten).
+#[test]
+fn a_reset_pair_answers_as_a_fresh_one() {
+    let t = teeth();
+    let poses: Vec<Pose> = (0..30)
+        .map(|i| {
+            pose_b(
+                0.4 + 0.02 * i as f64,
+                [0.03 * i as f64, 0.1],
+                [0.0, 0.0, 0.01 * i as f64],
+            )
+        })
+        .collect();
+    let mut warm = Pair::new(&t.a, &t.b);
+    for p in &poses {
+        warm.refined_distance(&Pose::IDENTITY, p).unwrap();
+    }
+    let target = pose_b(1.2, [-0.8, 0.5], [0.05, 0.0, 0.2]);
+    warm.reset();
+    let got = warm.refined_distance(&Pose::IDENTITY, &target).unwrap();
+    let want = Pair::new(&t.a, &t.b)
+        .refined_distance(&Pose::IDENTITY, &target)
+        .unwrap();
+    assert_eq!(got, want);
+}
+
 /// A budget too small for the search: an upper bound still, and marked incomplete.
 #[test]
 fn a_spent_budget_still_gives_an_upper_bound() {

@@ -511,6 +511,7 @@ impl Pair {
         self.sep = None;
         self.front.reset();
         self.bfront.reset();
+        self.refine.reset();
     }
 
     /// Size of the kinetic front: (separated node pairs on it, overlapping leaf pairs).

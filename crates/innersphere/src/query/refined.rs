@@ -137,6 +137,11 @@ impl RefineScratch {
             last: None,
         }
     }
+
+    /// Forgets the last answer's triangle pair.
+    pub(crate) fn reset(&mut self) {
+        self.last = None;
+    }
 }
 
 /// The two meshes and what the refinement needs of each tree: the closest leaves' radii and

@@ -287,36 +287,26 @@ impl Pair {
         opts: &RefineOptions,
     ) -> Result<RefinedDistance> {
         opts.check()?;
-        let (Some(ma), Some(mb)) = (self.a.mesh.clone(), self.b.mesh.clone()) else {
-            return Err(Error::InvalidOption(
+        let missing = || {
+            Error::InvalidOption(
                 "the refined distance needs the meshes of both trees (SharedTree::with_mesh)"
                     .into(),
-            ));
+            )
         };
+        if self.a.mesh.is_none() || self.b.mesh.is_none() {
+            return Err(missing());
+        }
         let spheres = self.distance(pose_a, pose_b);
-        let radius = |t: &SphereTree, leaf: u32| {
-            let n = leaf as usize;
-            if n < t.r.len() {
-                t.r[n] as f64
-            } else {
-                0.0
-            }
+        let (Some(ma), Some(mb)) = (self.a.mesh.as_deref(), self.b.mesh.as_deref()) else {
+            return Err(missing());
         };
+        let radius = |t: &SphereTree, leaf: u32| t.r.get(leaf as usize).map_or(0.0, |&r| r as f64);
+        let (ta, tb) = (&self.a.tree, &self.b.tree);
         let surfaces = Surfaces {
-            a: &ma,
-            b: &mb,
-            leaf_radii: (
-                radius(&self.a.tree, spheres.leaf_a),
-                radius(&self.b.tree, spheres.leaf_b),
-            ),
-            default_margin: 1.0
-                * self
-                    .a
-                    .tree
-                    .meta
-                    .voxel_size
-                    .max(self.b.tree.meta.voxel_size)
-                    .max(0.0),
+            a: ma,
+            b: mb,
+            leaf_radii: (radius(ta, spheres.leaf_a), radius(tb, spheres.leaf_b)),
+            default_margin: ta.meta.voxel_size.max(tb.meta.voxel_size).max(0.0),
         };
         Ok(refined::refine(
             spheres,

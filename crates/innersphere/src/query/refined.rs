@@ -178,7 +178,7 @@ pub(crate) fn refine(
         tri_a: u32::MAX,
         tri_b: u32::MAX,
         refined: false,
-        intersecting: spheres.overlapping,
+        intersecting: false,
         complete: true,
         radius,
         node_pairs: 0,

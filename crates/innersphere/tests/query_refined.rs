@@ -4,6 +4,7 @@
 
 use glam::{DQuat, DVec3};
 use innersphere::exact::{self, ExactMesh, ExactScratch};
+use innersphere::query::batch::{self, BatchOptions};
 use innersphere::{
     shapes, BuildOptions, Mesh, Pair, Pose, RefineOptions, Resolution, SharedTree, SphereTree,
 };
@@ -278,4 +279,61 @@ fn missing_or_foreign_meshes_and_bad_options_are_errors() {
             .unwrap_err();
         assert!(err.to_string().contains("refine"), "{err}");
     }
+}
+
+/// The batch door: on any number of threads the same bits in input order, each chunk one
+/// pair carried from a fresh state; trees without meshes and bad options are refused before
+/// any query.
+#[test]
+fn refined_distance_many_is_a_pair_per_chunk_on_any_thread_count() {
+    let t = teeth();
+    let poses: Vec<Pose> = (0..40)
+        .map(|i| {
+            let s = i as f64 / 39.0;
+            pose_b(
+                0.6 - 0.62 * s,
+                [0.3 * s, -0.2 * s],
+                [0.02 * s, 0.0, 0.05 * s],
+            )
+        })
+        .collect();
+    let (pa, q, chunk) = ([Pose::IDENTITY], RefineOptions::default(), 16);
+    let at = |threads| BatchOptions { threads, chunk };
+    let bits = |r: &innersphere::RefinedDistance| {
+        let mut v = vec![r.distance.to_bits(), r.spheres.distance.to_bits()];
+        v.extend(r.point_a.to_array().map(f64::to_bits));
+        v.extend(r.point_b.to_array().map(f64::to_bits));
+        v.extend([
+            r.tri_a as u64,
+            r.tri_b as u64,
+            r.intersecting as u64,
+            r.complete as u64,
+        ]);
+        v
+    };
+    let one = batch::refined_distance_many(&t.a, &t.b, &pa, &poses, &q, &at(1)).unwrap();
+    assert_eq!(one.len(), poses.len());
+    assert!(one.iter().any(|r| r.intersecting) && one.iter().any(|r| !r.intersecting));
+    let mut pair = Pair::new(t.a.clone(), t.b.clone());
+    for (i, pb) in poses.iter().enumerate() {
+        if i % chunk == 0 {
+            pair.reset();
+        }
+        let r = pair.refined_distance_with(&Pose::IDENTITY, pb, &q).unwrap();
+        assert_eq!(bits(&one[i]), bits(&r), "pose {i}");
+    }
+    for threads in [2, 3, 0] {
+        let got = batch::refined_distance_many(&t.a, &t.b, &pa, &poses, &q, &at(threads)).unwrap();
+        let same = got.iter().zip(&one).all(|(x, y)| bits(x) == bits(y));
+        assert!(same, "{threads} threads");
+    }
+    let bare = SharedTree::new(t.a.tree().clone());
+    let err = batch::refined_distance_many(&bare, &t.b, &pa, &poses, &q, &at(2)).unwrap_err();
+    assert!(err.to_string().contains("meshes"), "{err}");
+    let nan = RefineOptions {
+        radius_scale: f64::NAN,
+        ..q
+    };
+    let err = batch::refined_distance_many(&t.a, &t.b, &pa, &poses, &nan, &at(2)).unwrap_err();
+    assert!(err.to_string().contains("radius_scale"), "{err}");
 }

@@ -1,5 +1,5 @@
-//! Many poses at once on all cores: [`distance_many`], [`contact_many`],
-//! [`penetration_many`] and the generic [`map`].
+//! Many poses at once on all cores: [`distance_many`], [`refined_distance_many`],
+//! [`contact_many`], [`penetration_many`] and the generic [`map`].
 //!
 //! The poses of B are cut into fixed chunks of [`BatchOptions::chunk`] poses. Each chunk
 //! starts from a fresh state ([`Pair::reset`]) and carries the temporal coherence from pose
@@ -10,7 +10,11 @@
 //! do not depend on the state at all; the penetration volume's last bits can, through the
 //! order of its sums.)
 
-use super::{ContactResult, Distance, Pair, Penetration, PenetrationOptions, SharedTree};
+use super::pair::needs_meshes;
+use super::{
+    ContactResult, Distance, Pair, Penetration, PenetrationOptions, RefineOptions, RefinedDistance,
+    SharedTree,
+};
 use crate::error::{Error, Result};
 use crate::pose::Pose;
 use rayon::prelude::*;
@@ -117,6 +121,26 @@ pub fn distance_many(
     opts: &BatchOptions,
 ) -> Result<Vec<Distance>> {
     map(a, b, poses_a, poses_b, opts, |p, pa, pb| p.distance(pa, pb))
+}
+
+/// [`Pair::refined_distance_with`] for each pose of B ([`map`]): the distance between the
+/// meshes, for accuracy sweeps and data sets. Fails up front, before any query, for bad
+/// options or trees without their meshes ([`SharedTree::with_mesh`]).
+pub fn refined_distance_many(
+    a: &SharedTree,
+    b: &SharedTree,
+    poses_a: &[Pose],
+    poses_b: &[Pose],
+    query: &RefineOptions,
+    opts: &BatchOptions,
+) -> Result<Vec<RefinedDistance>> {
+    query.check()?;
+    needs_meshes(a, b)?;
+    map(a, b, poses_a, poses_b, opts, |p, pa, pb| {
+        p.refined_distance_with(pa, pb, query)
+    })?
+    .into_iter()
+    .collect()
 }
 
 /// [`Pair::contact`] for each pose of B ([`map`]).

@@ -126,6 +126,73 @@ typedef struct ist_pose {
 } ist_pose;
 
 /*
+ Options of ist_refined_distance (ist_refine_options_default: the library's defaults).
+ */
+typedef struct ist_refine_options {
+  /*
+   Radius of the balls searched around the spheres' closest points, as a multiple of the
+   larger closest leaf's radius (plus `margin`); ≥ 0.
+   */
+  double radius_scale;
+  /*
+   Added to the radius, in model units; negative: the larger voxel size of the two
+   trees.
+   */
+  double margin;
+  /*
+   Skip what cannot beat the best so far by more than this fraction of it; in [0, 1).
+   */
+  double rel_tolerance;
+  /*
+   Most triangle-BVH node pairs searched (≥ 1); past it `complete` is 0.
+   */
+  uint64_t max_node_pairs;
+} ist_refine_options;
+
+/*
+ Result of ist_refined_distance (world frame).
+ */
+typedef struct ist_refined_distance_result {
+  /*
+   Distance between the meshes as refined from the sphere distance: never below the
+   exact mesh distance, never above `sphere_distance`; 0 when they touch.
+   */
+  double distance;
+  /*
+   1 when the bodies touch (two triangles cross, or the sphere packings overlap).
+   */
+  int contact;
+  /*
+   1 when a triangle pair nearer than the spheres was found (the points lie on it).
+   */
+  int refined;
+  /*
+   1 when the local search ended within its budget.
+   */
+  int complete;
+  /*
+   Closest point on A.
+   */
+  double point_a[3];
+  /*
+   Closest point on B.
+   */
+  double point_b[3];
+  /*
+   A's triangle of `point_a` (index in A's mesh), UINT32_MAX unless refined.
+   */
+  uint32_t tri_a;
+  /*
+   B's triangle of `point_b`, UINT32_MAX unless refined.
+   */
+  uint32_t tri_b;
+  /*
+   The sphere distance that was refined (as ist_distance's `distance`).
+   */
+  double sphere_distance;
+} ist_refined_distance_result;
+
+/*
  Result of ist_penetration (world frame).
  */
 typedef struct ist_penetration_result {
@@ -337,73 +404,6 @@ typedef struct ist_distance_result {
 } ist_distance_result;
 
 /*
- Options of ist_refined_distance (ist_refine_options_default: the library's defaults).
- */
-typedef struct ist_refine_options {
-  /*
-   Radius of the balls searched around the spheres' closest points, as a multiple of the
-   larger closest leaf's radius (plus `margin`); ≥ 0.
-   */
-  double radius_scale;
-  /*
-   Added to the radius, in model units; negative: the larger voxel size of the two
-   trees.
-   */
-  double margin;
-  /*
-   Skip what cannot beat the best so far by more than this fraction of it; in [0, 1).
-   */
-  double rel_tolerance;
-  /*
-   Most triangle-BVH node pairs searched (≥ 1); past it `complete` is 0.
-   */
-  uint64_t max_node_pairs;
-} ist_refine_options;
-
-/*
- Result of ist_refined_distance (world frame).
- */
-typedef struct ist_refined_distance_result {
-  /*
-   Distance between the meshes as refined from the sphere distance: never below the
-   exact mesh distance, never above `sphere_distance`; 0 when they touch.
-   */
-  double distance;
-  /*
-   1 when the bodies touch (two triangles cross, or the sphere packings overlap).
-   */
-  int contact;
-  /*
-   1 when a triangle pair nearer than the spheres was found (the points lie on it).
-   */
-  int refined;
-  /*
-   1 when the local search ended within its budget.
-   */
-  int complete;
-  /*
-   Closest point on A.
-   */
-  double point_a[3];
-  /*
-   Closest point on B.
-   */
-  double point_b[3];
-  /*
-   A's triangle of `point_a` (index in A's mesh), UINT32_MAX unless refined.
-   */
-  uint32_t tri_a;
-  /*
-   B's triangle of `point_b`, UINT32_MAX unless refined.
-   */
-  uint32_t tri_b;
-  /*
-   The sphere distance that was refined (as ist_distance's `distance`).
-   */
-  double sphere_distance;
-} ist_refined_distance_result;
-
-/*
  Result of ist_penetration_within (world frame): what a time-critical penetration query
  found within its node-pair budget.
  */
@@ -541,6 +541,17 @@ const char *ist_version(void);
  Every pointer is NULL or valid for its count.
  */
 int ist_distance_many(const struct ist_tree *a, const struct ist_tree *b, const struct ist_pose *poses_a, size_t n_a, const struct ist_pose *poses_b, size_t n, size_t threads, size_t chunk, double *out);
+
+/*
+ ist_refined_distance for `n` poses of B, as ist_distance_many, with `opts` (NULL: the
+ defaults): `out[i]`. Both trees need their meshes (ist_tree_with_mesh); without them, or
+ with bad options, IST_ERR_INVALID_ARGUMENT before any query. Allocates.
+
+ # Safety
+ Every pointer but `opts` is NULL or valid for its count; `opts` is NULL or points to
+ options.
+ */
+int ist_refined_distance_many(const struct ist_tree *a, const struct ist_tree *b, const struct ist_pose *poses_a, size_t n_a, const struct ist_pose *poses_b, size_t n, const struct ist_refine_options *opts, size_t threads, size_t chunk, struct ist_refined_distance_result *out);
 
 /*
  ist_contact for `n` poses of B, as ist_distance_many: `out[i]` = 1 where the packings

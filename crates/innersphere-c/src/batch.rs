@@ -5,7 +5,9 @@
 use crate::error::{status, Fail};
 use crate::reference;
 use crate::tree::ist_tree;
-use crate::types::{ist_penetration_result, ist_pose};
+use crate::types::{
+    ist_penetration_result, ist_pose, ist_refine_options, ist_refined_distance_result,
+};
 use innersphere::query::batch::{self, BatchOptions};
 use innersphere::{PenetrationOptions, Pose, SharedTree};
 use std::ffi::c_int;
@@ -83,6 +85,41 @@ pub unsafe extern "C" fn ist_distance_many(
             .zip(batch::distance_many(ta, tb, &pa, &pb, &o)?)
         {
             *o = d.distance;
+        }
+        Ok(())
+    })
+}
+
+/// ist_refined_distance for `n` poses of B, as ist_distance_many, with `opts` (NULL: the
+/// defaults): `out[i]`. Both trees need their meshes (ist_tree_with_mesh); without them, or
+/// with bad options, IST_ERR_INVALID_ARGUMENT before any query. Allocates.
+///
+/// # Safety
+/// Every pointer but `opts` is NULL or valid for its count; `opts` is NULL or points to
+/// options.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn ist_refined_distance_many(
+    a: *const ist_tree,
+    b: *const ist_tree,
+    poses_a: *const ist_pose,
+    n_a: usize,
+    poses_b: *const ist_pose,
+    n: usize,
+    opts: *const ist_refine_options,
+    threads: usize,
+    chunk: usize,
+    out: *mut ist_refined_distance_result,
+) -> c_int {
+    status(|| {
+        let ((ta, tb, pa, pb), out) = unsafe { batch_args(a, b, poses_a, n_a, poses_b, n, out) }?;
+        let q = unsafe { ist_refine_options::read(opts) };
+        let o = BatchOptions { threads, chunk };
+        for (o, r) in out
+            .iter_mut()
+            .zip(batch::refined_distance_many(ta, tb, &pa, &pb, &q, &o)?)
+        {
+            *o = ist_refined_distance_result::from(&r);
         }
         Ok(())
     })

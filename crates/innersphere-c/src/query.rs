@@ -120,27 +120,8 @@ pub unsafe extern "C" fn ist_refined_distance(
     status(|| {
         let (pair, a, b) = unsafe { args(pair, pose_a, pose_b) }?;
         let out = unsafe { mutable(out, "out") }?;
-        let o = match unsafe { opts.as_ref() } {
-            None => RefineOptions::default(),
-            Some(o) => RefineOptions {
-                radius_scale: o.radius_scale,
-                margin: o.margin,
-                rel_tolerance: o.rel_tolerance,
-                max_node_pairs: o.max_node_pairs,
-            },
-        };
-        let r = pair.refined_distance_with(&a, &b, &o)?;
-        *out = ist_refined_distance_result {
-            distance: r.distance,
-            contact: r.intersecting as c_int,
-            refined: r.refined as c_int,
-            complete: r.complete as c_int,
-            point_a: r.point_a.to_array(),
-            point_b: r.point_b.to_array(),
-            tri_a: r.tri_a,
-            tri_b: r.tri_b,
-            sphere_distance: r.spheres.distance,
-        };
+        let o = unsafe { ist_refine_options::read(opts) };
+        *out = ist_refined_distance_result::from(&pair.refined_distance_with(&a, &b, &o)?);
         Ok(())
     })
 }

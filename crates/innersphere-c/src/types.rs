@@ -196,3 +196,37 @@ impl From<&innersphere::Penetration> for ist_penetration_result {
         }
     }
 }
+
+impl ist_refine_options {
+    /// The options `opts` points to, or the library's defaults for NULL.
+    ///
+    /// # Safety
+    /// `opts` is NULL or points to options.
+    pub(crate) unsafe fn read(opts: *const ist_refine_options) -> innersphere::RefineOptions {
+        match unsafe { opts.as_ref() } {
+            None => innersphere::RefineOptions::default(),
+            Some(o) => innersphere::RefineOptions {
+                radius_scale: o.radius_scale,
+                margin: o.margin,
+                rel_tolerance: o.rel_tolerance,
+                max_node_pairs: o.max_node_pairs,
+            },
+        }
+    }
+}
+
+impl From<&innersphere::RefinedDistance> for ist_refined_distance_result {
+    fn from(r: &innersphere::RefinedDistance) -> Self {
+        ist_refined_distance_result {
+            distance: r.distance,
+            contact: r.intersecting as c_int,
+            refined: r.refined as c_int,
+            complete: r.complete as c_int,
+            point_a: r.point_a.to_array(),
+            point_b: r.point_b.to_array(),
+            tri_a: r.tri_a,
+            tri_b: r.tri_b,
+            sphere_distance: r.spheres.distance,
+        }
+    }
+}

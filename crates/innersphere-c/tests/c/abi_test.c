@@ -374,6 +374,55 @@ static void errors(const char* dir, ist_tree* a, ist_tree* b) {
     CHECK(strlen(ist_version()) > 0, "version");
 }
 
+/* Whether two refined distances are the same bit for bit, field by field (the struct has
+ * padding). */
+static int same_refined(const ist_refined_distance_result* x, const ist_refined_distance_result* y) {
+    return memcmp(&x->distance, &y->distance, sizeof(double)) == 0 && x->contact == y->contact &&
+           x->refined == y->refined && x->complete == y->complete &&
+           memcmp(x->point_a, y->point_a, sizeof x->point_a) == 0 &&
+           memcmp(x->point_b, y->point_b, sizeof x->point_b) == 0 && x->tri_a == y->tri_a &&
+           x->tri_b == y->tri_b &&
+           memcmp(&x->sphere_distance, &y->sphere_distance, sizeof(double)) == 0;
+}
+
+/* The refined distance's batch: with the trees' meshes, chunks of 4 on 1 and 3 threads and on
+ * all cores against a pair reset every 4 poses; trees without meshes and bad options refused. */
+static void refined_batches(const char* dir, ist_tree* a, ist_tree* b, const ist_pose* pa,
+                            const ist_pose* pb, size_t n) {
+    char* mesh_a = join(dir, "a.stl");
+    char* mesh_b = join(dir, "b.stl");
+    ist_tree* am = ist_tree_with_mesh(a, mesh_a);
+    ist_tree* bm = ist_tree_with_mesh(b, mesh_b);
+    free(mesh_a);
+    free(mesh_b);
+    CHECK(am != NULL && bm != NULL, "ist_tree_with_mesh");
+    ist_pair* pair = ist_pair_new(am, bm);
+    ist_refined_distance_result* r = malloc(n * sizeof *r);
+    const size_t threads[3] = {1, 3, 0};
+    for (int t = 0; t < 3; t++) {
+        CHECK(ist_refined_distance_many(am, bm, pa, n, pb, n, NULL, threads[t], 4, r) == IST_OK,
+              "refined_distance_many");
+        for (size_t i = 0; i < n; i++) {
+            ist_refined_distance_result one;
+            if (i % 4 == 0) ist_pair_reset(pair);
+            CHECK(ist_refined_distance(pair, &pa[i], &pb[i], NULL, &one) == IST_OK, "refined");
+            CHECK(same_refined(&r[i], &one), "refined_distance_many, pose %zu", i);
+        }
+    }
+    CHECK(ist_refined_distance_many(a, b, pa, 1, pb, n, NULL, 0, 1, r) == IST_ERR_INVALID_ARGUMENT,
+          "refined_distance_many without meshes");
+    ist_refine_options bad = ist_refine_options_default();
+    bad.radius_scale = NAN;
+    CHECK(ist_refined_distance_many(am, bm, pa, 1, pb, n, &bad, 0, 1, r) == IST_ERR_INVALID_ARGUMENT,
+          "refined_distance_many, NaN radius_scale");
+    CHECK(ist_refined_distance_many(am, bm, pa, 1, pb, n, NULL, 0, 1, NULL) == IST_ERR_NULL,
+          "refined_distance_many, NULL out");
+    free(r);
+    ist_pair_free(pair);
+    ist_tree_free(am);
+    ist_tree_free(bm);
+}
+
 /* The batches against single queries on a fresh pair (chunk 1), on 1 and 3 threads and on
  * all cores, with one pose of A for all and one each; a chunk of 5 equals a pair reset every
  * 5 poses; bad arguments are refused. Prints nothing (the single queries are diffed against
@@ -443,6 +492,7 @@ static void batches(const char* dir, ist_tree* a, ist_tree* b) {
     CHECK(ist_penetration_many(a, b, pa, 1, pb, 1, 1e308, 0, 1, p) == IST_ERR_INVALID_ARGUMENT,
           "stiffness 1e308");
     ist_pair_free(pair);
+    refined_batches(dir, a, b, pa, pb, n);
     free(pa);
     free(pb);
     free(d);

@@ -6,7 +6,7 @@ use innersphere::glam::DVec3;
 use innersphere::query::{BatchOptions, Paper, TraversalOptions};
 use innersphere::{
     ContactResult, Distance, DistanceOptions, MultipointOptions, Patch, Penetration,
-    PenetrationOptions, Pose, RefineOptions,
+    PenetrationOptions, Pose, RefineOptions, RefinedDistance,
 };
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -606,6 +606,76 @@ impl Pair {
             .detach(|| innersphere::query::batch::distance_many(&a, &b, pa.as_slice(), &pb, &o))
             .map_err(error)?;
         Ok(PyArray1::from_iter(py, out.iter().map(|d| d.distance)))
+    }
+
+    /// Pair.refined_distance for each pose of B (an (N, 7) or (N, 4, 4) array), in order,
+    /// on `threads` threads in chunks of `chunk` as distance_many. Both trees need their
+    /// meshes (Tree.with_mesh): ValueError otherwise, or for bad options, before any query.
+    /// Returns a dict of numpy arrays: distance (N,), contact (N,) bool, refined (N,) bool,
+    /// complete (N,) bool, point_a (N, 3), point_b (N, 3), triangle_a (N,) and triangle_b
+    /// (N,) int64 (−1 unless refined), sphere_distance (N,). Interpreter released.
+    #[pyo3(signature = (poses, *, pose_a=None, threads=None, chunk=1024, radius_scale=0.5, rel_tol=1e-3, max_node_pairs=4096))]
+    #[allow(clippy::too_many_arguments)]
+    fn refined_distance_many<'py>(
+        &self,
+        py: Python<'py>,
+        poses: &Bound<'py, PyAny>,
+        pose_a: Option<&Bound<'py, PyAny>>,
+        threads: Option<usize>,
+        chunk: usize,
+        radius_scale: f64,
+        rel_tol: f64,
+        max_node_pairs: u64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let (pb, pa) = batch(poses, pose_a)?;
+        let query = RefineOptions {
+            radius_scale,
+            rel_tolerance: rel_tol,
+            max_node_pairs,
+            ..Default::default()
+        };
+        let (a, b, o) = (
+            self.a.get().shared.clone(),
+            self.b.get().shared.clone(),
+            batch_options(threads, chunk),
+        );
+        let out: Vec<RefinedDistance> = py
+            .detach(|| {
+                innersphere::query::batch::refined_distance_many(
+                    &a,
+                    &b,
+                    pa.as_slice(),
+                    &pb,
+                    &query,
+                    &o,
+                )
+            })
+            .map_err(error)?;
+        let col = |f: fn(&RefinedDistance) -> f64| PyArray1::from_iter(py, out.iter().map(f));
+        let flag = |f: fn(&RefinedDistance) -> bool| PyArray1::from_iter(py, out.iter().map(f));
+        let tri = |f: fn(&RefinedDistance) -> u32| {
+            PyArray1::from_iter(
+                py,
+                out.iter().map(|r| match f(r) {
+                    u32::MAX => -1,
+                    t => t as i64,
+                }),
+            )
+        };
+        let v3 = |f: fn(&RefinedDistance) -> DVec3| -> Vec<[f64; 3]> {
+            out.iter().map(|r| f(r).to_array()).collect()
+        };
+        let d = PyDict::new(py);
+        d.set_item("distance", col(|r| r.distance))?;
+        d.set_item("contact", flag(|r| r.intersecting))?;
+        d.set_item("refined", flag(|r| r.refined))?;
+        d.set_item("complete", flag(|r| r.complete))?;
+        d.set_item("point_a", rows3(py, v3(|r| r.point_a))?)?;
+        d.set_item("point_b", rows3(py, v3(|r| r.point_b))?)?;
+        d.set_item("triangle_a", tri(|r| r.tri_a))?;
+        d.set_item("triangle_b", tri(|r| r.tri_b))?;
+        d.set_item("sphere_distance", col(|r| r.spheres.distance))?;
+        Ok(d)
     }
 
     /// Pair.contact for each pose of B (an (N, 7) or (N, 4, 4) array), in order, on

@@ -179,3 +179,42 @@ def test_threads(trees, loaded):
         t.join()
     assert len(out) + len(errors) == 2 and len(out) >= 1
     assert all(v.shape == want.shape and np.isfinite(v).all() for v in out.values())
+
+
+def test_refined_distance_many_equals_single_calls(trees, meshes, loaded):
+    """The refined batch is the single query pose after pose on one pair (one chunk), and
+    chunks of 7 on any thread count give the same bits as a pair reset every 7 poses."""
+    am, bm = trees[0].with_mesh(meshes["box"]), trees[1].with_mesh(meshes["ellipsoid"])
+    poses = loaded[1][::4]
+    got = innersphere.Pair(am, bm).refined_distance_many(poses, threads=2)
+    one = innersphere.Pair(am, bm)
+    singles = [one.refined_distance(p) for p in poses]
+    n = len(poses)
+    for k, shape in [("distance", (n,)), ("contact", (n,)), ("refined", (n,)), ("complete", (n,)),
+                     ("point_a", (n, 3)), ("point_b", (n, 3)), ("triangle_a", (n,)),
+                     ("triangle_b", (n,)), ("sphere_distance", (n,))]:
+        assert got[k].shape == shape, k
+    for k in ("distance", "contact", "refined", "complete", "point_a", "point_b", "sphere_distance"):
+        assert np.array_equal(got[k], [s[k] for s in singles]), k
+    for k in ("triangle_a", "triangle_b"):
+        assert np.array_equal(got[k], [-1 if s[k] is None else s[k] for s in singles]), k
+    assert got["contact"].any() and not got["contact"].all()
+    assert (got["distance"] <= got["sphere_distance"]).all()
+    chunked = [innersphere.Pair(am, bm).refined_distance_many(poses, chunk=7, threads=t) for t in (1, 3)]
+    reset = innersphere.Pair(am, bm)
+    want = []
+    for i, p in enumerate(poses):
+        if i % 7 == 0:
+            reset.reset()
+        want.append(reset.refined_distance(p)["distance"])
+    for c in chunked:
+        assert np.array_equal(c["distance"], want)
+
+
+def test_refined_distance_many_needs_the_meshes(trees, meshes, loaded):
+    with pytest.raises(ValueError, match="with_mesh"):
+        innersphere.Pair(*trees).refined_distance_many(loaded[1][:3])
+    am, bm = trees[0].with_mesh(meshes["box"]), trees[1].with_mesh(meshes["ellipsoid"])
+    with pytest.raises(ValueError, match="rel_tolerance"):
+        innersphere.Pair(am, bm).refined_distance_many(loaded[1][:3], rel_tol=2.0)
+    assert innersphere.Pair(am, bm).refined_distance_many(np.zeros((0, 7)))["point_a"].shape == (0, 3)

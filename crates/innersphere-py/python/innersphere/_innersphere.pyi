@@ -297,6 +297,21 @@ class Pair:
         cores), in chunks of ``chunk`` poses that each start from a fresh state and carry it
         (``ist replay``'s distances); the answers never depend on ``threads``. Returns shape
         (N,)."""
+    def refined_distance_many(
+        self,
+        poses: _PosesLike,
+        *,
+        pose_a: Optional[Union[_PoseLike, _PosesLike]] = None,
+        threads: Optional[int] = None,
+        chunk: int = 1024,
+        radius_scale: float = 0.5,
+        rel_tol: float = 1e-3,
+        max_node_pairs: int = 4096,
+    ) -> Dict[str, npt.NDArray[Any]]:
+        """``refined_distance`` for each pose of B in order (threads and chunks as
+        distance_many; both trees need their meshes): a dict of arrays distance (N,),
+        contact (N,), refined (N,), complete (N,), point_a (N, 3), point_b (N, 3),
+        triangle_a (N,), triangle_b (N,) (−1 unless refined), sphere_distance (N,)."""
     def contact_many(
         self,
         poses: _PosesLike,

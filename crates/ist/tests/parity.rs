@@ -123,7 +123,7 @@ fn every_batch_reaches_c_and_python() {
         .map(|s| s.split('(').next().unwrap_or(""))
         .filter(|n| n.ends_with("_many"))
         .collect();
-    assert_eq!(batches.len(), 3, "{batches:?}");
+    assert_eq!(batches.len(), 4, "{batches:?}");
     for k in batches {
         assert!(header.contains(&format!(" ist_{k}(")), "C: ist_{k}");
         assert!(stubs.contains(&format!("def {k}(")), "Python: Pair.{k}");

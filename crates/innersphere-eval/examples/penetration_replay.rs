@@ -57,6 +57,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pairs[worst],
         pairs.iter().max().unwrap_or(&0)
     );
+    let mut tests = visits.clone();
+    tests.sort_unstable();
+    println!(
+        "node-pair tests: {} in all, p99 {}, max {}",
+        visits.iter().sum::<u64>(),
+        tests[((n - 1) as f64 * 0.99).round() as usize],
+        tests[n - 1]
+    );
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&i, &j| best[j].total_cmp(&best[i]));
     for &i in order.iter().take(env("TOP").unwrap_or(0)) {

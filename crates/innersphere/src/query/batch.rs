@@ -10,7 +10,7 @@
 //! do not depend on the state at all; the penetration volume's last bits can, through the
 //! order of its sums.)
 
-use super::pair::needs_meshes;
+use super::refined::missing_meshes;
 use super::{
     ContactResult, Distance, Pair, Penetration, PenetrationOptions, RefineOptions, RefinedDistance,
     SharedTree,
@@ -135,7 +135,9 @@ pub fn refined_distance_many(
     opts: &BatchOptions,
 ) -> Result<Vec<RefinedDistance>> {
     query.check()?;
-    needs_meshes(a, b)?;
+    if a.mesh().is_none() || b.mesh().is_none() {
+        return Err(missing_meshes());
+    }
     map(a, b, poses_a, poses_b, opts, |p, pa, pb| {
         p.refined_distance_with(pa, pb, query)
     })?

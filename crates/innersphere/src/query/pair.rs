@@ -108,22 +108,6 @@ impl From<&SharedTree> for SharedTree {
     }
 }
 
-/// An error unless both trees carry their meshes (what the refined distance needs).
-pub(crate) fn needs_meshes(a: &SharedTree, b: &SharedTree) -> Result<()> {
-    if a.mesh.is_some() && b.mesh.is_some() {
-        Ok(())
-    } else {
-        Err(missing_meshes())
-    }
-}
-
-/// The error of a refined distance asked of trees without their meshes.
-fn missing_meshes() -> Error {
-    Error::InvalidOption(
-        "the refined distance needs the meshes of both trees (SharedTree::with_mesh)".into(),
-    )
-}
-
 /// Two trees and all per-pair state of their queries: what temporal coherence needs (last
 /// contact pairs, last proved separation, the kinetic fronts) and all scratch memory,
 /// reserved from the tree sizes when the pair is made, so that queries allocate nothing from
@@ -303,10 +287,12 @@ impl Pair {
         opts: &RefineOptions,
     ) -> Result<RefinedDistance> {
         opts.check()?;
-        needs_meshes(&self.a, &self.b)?;
+        if self.a.mesh.is_none() || self.b.mesh.is_none() {
+            return Err(refined::missing_meshes());
+        }
         let spheres = self.distance(pose_a, pose_b);
         let (Some(ma), Some(mb)) = (self.a.mesh.as_deref(), self.b.mesh.as_deref()) else {
-            return Err(missing_meshes());
+            return Err(refined::missing_meshes());
         };
         let radius = |t: &SphereTree, leaf: u32| t.r.get(leaf as usize).map_or(0.0, |&r| r as f64);
         let (ta, tb) = (&self.a.tree, &self.b.tree);

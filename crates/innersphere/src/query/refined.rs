@@ -155,6 +155,13 @@ pub(crate) struct Surfaces<'m> {
     pub default_margin: f64,
 }
 
+/// The error of a refined distance asked of trees without their meshes.
+pub(crate) fn missing_meshes() -> crate::error::Error {
+    crate::error::Error::InvalidOption(
+        "the refined distance needs the meshes of both trees (SharedTree::with_mesh)".into(),
+    )
+}
+
 /// Refines `spheres` (the sphere distance at world poses `pose_a`, `pose_b`) to the
 /// surfaces of `m` (see the module doc).
 pub(crate) fn refine(

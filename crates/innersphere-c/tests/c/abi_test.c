@@ -54,16 +54,23 @@ static char* join(const char* dir, const char* file) {
     return s;
 }
 
+/* Trees `a` and `b` given their meshes (`dir`'s a.stl and b.stl), into `am` and `bm`. */
+static void with_meshes(const char* dir, const ist_tree* a, const ist_tree* b, ist_tree** am,
+                        ist_tree** bm) {
+    char* mesh_a = join(dir, "a.stl");
+    char* mesh_b = join(dir, "b.stl");
+    *am = ist_tree_with_mesh(a, mesh_a);
+    *bm = ist_tree_with_mesh(b, mesh_b);
+    free(mesh_a);
+    free(mesh_b);
+    CHECK(*am != NULL && *bm != NULL, "ist_tree_with_mesh");
+}
+
 static void answers(const char* dir, ist_tree* a, ist_tree* b) {
     ist_pair* pair = ist_pair_new(a, b);
     CHECK(pair != NULL, "ist_pair_new");
-    char* mesh_a = join(dir, "a.stl");
-    char* mesh_b = join(dir, "b.stl");
-    ist_tree* am = ist_tree_with_mesh(a, mesh_a);
-    ist_tree* bm = ist_tree_with_mesh(b, mesh_b);
-    free(mesh_a);
-    free(mesh_b);
-    CHECK(am != NULL && bm != NULL, "ist_tree_with_mesh");
+    ist_tree *am, *bm;
+    with_meshes(dir, a, b, &am, &bm);
     ist_pair* refined = ist_pair_new(am, bm);
     CHECK(refined != NULL, "ist_pair_new with meshes");
     ist_tree_free(am);
@@ -348,11 +355,9 @@ static void errors(const char* dir, ist_tree* a, ist_tree* b) {
               strstr(ist_last_error(), "not the mesh"),
           "B's mesh given to A");
     CHECK(ist_tree_with_mesh(a, NULL) == NULL && ist_last_status() == IST_ERR_NULL, "NULL mesh");
-    ist_tree* bm = ist_tree_with_mesh(b, mesh_b);
     free(mesh_b);
-    char* mesh_a = join(dir, "a.stl");
-    ist_tree* am = ist_tree_with_mesh(a, mesh_a);
-    free(mesh_a);
+    ist_tree *am, *bm;
+    with_meshes(dir, a, b, &am, &bm);
     ist_pair* rp = ist_pair_new(am, bm);
     ist_refine_options ro = ist_refine_options_default();
     CHECK(ro.radius_scale > 0 && ro.max_node_pairs > 0, "default refine options");
@@ -389,13 +394,8 @@ static int same_refined(const ist_refined_distance_result* x, const ist_refined_
  * all cores against a pair reset every 4 poses; trees without meshes and bad options refused. */
 static void refined_batches(const char* dir, ist_tree* a, ist_tree* b, const ist_pose* pa,
                             const ist_pose* pb, size_t n) {
-    char* mesh_a = join(dir, "a.stl");
-    char* mesh_b = join(dir, "b.stl");
-    ist_tree* am = ist_tree_with_mesh(a, mesh_a);
-    ist_tree* bm = ist_tree_with_mesh(b, mesh_b);
-    free(mesh_a);
-    free(mesh_b);
-    CHECK(am != NULL && bm != NULL, "ist_tree_with_mesh");
+    ist_tree *am, *bm;
+    with_meshes(dir, a, b, &am, &bm);
     ist_pair* pair = ist_pair_new(am, bm);
     ist_refined_distance_result* r = malloc(n * sizeof *r);
     const size_t threads[3] = {1, 3, 0};

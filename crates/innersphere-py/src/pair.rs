@@ -6,7 +6,7 @@ use innersphere::glam::DVec3;
 use innersphere::query::{BatchOptions, Paper, TraversalOptions};
 use innersphere::{
     ContactResult, Distance, DistanceOptions, MultipointOptions, Patch, Penetration,
-    PenetrationOptions, Pose, RefineOptions, RefinedDistance,
+    PenetrationOptions, Pose, RefineOptions, RefinedDistance, SharedTree,
 };
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -273,21 +273,38 @@ fn stiffness_arg(stiffness: f64) -> PyResult<f64> {
     Ok(stiffness)
 }
 
-/// B's and A's poses of a batch.
-fn batch(
-    poses_b: &Bound<'_, PyAny>,
-    pose_a: Option<&Bound<'_, PyAny>>,
-) -> PyResult<(Vec<Pose>, PosesA)> {
-    let b = poses(poses_b, "poses")?;
-    let a = PosesA::new(pose_a, b.len())?;
-    Ok((b, a))
+/// What a batch runs: the poses of B and of A, both shared trees, and the batch options of
+/// `threads` (None: all cores) and `chunk`.
+struct Batch {
+    pb: Vec<Pose>,
+    pa: PosesA,
+    a: SharedTree,
+    b: SharedTree,
+    o: BatchOptions,
 }
 
-/// The batch options of `threads` (None: all cores) and `chunk`.
-fn batch_options(threads: Option<usize>, chunk: usize) -> BatchOptions {
-    BatchOptions {
-        threads: threads.unwrap_or(0),
-        chunk,
+impl Pair {
+    /// The [`Batch`] of `poses_b` (an (N, 7) or (N, 4, 4) array) and `pose_a` (None, one
+    /// pose, or N) on this pair's trees.
+    fn batch(
+        &self,
+        poses_b: &Bound<'_, PyAny>,
+        pose_a: Option<&Bound<'_, PyAny>>,
+        threads: Option<usize>,
+        chunk: usize,
+    ) -> PyResult<Batch> {
+        let pb = poses(poses_b, "poses")?;
+        let pa = PosesA::new(pose_a, pb.len())?;
+        Ok(Batch {
+            pb,
+            pa,
+            a: self.a.get().shared.clone(),
+            b: self.b.get().shared.clone(),
+            o: BatchOptions {
+                threads: threads.unwrap_or(0),
+                chunk,
+            },
+        })
     }
 }
 
@@ -596,12 +613,7 @@ impl Pair {
         threads: Option<usize>,
         chunk: usize,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let (pb, pa) = batch(poses, pose_a)?;
-        let (a, b, o) = (
-            self.a.get().shared.clone(),
-            self.b.get().shared.clone(),
-            batch_options(threads, chunk),
-        );
+        let Batch { pb, pa, a, b, o } = self.batch(poses, pose_a, threads, chunk)?;
         let out = py
             .detach(|| innersphere::query::batch::distance_many(&a, &b, pa.as_slice(), &pb, &o))
             .map_err(error)?;
@@ -627,18 +639,13 @@ impl Pair {
         rel_tol: f64,
         max_node_pairs: u64,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let (pb, pa) = batch(poses, pose_a)?;
+        let Batch { pb, pa, a, b, o } = self.batch(poses, pose_a, threads, chunk)?;
         let query = RefineOptions {
             radius_scale,
             rel_tolerance: rel_tol,
             max_node_pairs,
             ..Default::default()
         };
-        let (a, b, o) = (
-            self.a.get().shared.clone(),
-            self.b.get().shared.clone(),
-            batch_options(threads, chunk),
-        );
         let out: Vec<RefinedDistance> = py
             .detach(|| {
                 innersphere::query::batch::refined_distance_many(
@@ -689,12 +696,7 @@ impl Pair {
         threads: Option<usize>,
         chunk: usize,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
-        let (pb, pa) = batch(poses, pose_a)?;
-        let (a, b, o) = (
-            self.a.get().shared.clone(),
-            self.b.get().shared.clone(),
-            batch_options(threads, chunk),
-        );
+        let Batch { pb, pa, a, b, o } = self.batch(poses, pose_a, threads, chunk)?;
         let out = py
             .detach(|| innersphere::query::batch::contact_many(&a, &b, pa.as_slice(), &pb, &o))
             .map_err(error)?;
@@ -717,16 +719,11 @@ impl Pair {
         threads: Option<usize>,
         chunk: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let (pb, pa) = batch(poses, pose_a)?;
+        let Batch { pb, pa, a, b, o } = self.batch(poses, pose_a, threads, chunk)?;
         let query = PenetrationOptions {
             stiffness: stiffness_arg(stiffness)?,
             ..Default::default()
         };
-        let (a, b, o) = (
-            self.a.get().shared.clone(),
-            self.b.get().shared.clone(),
-            batch_options(threads, chunk),
-        );
         let out: Vec<Penetration> = py
             .detach(|| {
                 innersphere::query::batch::penetration_many(&a, &b, pa.as_slice(), &pb, &query, &o)

@@ -138,7 +138,9 @@ pub fn perturbed_poses(
         .collect()
 }
 
-/// The batch kind of [`bench_batch`]: "distance", "contact" or "penetration".
+/// Times the batch of `query` ("distance", "refined-distance" (both trees with their
+/// meshes), "contact" or "penetration") over `poses` on each thread count of `threads`, the
+/// best of `repeats`, and checks that every count answers the first's bits.
 pub fn bench_batch(
     a: &innersphere::SharedTree,
     b: &innersphere::SharedTree,
@@ -157,6 +159,12 @@ pub fn bench_batch(
                 .iter()
                 .map(|d| d.distance.to_bits())
                 .collect(),
+            "refined-distance" => {
+                batch::refined_distance_many(a, b, &id, poses, &Default::default(), &o)?
+                    .iter()
+                    .flat_map(|r| [r.distance.to_bits(), r.tri_a as u64, r.tri_b as u64])
+                    .collect()
+            }
             "contact" => batch::contact_many(a, b, &id, poses, &o)?
                 .iter()
                 .map(|c| c.in_contact() as u64)
@@ -173,7 +181,7 @@ pub fn bench_batch(
                 .collect(),
             other => {
                 return Err(innersphere::Error::InvalidOption(format!(
-                    "query must be distance, contact or penetration, not {other}"
+                    "query must be distance, refined-distance, contact or penetration, not {other}"
                 )))
             }
         })

@@ -45,9 +45,13 @@ enum What {
         /// Seed of the poses.
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Query kind: distance, contact or penetration.
+        /// Query kind: distance, refined-distance, contact or penetration.
         #[arg(long, default_value = "distance")]
         query: String,
+        /// Refined distance: the meshes of A and B (default: the meshes the trees were built
+        /// from, where those files still hold them).
+        #[arg(long, num_args = 2, value_names = ["MESH_A", "MESH_B"])]
+        meshes: Option<Vec<PathBuf>>,
         /// Thread counts to time (0 = all cores).
         #[arg(long, value_delimiter = ',', default_value = "1,0")]
         threads: Vec<usize>,
@@ -156,6 +160,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             deg,
             seed,
             query,
+            meshes,
             threads,
             chunk,
             repeat,
@@ -164,8 +169,13 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             if poses > 100_000_000 || !(mm.is_finite() && deg.is_finite()) {
                 anyhow::bail!("--poses must be at most 1e8 and --mm, --deg finite numbers");
             }
-            let ta = innersphere::SharedTree::new(crate::files::load_tree(&a)?);
-            let tb = innersphere::SharedTree::new(crate::files::load_tree(&b)?);
+            let mut ta = innersphere::SharedTree::new(crate::files::load_tree(&a)?);
+            let mut tb = innersphere::SharedTree::new(crate::files::load_tree(&b)?);
+            if query == "refined-distance" {
+                let given = meshes.as_deref().unwrap_or(&[]);
+                ta = crate::bodies::with_mesh(ta, given.first(), None, "A")?;
+                tb = crate::bodies::with_mesh(tb, given.get(1), None, "B")?;
+            }
             let centre = innersphere::glam::DVec3::from_array(tb.meta.center_of_mass);
             let p = innersphere_eval::bench::perturbed_poses(poses, seed, mm, deg, centre);
             let rows = innersphere_eval::bench::bench_batch(

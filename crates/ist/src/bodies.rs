@@ -4,6 +4,7 @@
 
 use crate::build::PresetArg;
 use crate::progress::Bars;
+use anyhow::Context;
 use innersphere::build::{BuildCache, BuildOptions, CacheOutcome, Preset};
 use innersphere::SphereTree;
 use std::path::{Path, PathBuf};
@@ -112,4 +113,28 @@ pub fn load_body(
         ),
     }
     Ok((tree, Some(mesh)))
+}
+
+/// `tree` with its mesh for the refined distance: `given` (--meshes), else the body's own
+/// mesh, else the mesh the tree names as its source; an error that says which to give.
+pub fn with_mesh(
+    tree: innersphere::SharedTree,
+    given: Option<&PathBuf>,
+    own: Option<innersphere::Mesh>,
+    body: &str,
+) -> anyhow::Result<innersphere::SharedTree> {
+    let mesh = match (given, own) {
+        (Some(p), _) => crate::files::load_mesh(p)?,
+        (None, Some(m)) => m,
+        (None, None) => match &tree.meta.source {
+            Some(src) => src.load().with_context(|| {
+                format!("body {body}'s tree names its mesh, but it cannot be used: give --meshes MESH_A MESH_B")
+            })?,
+            None => anyhow::bail!(
+                "the refined distance needs the meshes: body {body}'s tree does not name the mesh it was built from; give --meshes MESH_A MESH_B"
+            ),
+        },
+    };
+    tree.with_mesh(&mesh)
+        .with_context(|| format!("body {body}'s mesh"))
 }

@@ -134,8 +134,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let (mut a, mut b) = (SharedTree::new(a), SharedTree::new(b));
     if args.query == Kind::RefinedDistance {
         let given = args.meshes.as_deref().unwrap_or(&[]);
-        a = with_mesh(a, given.first(), mesh_a, "A")?;
-        b = with_mesh(b, given.get(1), mesh_b, "B")?;
+        a = crate::bodies::with_mesh(a, given.first(), mesh_a, "A")?;
+        b = crate::bodies::with_mesh(b, given.get(1), mesh_b, "B")?;
     }
     let pose_a = Pose::IDENTITY;
     let mut pair = Pair::new(a, b);
@@ -415,28 +415,4 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         println!("{summary}");
     }
     Ok(0)
-}
-
-/// `tree` with its mesh for the refined distance: `given` (--meshes), else the body's own
-/// mesh, else the mesh the tree names as its source; an error that says which to give.
-fn with_mesh(
-    tree: SharedTree,
-    given: Option<&PathBuf>,
-    own: Option<innersphere::Mesh>,
-    body: &str,
-) -> anyhow::Result<SharedTree> {
-    let mesh = match (given, own) {
-        (Some(p), _) => crate::files::load_mesh(p)?,
-        (None, Some(m)) => m,
-        (None, None) => match &tree.meta.source {
-            Some(src) => src.load().with_context(|| {
-                format!("body {body}'s tree names its mesh, but it cannot be used: give --meshes MESH_A MESH_B")
-            })?,
-            None => anyhow::bail!(
-                "--query refined-distance needs the meshes: body {body}'s tree does not name the mesh it was built from; give --meshes MESH_A MESH_B"
-            ),
-        },
-    };
-    tree.with_mesh(&mesh)
-        .with_context(|| format!("body {body}'s mesh"))
 }

@@ -318,6 +318,74 @@ fn query_refines_the_distance_to_the_meshes() {
     assert!(stderr(&out).contains("--exact"), "{}", stderr(&out));
 }
 
+/// `ist bench batch` times every batch kind, the refined distance with the meshes its trees
+/// name (or `--meshes`), and every thread count answers the same bits; another body's mesh
+/// and an unknown kind are errors.
+#[test]
+fn bench_batch_runs_every_kind_with_the_same_answers_on_any_thread_count() {
+    let dir = fixture("bench-batch");
+    let (box_ist, ball_ist) = (dir.path("box.ist"), dir.path("ball.ist"));
+    let bench = |query: &str, extra: &[&str], want: i32| {
+        let mut args = vec![
+            "bench",
+            "batch",
+            s(&box_ist),
+            s(&ball_ist),
+            "--poses",
+            "40",
+            "--mm",
+            "3",
+            "--query",
+            query,
+            "--threads",
+            "1,2",
+            "--repeat",
+            "1",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        ist_json(&args, want)
+    };
+    for query in ["distance", "refined-distance", "contact", "penetration"] {
+        let rows = bench(query, &[], 0);
+        let rows = rows.as_array().unwrap();
+        assert_eq!(rows.len(), 2, "{query}: {rows:?}");
+        assert!(rows.iter().all(|r| r["same_answers"] == true), "{query}");
+    }
+    let (box_stl, ball_obj) = (dir.path("box.stl"), dir.path("ball.obj"));
+    let given = [s(&box_stl), s(&ball_obj)];
+    bench("refined-distance", &["--meshes", given[0], given[1]], 0);
+    let out = ist(&[
+        "bench",
+        "batch",
+        s(&box_ist),
+        s(&ball_ist),
+        "--poses",
+        "4",
+        "--query",
+        "refined-distance",
+        "--meshes",
+        given[1],
+        given[1],
+    ]);
+    assert_eq!(code(&out), 2);
+    assert!(stderr(&out).contains("not the mesh"), "{}", stderr(&out));
+    let out = ist(&[
+        "bench",
+        "batch",
+        s(&box_ist),
+        s(&ball_ist),
+        "--query",
+        "volume",
+    ]);
+    assert_eq!(code(&out), 2);
+    assert!(
+        stderr(&out).contains("refined-distance"),
+        "{}",
+        stderr(&out)
+    );
+}
+
 #[test]
 fn errors_exit_with_code_2() {
     let dir = fixture("errors");

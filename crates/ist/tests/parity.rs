@@ -110,13 +110,14 @@ fn every_planning_tool_reaches_ist_and_python() {
     }
 }
 
-/// Every batch of the library (`query::batch`'s `…_many`) reaches the C ABI and the Python
-/// module (`ist bench batch` times them). Read from the batch module's source.
+/// Every batch of the library (`query::batch`'s `…_many`) reaches the C ABI, the Python
+/// module and `ist bench batch --query`. Read from the batch module's source.
 #[test]
-fn every_batch_reaches_c_and_python() {
+fn every_batch_reaches_c_python_and_ist_bench_batch() {
     let src = read("crates/innersphere/src/query/batch.rs");
     let header = read("include/innersphere.h");
     let stubs = read("crates/innersphere-py/python/innersphere/_innersphere.pyi");
+    let bench = read("crates/innersphere-eval/src/bench.rs");
     let batches: Vec<&str> = src
         .split("pub fn ")
         .skip(1)
@@ -127,5 +128,10 @@ fn every_batch_reaches_c_and_python() {
     for k in batches {
         assert!(header.contains(&format!(" ist_{k}(")), "C: ist_{k}");
         assert!(stubs.contains(&format!("def {k}(")), "Python: Pair.{k}");
+        let kind = k.trim_end_matches("_many").replace('_', "-");
+        assert!(
+            bench.contains(&format!("\"{kind}\" =>")) && bench.contains(&format!("batch::{k}(")),
+            "ist bench batch --query {kind}"
+        );
     }
 }

@@ -392,20 +392,42 @@ impl Tree {
         Ok(PyBytes::new(py, &bytes))
     }
 
-    /// A tree from the bytes of a tree file (checked as Tree.load checks a file).
+    /// A tree from the bytes of a tree file (checked as Tree.load checks a file), with
+    /// `mesh` attached as Tree.with_mesh does when given.
     #[staticmethod]
-    fn from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<Tree> {
+    #[pyo3(signature = (data, mesh=None))]
+    fn from_bytes(py: Python<'_>, data: &[u8], mesh: Option<&Bound<'_, PyAny>>) -> PyResult<Tree> {
         let tree = py.detach(|| file::from_bytes(data)).map_err(error)?;
-        Ok(Tree::new(tree, None))
+        let tree = Tree::new(tree, None);
+        match mesh {
+            Some(m) => tree.with_mesh(py, m),
+            None => Ok(tree),
+        }
     }
 
-    /// Pickling goes through the tree file's bytes.
+    /// Pickling goes through the tree file's bytes, and the mesh's vertices and faces when
+    /// the tree carries its mesh (the receiver prepares it again, as Tree.with_mesh does).
     fn __reduce__<'py>(
         &self,
         py: Python<'py>,
-    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
         let ctor = py.get_type::<Tree>().getattr("from_bytes")?;
-        Ok((ctor, (self.to_bytes(py)?,)))
+        let bytes = self.to_bytes(py)?.into_any();
+        let args = match self.shared.mesh() {
+            None => PyTuple::new(py, [bytes])?,
+            Some(m) => {
+                let m = m.mesh();
+                let v: Vec<Vec<f64>> = m.vertices.iter().map(|p| p.to_array().to_vec()).collect();
+                let f: Vec<Vec<u32>> = m.triangles.iter().map(|t| t.to_vec()).collect();
+                let v = PyArray2::from_vec2(py, &v)
+                    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+                let f = PyArray2::from_vec2(py, &f)
+                    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+                let mesh = PyTuple::new(py, [v.into_any(), f.into_any()])?;
+                PyTuple::new(py, [bytes, mesh.into_any()])?
+            }
+        };
+        Ok((ctor, args))
     }
 
     /// The inner spheres (the leaves): a float64 array of shape (leaf_count, 4), one row

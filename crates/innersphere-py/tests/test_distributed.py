@@ -232,3 +232,29 @@ def test_occlude_many_keeps_order_and_reports_a_bad_pair(client, tmp_path):
     assert free[0] == free[1] == innersphere.occlude(a, b, START, free=True, starts=3)
     with pytest.raises(ValueError, match="start poses"):
         isd.occlude_many(client, [(pa, pb)] * 3, [START, START])
+
+
+def test_a_tree_with_its_mesh_pickles_with_it(trees, meshes):
+    import pickle
+
+    am = trees[0].with_mesh(meshes["box"])
+    back = pickle.loads(pickle.dumps(am))
+    assert back.has_mesh and not pickle.loads(pickle.dumps(trees[0])).has_mesh
+    assert back.to_bytes() == am.to_bytes()
+    bm = trees[1].with_mesh(meshes["ellipsoid"])
+    poses = random_poses(40, 7)
+    want = innersphere.Pair(am, bm).refined_distance_many(poses)
+    assert same(innersphere.Pair(back, bm).refined_distance_many(poses), want)
+
+
+def test_sweep_of_the_refined_distance_equals_the_local_batch(client, trees, tree_files, meshes):
+    am, bm = trees[0].with_mesh(meshes["box"]), trees[1].with_mesh(meshes["ellipsoid"])
+    poses = random_poses(2000, 5)
+    local = innersphere.Pair(am, bm).refined_distance_many(poses, chunk=1)
+    got = isd.sweep(client, am, bm, poses, query="refined-distance", chunk=500)
+    assert same(got, local)
+    assert got["contact"].any() and not got["contact"].all()
+    with pytest.raises(ValueError, match="with_mesh"):
+        isd.sweep(client, *trees, poses, query="refined-distance")
+    with pytest.raises(ValueError, match="with_mesh"):
+        isd.sweep(client, *tree_files, poses, query="refined-distance")

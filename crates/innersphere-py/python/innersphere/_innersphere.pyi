@@ -103,8 +103,10 @@ class Tree:
     def to_bytes(self) -> bytes:
         """The tree file's bytes."""
     @staticmethod
-    def from_bytes(data: bytes) -> "Tree":
-        """A tree from a tree file's bytes (checked as ``Tree.load`` checks a file)."""
+    def from_bytes(data: bytes, mesh: Optional[_MeshLike] = None) -> "Tree":
+        """A tree from a tree file's bytes (checked as ``Tree.load`` checks a file), with
+        ``mesh`` attached as ``with_mesh`` does when given. A pickled tree that carries its
+        mesh comes back with it."""
     @property
     def spheres(self) -> _FloatArray:
         """The inner spheres (leaves): shape (leaf_count, 4), rows (x, y, z, r)."""

@@ -17,7 +17,7 @@ brings its own object store and runtime to install for what is a map over chunks
 - ``occlude_many(client, pairs, from_poses)``: the bite (``occlude``) of many jaw pairs.
 
 A sweep sends its trees once to every worker (``client.scatter(..., broadcast=True)``; a
-``Tree`` pickles as its file's bytes), where they stay for all its chunks. To send them once
+``Tree`` pickles as its file's bytes, and its mesh's arrays when it carries one), where they stay for all its chunks. To send them once
 for many sweeps, scatter them yourself and pass the futures:
 ``fa, fb = client.scatter([tree_a, tree_b], broadcast=True)``. (Content-keyed scatters,
 ``hash=True``, are not used: a later sweep re-scattering the key while the scheduler releases
@@ -50,6 +50,7 @@ __all__ = ["sweep", "balanced_chunk", "build_many", "contact_map_many", "occlude
 #: The query kinds of ``sweep`` and the batch method each one runs.
 QUERIES = {
     "distance": "distance_many",
+    "refined-distance": "refined_distance_many",
     "contact": "contact_many",
     "penetration": "penetration_many",
 }
@@ -106,10 +107,15 @@ DEFAULT_TASK_POSES = 65536
 """The most poses ``balanced_chunk`` puts in one task unless told (about a second of
 distance on one core of the jaw pair)."""
 
-TASK_POSES = {"distance": DEFAULT_TASK_POSES, "contact": DEFAULT_TASK_POSES, "penetration": 1024}
+TASK_POSES = {
+    "distance": DEFAULT_TASK_POSES,
+    "refined-distance": 16384,
+    "contact": DEFAULT_TASK_POSES,
+    "penetration": 1024,
+}
 """The most poses ``sweep`` puts in one task by default, per query: about a second of one
-core's work on the jaw pair (penetration answers ~700 poses a second where distance answers
-~55,000), so that a lost worker's task is cheap to redo."""
+core's work on the jaw pair (penetration answers ~700 poses a second, the refined distance
+~20,000, distance ~55,000), so that a lost worker's task is cheap to redo."""
 
 MIN_TASK_POSES = 1024
 """The fewest poses ``sweep`` puts in one task by default, where there are poses enough:
@@ -157,8 +163,10 @@ def sweep(
         every worker), or futures of trees already scattered to the cluster (sent by the
         caller once for many sweeps).
     poses: B's poses, ``(N, 7)`` or ``(N, 4, 4)``. pose_a: None, one pose, or N poses.
-    query: "distance" (float64 (N,)), "contact" (bool (N,)) or "penetration" (a dict of
-        arrays, as ``Pair.penetration_many``; ``stiffness`` applies).
+    query: "distance" (float64 (N,)), "refined-distance" (a dict of arrays, as
+        ``Pair.refined_distance_many``; both trees must carry their meshes, ``Tree.with_mesh``,
+        which travel with them), "contact" (bool (N,)) or "penetration" (a dict of arrays, as
+        ``Pair.penetration_many``; ``stiffness`` applies).
     chunk: poses per task; a multiple of ``batch_chunk`` (each task answers its poses in
         fresh-state chunks of ``batch_chunk``, exactly as the local call does). None (the
         default): equal tasks, as many as a whole number of rounds of the cluster's worker
@@ -199,6 +207,10 @@ def sweep(
             if len(a_each) != n:
                 raise ValueError(f"pose_a: {len(a_each)} poses for a batch of {n}")
     ta, tb = _tree(tree_a), _tree(tree_b)
+    if query == "refined-distance" and any(isinstance(t, Tree) and not t.has_mesh for t in (ta, tb)):
+        raise ValueError(
+            "query 'refined-distance' needs both trees with their meshes: Tree.with_mesh(mesh)"
+        )
     kwargs: Dict[str, Any] = {"chunk": batch_chunk, "threads": threads}
     if query == "penetration":
         kwargs["stiffness"] = stiffness
@@ -227,10 +239,10 @@ def sweep(
     parts = client.gather(futures)
     for k, (start, part) in enumerate(zip(range(0, n, chunk), parts)):
         want = min(chunk, n - start)
-        got = len(part["volume"]) if isinstance(part, dict) else len(part)
+        got = len(next(iter(part.values()))) if isinstance(part, dict) else len(part)
         if got != want:
             raise RuntimeError(f"chunk {k} came back with {got} answers for {want} poses")
-    if query == "penetration":
+    if isinstance(parts[0], dict):
         return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
     return np.concatenate(parts)
 

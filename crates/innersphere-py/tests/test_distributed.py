@@ -258,3 +258,44 @@ def test_sweep_of_the_refined_distance_equals_the_local_batch(client, trees, tre
         isd.sweep(client, *trees, poses, query="refined-distance")
     with pytest.raises(ValueError, match="with_mesh"):
         isd.sweep(client, *tree_files, poses, query="refined-distance")
+
+
+def test_the_trees_only_holder_killed_mid_sweep_loses_nothing(client, trees, monkeypatch):
+    """The trees' only copy on a worker killed as the sweep starts (as when the scheduler
+    keeps fewer replicas than were broadcast): the answers are the local batch's. Whether the
+    other worker fetched a copy before the kill is a race; when it did not, its chunks are
+    cancelled and must run again on trees scattered anew (before that, the sweep raised
+    FuturesCancelledError)."""
+    poses = random_poses(20000, 8)
+    local = innersphere.Pair(*trees).penetration_many(poses, chunk=16)
+    holder = sorted(client.scheduler_info()["workers"])[0]
+    real = client.scatter
+    calls = []
+
+    def scatter(data, **kw):
+        calls.append(kw)
+        if len(calls) <= 2:  # the first sweep's two trees: on one worker only
+            return real(data, workers=[holder], hash=False)
+        return real(data, **kw)
+
+    monkeypatch.setattr(client, "scatter", scatter)
+    out = {}
+
+    def run():
+        out["got"] = isd.sweep(client, *trees, poses, query="penetration", chunk=160, batch_chunk=16)
+
+    th = threading.Thread(target=run)
+    th.start()
+    deadline = time.time() + 60
+    while not any(client.processing().values()) and time.time() < deadline:
+        time.sleep(0.01)
+    try:
+        client.run(os._exit, 1, workers=[holder])
+    except Exception:
+        pass  # the worker died under the call
+    th.join(timeout=300)
+    assert not th.is_alive()
+    assert "got" in out, "the sweep raised"
+    assert len(calls) in (2, 4), calls  # scattered again at most once
+    assert same(out["got"], local)
+    client.wait_for_workers(2, timeout=60)

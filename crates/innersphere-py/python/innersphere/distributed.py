@@ -43,6 +43,11 @@ except ImportError as e:  # pragma: no cover - exercised only without the extra
         '(or pip install "dask[distributed]")'
     ) from e
 
+try:  # what wait raises for cancelled futures (distributed ≥ 2024; asyncio's before)
+    from distributed.client import FuturesCancelledError as _Cancelled
+except ImportError:  # pragma: no cover
+    from asyncio import CancelledError as _Cancelled  # type: ignore[assignment]
+
 from ._innersphere import Pair, Tree, contact_map, occlude
 
 __all__ = ["sweep", "balanced_chunk", "build_many", "contact_map_many", "occlude_many", "QUERIES"]
@@ -222,20 +227,44 @@ def sweep(
     if chunk is None:
         chunk = balanced_chunk(n, sum(client.nthreads().values()), batch_chunk, TASK_POSES[query])
     # Fresh keys per sweep (hash=False): see the module's note on content-keyed scatters.
-    fa, fb = (
-        t if isinstance(t, Future) else client.scatter(t, broadcast=True, hash=False)
-        for t in (ta, tb)
-    )
-    futures = []
-    for start in range(0, n, chunk):
+    def scatter() -> List[Any]:
+        return [
+            t if isinstance(t, Future) else client.scatter(t, broadcast=True, hash=False)
+            for t in (ta, tb)
+        ]
+
+    trees = scatter()
+
+    def submit(start: int) -> Future:
         part = b[start : start + chunk]
         pa_part = a_each[start : start + chunk] if a_each is not None else a_one
-        futures.append(
-            client.submit(
-                _sweep_chunk, fa, fb, part, pa_part, method, kwargs, retries=retries, pure=False
-            )
+        return client.submit(
+            _sweep_chunk, trees[0], trees[1], part, pa_part, method, kwargs, retries=retries, pure=False
         )
-    _show(futures, progress)
+
+    starts = list(range(0, n, chunk))
+    futures = [submit(start) for start in starts]
+    if progress:
+        _dask_progress(futures)
+    # A lost worker can take the last copy of a scattered tree with it (the scheduler may
+    # keep fewer replicas than were broadcast): the tasks that needed it are cancelled, and
+    # run again on the trees scattered anew.
+    for attempt in range(retries + 1):
+        try:
+            wait(futures)
+        except _Cancelled:
+            pass
+        lost = [k for k, f in enumerate(futures) if f.status == "cancelled"]
+        if not lost:
+            break
+        if attempt == retries or any(isinstance(t, Future) for t in (ta, tb)):
+            raise RuntimeError(
+                f"{len(lost)} of {len(futures)} chunks were cancelled (a lost worker held the "
+                "trees' last copy); sweep again, or scatter the trees anew"
+            )
+        trees = scatter()
+        for k in lost:
+            futures[k] = submit(starts[k])
     parts = client.gather(futures)
     for k, (start, part) in enumerate(zip(range(0, n, chunk), parts)):
         want = min(chunk, n - start)

@@ -147,24 +147,23 @@ def test_sweep_refuses_bad_input(client, trees):
     assert isd.sweep(client, *trees, poses[:0]).shape == (0,)
 
 
-def test_a_worker_killed_mid_sweep_loses_nothing(client, trees):
-    poses = random_poses(40000, 6)
-    local = innersphere.Pair(*trees).penetration_many(poses, chunk=16)
+def sweep_killing(client, trees, poses, pick):
+    """A penetration sweep of `poses` (chunks of 160, batch chunks of 16) that kills worker
+    `pick(busy)` (`busy`: the workers running a chunk) as soon as a chunk runs; its nanny
+    starts a new one. Returns (what the sweep returned, or None if it raised; the victim)."""
     out = {}
 
     def run():
         out["got"] = isd.sweep(client, *trees, poses, query="penetration", chunk=160, batch_chunk=16)
 
-    before = set(client.scheduler_info()["workers"])
     th = threading.Thread(target=run)
     th.start()
-    # Kill a worker process while it runs a chunk; its nanny starts a new one.
     victim = None
     deadline = time.time() + 60
     while victim is None and time.time() < deadline:
         busy = [w for w, tasks in client.processing().items() if tasks]
         if busy:
-            victim = busy[0]
+            victim = pick(busy)
         else:
             time.sleep(0.01)
     assert victim is not None, "no task ran"
@@ -174,7 +173,15 @@ def test_a_worker_killed_mid_sweep_loses_nothing(client, trees):
         pass  # the worker died under the call
     th.join(timeout=300)
     assert not th.is_alive()
-    assert same(out["got"], local)
+    return out.get("got"), victim
+
+
+def test_a_worker_killed_mid_sweep_loses_nothing(client, trees):
+    poses = random_poses(40000, 6)
+    local = innersphere.Pair(*trees).penetration_many(poses, chunk=16)
+    before = set(client.scheduler_info()["workers"])
+    got, victim = sweep_killing(client, trees, poses, lambda busy: busy[0])
+    assert got is not None and same(got, local)
     client.wait_for_workers(2, timeout=60)
     assert victim not in set(client.scheduler_info()["workers"]) and victim in before
 
@@ -279,23 +286,8 @@ def test_the_trees_only_holder_killed_mid_sweep_loses_nothing(client, trees, mon
         return real(data, **kw)
 
     monkeypatch.setattr(client, "scatter", scatter)
-    out = {}
-
-    def run():
-        out["got"] = isd.sweep(client, *trees, poses, query="penetration", chunk=160, batch_chunk=16)
-
-    th = threading.Thread(target=run)
-    th.start()
-    deadline = time.time() + 60
-    while not any(client.processing().values()) and time.time() < deadline:
-        time.sleep(0.01)
-    try:
-        client.run(os._exit, 1, workers=[holder])
-    except Exception:
-        pass  # the worker died under the call
-    th.join(timeout=300)
-    assert not th.is_alive()
-    assert "got" in out, "the sweep raised"
+    got, _ = sweep_killing(client, trees, poses, lambda busy: holder)
+    assert got is not None, "the sweep raised"
     assert len(calls) in (2, 4), calls  # scattered again at most once
-    assert same(out["got"], local)
+    assert same(got, local)
     client.wait_for_workers(2, timeout=60)

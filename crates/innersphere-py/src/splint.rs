@@ -20,7 +20,8 @@ type SplintOut<'py> = (
 /// frame and a dict of its measurements (the JSON of `ist splint`, with `opened` and
 /// `pose`). `open`: an incisal opening about the hinge (mm) applied after the pose, or
 /// "auto" for the least that leaves room for the wafer. Options default as in `ist splint`.
-/// `out`: also write it as a binary STL there. Runs on all cores with the interpreter
+/// `out`: also write it there, as binary STL (`.stl`) or OBJ (`.obj`), compressed when the
+/// name ends in `.gz`; another name is refused before the work. Runs on all cores with the interpreter
 /// released.
 #[pyfunction]
 #[pyo3(signature = (a, b, pose_b=None, open=None, clearance=None, coverage=None,
@@ -57,13 +58,18 @@ pub fn splint<'py>(
         })?),
     };
     let out = out.map(convert::path).transpose()?;
+    if let Some(p) = &out {
+        // Before the work: a name that promises another format, or a folder that is missing.
+        innersphere::mesh::SAVED_MESH.check(p).map_err(error)?;
+        innersphere::output::ensure_folder_writable(p).map_err(error)?;
+    }
     let ma = mesh_like(py, a, "a", false)?;
     let mb = mesh_like(py, b, "b", false)?;
     let s = py
         .detach(|| -> innersphere::Result<_> {
             let s = make_opened(&ma, &mb, &pose, opening, &opts)?;
             if let Some(p) = &out {
-                innersphere::mesh::save_stl(&s.mesh, p)?;
+                innersphere::mesh::save(&s.mesh, p)?;
             }
             Ok(s)
         })

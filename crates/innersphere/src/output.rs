@@ -65,12 +65,28 @@ pub fn ensure_not_input(output: &Path, inputs: &[&Path]) -> Result<()> {
     }
 }
 
-/// An error when two of `outputs` are the same path or the same existing file (one would
-/// overwrite the other within the run).
+/// `path` as the file system will resolve it, for comparing outputs that may not exist yet:
+/// its folder's canonical path (when the folder exists) joined with its name, else the path
+/// made absolute lexically (`.` components removed). `out/q.ply`, `./out/q.ply` and
+/// `out/../out/q.ply` are one file.
+fn resolved(path: &Path) -> PathBuf {
+    let parent = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    match (parent.canonicalize(), path.file_name()) {
+        (Ok(dir), Some(name)) => dir.join(name),
+        _ => std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()),
+    }
+}
+
+/// An error when two of `outputs` are the same path or the same file (one would overwrite
+/// the other within the run): the same existing file ([`same_file`]), or two spellings of
+/// one path that does not exist yet (`out/q.ply` and `./out/q.ply`).
 pub fn ensure_distinct_outputs(outputs: &[&Path]) -> Result<()> {
     for (i, a) in outputs.iter().enumerate() {
         for b in &outputs[i + 1..] {
-            if a == b || same_file(a, b) {
+            if a == b || same_file(a, b) || resolved(a) == resolved(b) {
                 return Err(Error::Output(format!(
                     "two outputs are the same file ({} and {}): give each its own file",
                     a.display(),
@@ -80,6 +96,75 @@ pub fn ensure_distinct_outputs(outputs: &[&Path]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// What an output file is and the names it may have: a command writes one format per output,
+/// and a name whose extension promises another (`map.stl` for a PLY, `map.ply.gz` written
+/// uncompressed) is refused before any work rather than written with the wrong bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OutputKind {
+    /// What the file holds, for messages ("the contact map (PLY)").
+    pub what: &'static str,
+    /// The accepted extensions, lower case, without the leading dot; a `.gz` ending is listed
+    /// where the writer compresses (`"ply.gz"`).
+    pub extensions: &'static [&'static str],
+}
+
+impl OutputKind {
+    /// An error naming the accepted extensions when `path`'s does not match one (case
+    /// does not matter).
+    pub fn check(&self, path: &Path) -> Result<()> {
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        if self
+            .extensions
+            .iter()
+            .any(|e| name.len() > e.len() + 1 && name.ends_with(&format!(".{e}")))
+        {
+            return Ok(());
+        }
+        let list: Vec<String> = self.extensions.iter().map(|e| format!(".{e}")).collect();
+        Err(Error::Output(format!(
+            "{}: {} is written with the extension {}; the name promises another format",
+            path.display(),
+            self.what,
+            list.join(", ")
+        )))
+    }
+}
+
+/// An error when the folder that is to hold `path` does not exist, is not a folder, or
+/// refuses a new file: found before the work, not after it. Probed by creating and removing
+/// a temporary file there (the only test that sees permissions, read-only mounts and full
+/// quotas alike).
+pub fn ensure_folder_writable(path: &Path) -> Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let why = match std::fs::metadata(dir) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            Some("the folder does not exist; create it first".to_string())
+        }
+        Err(e) => Some(e.to_string()),
+        Ok(m) if !m.is_dir() => Some(format!("{} is not a folder", dir.display())),
+        Ok(_) => match tempfile::Builder::new()
+            .prefix(".innersphere-probe.")
+            .tempfile_in(dir)
+        {
+            Ok(_) => None,
+            Err(e) => Some(temp_error(dir, e).to_string()),
+        },
+    };
+    match why {
+        None => Ok(()),
+        Some(why) => Err(Error::Output(format!(
+            "{} cannot be written: {why}",
+            path.display()
+        ))),
+    }
 }
 
 /// Writes the file `path` with `write`, through a temporary file in the same folder renamed
@@ -155,16 +240,25 @@ pub fn write_atomic(
 
 /// [`write_atomic`] of `bytes`, gzip-compressed when `path` ends in `.gz` (any case).
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_stream(path, |w| w.write_all(bytes))
+}
+
+/// [`write_atomic`], gzip-compressed when `path` ends in `.gz` (any case): `write` sees the
+/// uncompressed stream.
+pub fn write_stream(
+    path: &Path,
+    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<()> {
     let gz = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
     write_atomic(path, |w| {
         if gz {
             let mut enc = flate2::write::GzEncoder::new(w, flate2::Compression::default());
-            enc.write_all(bytes)?;
+            write(&mut enc)?;
             enc.finish().map(drop)
         } else {
-            w.write_all(bytes)
+            write(w)
         }
     })
 }

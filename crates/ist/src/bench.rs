@@ -1,6 +1,7 @@
 //! `ist bench`: benchmarks whose numbers go into BENCHMARKS.md.
 
 use crate::build::BuildArgs;
+use anyhow::Context;
 use std::path::PathBuf;
 
 /// Arguments of `ist bench`.
@@ -113,8 +114,22 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             use innersphere_eval::paper::{run, PaperOptions, FILES};
             // Every file the run may write into --out, checked against the inputs before
             // the minutes of work.
+            // The folder is the run's own: made here, so that its check sees it.
+            std::fs::create_dir_all(&out)
+                .with_context(|| format!("creating the output folder {}", out.display()))?;
             let outputs: Vec<PathBuf> = FILES.iter().map(|f| out.join(f)).collect();
-            let outputs: Vec<&std::path::Path> = outputs.iter().map(|p| p.as_path()).collect();
+            let outputs: Vec<(&std::path::Path, _)> = outputs
+                .iter()
+                .map(|p| {
+                    let png = p.extension().is_some_and(|e| e == "png");
+                    let kind = if png {
+                        crate::files::PNG_FILE
+                    } else {
+                        crate::files::CSV_FILE
+                    };
+                    (p.as_path(), kind)
+                })
+                .collect();
             crate::files::check_outputs(&outputs, &[&a, &b, &motion])?;
             let ma = crate::files::load_mesh(&a)?;
             let mb = crate::files::load_mesh(&b)?;

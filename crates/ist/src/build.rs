@@ -127,7 +127,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     // Bad flags and an output that would overwrite the mesh fail before a large mesh is
     // loaded.
     innersphere::build::validate_options(&args.opts.options())?;
-    crate::files::check_outputs(&[&args.output], &[&args.mesh])?;
+    crate::files::check_outputs(&[(&args.output, crate::files::TREE_FILE)], &[&args.mesh])?;
     let bars = Bars::new(args.quiet);
     let mesh = crate::files::load_mesh(&args.mesh)?;
     let t_load = t0.elapsed().as_secs_f64();

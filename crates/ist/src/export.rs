@@ -29,7 +29,11 @@ enum Format {
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     if let Some(p) = &args.output {
-        crate::files::check_outputs(&[p], &[&args.tree])?;
+        let kind = match args.format {
+            Format::Ply => crate::files::SPHERES_PLY,
+            Format::Csv => crate::files::PLAIN_CSV,
+        };
+        crate::files::check_outputs(&[(p, kind)], &[&args.tree])?;
     }
     let tree = crate::files::load_tree(&args.tree)?;
     let which = if args.all_nodes {

@@ -2,17 +2,51 @@
 //! a file of the other kind (and the fix), outputs checked against the inputs before any
 //! work, and the warning for a tree not built by the current builder.
 
-/// Refuses, before any work, outputs that are one of the inputs or the same file twice: the
-/// library's [`innersphere::output`] checks (canonical paths, and device and inode on Unix, so
-/// links are caught). Every output is then written through
-/// [`innersphere::output::write_atomic`].
+use innersphere::output::OutputKind;
+
+/// A tree file (`ist build -o`).
+pub const TREE_FILE: OutputKind = OutputKind {
+    what: "a tree file",
+    extensions: &["ist"],
+};
+/// A CSV written through [`innersphere::output::write_file`] (compressed when named `.gz`).
+pub const CSV_FILE: OutputKind = OutputKind {
+    what: "a CSV table",
+    extensions: &["csv", "csv.gz"],
+};
+/// A CSV written as it is (`ist replay --csv`, `ist export --format csv`).
+pub const PLAIN_CSV: OutputKind = OutputKind {
+    what: "a CSV table",
+    extensions: &["csv"],
+};
+/// A chart.
+pub const PNG_FILE: OutputKind = OutputKind {
+    what: "a PNG picture",
+    extensions: &["png"],
+};
+/// The spheres of a tree as PLY (`ist export --format ply`).
+pub const SPHERES_PLY: OutputKind = OutputKind {
+    what: "the spheres as PLY",
+    extensions: &["ply"],
+};
+
+/// Refuses, before any work, outputs whose names promise another format than the one
+/// written ([`OutputKind::check`]), outputs that are one of the inputs or the same file
+/// twice (the library's [`innersphere::output`] checks: canonical paths, and device and inode
+/// on Unix, so links are caught), and outputs whose folder is missing or not writable. Every
+/// output is then written through [`innersphere::output::write_atomic`].
 pub fn check_outputs(
-    outputs: &[&std::path::Path],
+    outputs: &[(&std::path::Path, OutputKind)],
     inputs: &[&std::path::Path],
 ) -> anyhow::Result<()> {
-    innersphere::output::ensure_distinct_outputs(outputs)?;
-    for o in outputs {
+    let paths: Vec<&std::path::Path> = outputs.iter().map(|o| o.0).collect();
+    for o in &paths {
         innersphere::output::ensure_not_input(o, inputs)?;
+    }
+    innersphere::output::ensure_distinct_outputs(&paths)?;
+    for (path, kind) in outputs {
+        kind.check(path)?;
+        innersphere::output::ensure_folder_writable(path)?;
     }
     Ok(())
 }

@@ -76,8 +76,8 @@ fn parse_class(s: &str) -> Result<DeviceClass, String> {
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     let mut outputs = vec![];
-    outputs.extend(args.trace.as_deref());
-    outputs.extend(args.plot.as_deref());
+    outputs.extend(args.trace.as_deref().map(|p| (p, crate::files::CSV_FILE)));
+    outputs.extend(args.plot.as_deref().map(|p| (p, crate::files::PNG_FILE)));
     crate::files::check_outputs(&outputs, &[&args.a, &args.b, &args.device])?;
     let mut opts = HapticOptions::for_device_at(args.device_class, args.rate);
     opts.budget = args.budget_us.map_or(1.0 / args.rate, |us| us * 1e-6);

@@ -66,8 +66,8 @@ fn parse_scenario(s: &str) -> Result<Kind, String> {
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     let start = Instant::now();
-    let mut outputs = vec![args.output.as_path()];
-    outputs.extend(args.labels.as_deref());
+    let mut outputs = vec![(args.output.as_path(), crate::files::CSV_FILE)];
+    outputs.extend(args.labels.as_deref().map(|p| (p, crate::files::CSV_FILE)));
     crate::files::check_outputs(&outputs, &[&args.a, &args.b])?;
     // The library's errors name the file; the context says which body it was.
     let a = crate::files::load_mesh(&args.a).context("loading body A (--a)")?;

@@ -2,7 +2,9 @@
 //! f64 from the meshes), as PLY files, with the contacts per tooth.
 
 use anyhow::Context;
-use innersphere::contact_map::{summarise, write_ply, ContactMap, Teeth, LEGEND, SPOT_GAP};
+use innersphere::contact_map::{
+    save_ply, summarise, ContactMap, Teeth, LEGEND, MAP_FILE, SPOT_GAP,
+};
 use innersphere::exact::ExactMesh;
 use innersphere::Pose;
 use serde_json::json;
@@ -27,7 +29,8 @@ pub struct Args {
     /// Pose of B in A's frame, "tx ty tz qw qx qy qz" (p' = R(q)·p + t; mm).
     #[arg(long, default_value = "0 0 0 1 0 0 0", allow_hyphen_values = true)]
     pose: String,
-    /// Output PLY of A with its per-vertex `gap` (mm) and colour.
+    /// Output PLY of A with its per-vertex `gap` (mm) and colour (`.ply`, or `.ply.gz`
+    /// compressed).
     #[arg(long)]
     out_a: Option<PathBuf>,
     /// Output PLY of B, written at the pose (in A's frame), with its `gap` and colour.
@@ -51,10 +54,10 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         .pose
         .parse()
         .with_context(|| format!("--pose \"{}\"", args.pose))?;
-    let outputs: Vec<&std::path::Path> = [&args.out_a, &args.out_b]
+    let outputs: Vec<(&std::path::Path, _)> = [&args.out_a, &args.out_b]
         .into_iter()
         .flatten()
-        .map(|p| p.as_path())
+        .map(|p| (p.as_path(), MAP_FILE))
         .collect();
     let mut inputs: Vec<&std::path::Path> = vec![&args.a, &args.b];
     inputs.extend(
@@ -80,7 +83,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         (&args.out_b, &b, &map.gaps_b, pose),
     ] {
         if let Some(p) = out {
-            innersphere::output::write_atomic(p, |w| write_ply(mesh.mesh(), &at, gaps, w))?;
+            save_ply(p, mesh.mesh(), &at, gaps)?;
         }
     }
     let side = |name: &str, mesh: &ExactMesh, gaps: &[f64], teeth: &Option<Teeth>| {

@@ -96,7 +96,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     if let Some(csv) = &args.csv {
         let mut inputs = vec![args.a.as_path(), args.b.as_path(), args.motion.as_path()];
         inputs.extend(args.exact.iter().flatten().map(|p| p.as_path()));
-        crate::files::check_outputs(&[csv], &inputs)?;
+        crate::files::check_outputs(&[(csv, crate::files::PLAIN_CSV)], &inputs)?;
     }
     anyhow::ensure!(
         args.query != Kind::RefinedDistance || args.exact.is_some(),

@@ -40,7 +40,8 @@ pub struct Args {
     /// Grid spacing (mm).
     #[arg(long, default_value_t = SplintOptions::default().voxel)]
     voxel: f64,
-    /// Output: binary STL of the splint, in A's frame.
+    /// Output: the splint in A's frame, as binary STL (`.stl`) or OBJ (`.obj`), gzip-compressed
+    /// when the name ends in `.gz`.
     #[arg(short, long)]
     out: PathBuf,
     /// Print JSON.
@@ -64,7 +65,10 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             ),
         },
     };
-    crate::files::check_outputs(&[args.out.as_path()], &[&args.a, &args.b])?;
+    crate::files::check_outputs(
+        &[(args.out.as_path(), innersphere::mesh::SAVED_MESH)],
+        &[&args.a, &args.b],
+    )?;
     let opts = SplintOptions {
         clearance: args.clearance,
         coverage: args.coverage,
@@ -76,7 +80,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let a = crate::files::load_mesh(&args.a)?;
     let b = crate::files::load_mesh(&args.b)?;
     let s = splint::make_opened(&a, &b, &pose, opening, &opts)?;
-    innersphere::mesh::save_stl(&s.mesh, &args.out)
+    innersphere::mesh::save(&s.mesh, &args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
     let r = &s.report;
     if args.json {

@@ -634,3 +634,89 @@ fn demo_refuses_one_mesh_twice_before_building() {
         0,
     );
 }
+
+/// Output names are honoured or refused before any work: a contact map named `.ply.gz` is
+/// gzip, one named `.stl` is refused (it would hold PLY bytes), a tree named `.stl` is
+/// refused, two spellings of one new path are one output, and a missing folder is found
+/// before the meshes are read.
+#[test]
+fn output_names_are_honoured_or_refused_before_the_work() {
+    let dir = fixture("names");
+    let (box_obj, ball_obj, box_ist) = (
+        dir.path("box.obj"),
+        dir.path("ball.obj"),
+        dir.path("box.ist"),
+    );
+    let map = |a: &Path, b: &Path| {
+        vec![
+            "occlusion-map".to_string(),
+            s(&box_obj).into(),
+            s(&ball_obj).into(),
+            "--out-a".into(),
+            s(a).into(),
+            "--out-b".into(),
+            s(b).into(),
+        ]
+    };
+    let go =
+        |v: Vec<String>, want: i32| run(&v.iter().map(String::as_str).collect::<Vec<_>>(), want);
+    // `.ply.gz` is written compressed, and reads back as the same PLY.
+    let (gz, plain) = (dir.path("a.ply.gz"), dir.path("b.ply"));
+    go(map(&gz, &plain), 0);
+    let bytes = std::fs::read(&gz).unwrap();
+    assert_eq!(&bytes[..2], &[0x1f, 0x8b], "a .ply.gz contact map is gzip");
+    // A contact map named as STL, a tree named as STL: refused, nothing written.
+    let stl = dir.path("map.stl");
+    let e = go(map(&stl, &dir.path("b2.ply")), 2);
+    assert!(e.contains(".ply, .ply.gz"), "{e}");
+    assert!(!stl.exists());
+    let e = run(
+        &["build", s(&box_obj), "-o", s(&dir.path("t.stl")), "-q"],
+        2,
+    );
+    assert!(e.contains("tree file") && e.contains(".ist"), "{e}");
+    let e = run(
+        &[
+            "export",
+            s(&box_ist),
+            "--format",
+            "csv",
+            "-o",
+            s(&dir.path("s.ply")),
+        ],
+        2,
+    );
+    assert!(e.contains(".csv"), "{e}");
+    // Two spellings of one path that does not exist yet.
+    std::fs::create_dir_all(dir.path("out")).unwrap();
+    let one = dir.path("out").join("q.ply");
+    let other = dir
+        .0
+        .join(".")
+        .join("out")
+        .join("..")
+        .join("out")
+        .join("q.ply");
+    let e = go(map(&one, &other), 2);
+    assert!(e.contains("two outputs are the same"), "{e}");
+    assert!(!one.exists());
+    // A missing folder: refused at once, before the meshes are loaded.
+    let missing = dir.path("nowhere").join("q.ply");
+    let start = std::time::Instant::now();
+    let e = go(map(&missing, &dir.path("b3.ply")), 2);
+    assert!(e.contains("does not exist"), "{e}");
+    assert!(start.elapsed().as_secs_f64() < 30.0);
+    let e = run(
+        &[
+            "motion",
+            "--a",
+            s(&box_obj),
+            "--b",
+            s(&ball_obj),
+            "-o",
+            s(&dir.path("gone").join("m.csv")),
+        ],
+        2,
+    );
+    assert!(e.contains("does not exist"), "{e}");
+}

@@ -13,7 +13,7 @@ mod summary;
 mod teeth;
 
 pub use colour::{gap_colour, LEGEND};
-pub use ply::write_ply;
+pub use ply::{save_ply, write_ply, MAP_FILE};
 pub use summary::{summarise, RegionSummary, SPOT_GAP};
 pub use teeth::{Teeth, Tooth, MAX_TOOTH_REACH};
 

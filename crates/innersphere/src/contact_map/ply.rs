@@ -6,6 +6,25 @@ use crate::mesh::Mesh;
 use crate::pose::Pose;
 use std::io::Write;
 
+/// The names a contact map is written to: binary PLY, gzip-compressed when the name ends in
+/// `.gz` ([`save_ply`]).
+pub const MAP_FILE: crate::output::OutputKind = crate::output::OutputKind {
+    what: "the contact map (PLY with each vertex's gap and colour)",
+    extensions: &["ply", "ply.gz"],
+};
+
+/// [`write_ply`] into the file `path` ([`MAP_FILE`]: `.ply`, or `.ply.gz` compressed),
+/// written whole or not at all ([`write_atomic`](crate::output::write_atomic)).
+pub fn save_ply(
+    path: &std::path::Path,
+    mesh: &Mesh,
+    pose: &Pose,
+    gaps: &[f64],
+) -> crate::error::Result<()> {
+    MAP_FILE.check(path)?;
+    crate::output::write_stream(path, |w| write_ply(mesh, pose, gaps, w))
+}
+
 /// Writes `mesh` at `pose` as binary little-endian PLY: per vertex `float x y z`, `float
 /// gap` (the signed gap, mm) and `uchar red green blue` ([`gap_colour`]); faces as
 /// `list uchar int vertex_indices`. `gaps` has one entry per vertex.

@@ -11,7 +11,7 @@ pub mod report;
 pub mod union_find;
 pub mod winding;
 
-pub use io::{load, load_bytes, save_obj, save_stl, Format};
+pub use io::{load, load_bytes, save, save_obj, save_stl, Format, SAVED_MESH};
 pub use mass::MassProperties;
 pub use report::MeshReport;
 

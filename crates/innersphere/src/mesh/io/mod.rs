@@ -144,6 +144,22 @@ pub fn load_bytes(bytes: &[u8], format: Format, name: &Path) -> Result<Mesh> {
     Ok(mesh)
 }
 
+/// The names [`save`] writes: binary STL or OBJ, gzip-compressed when the name ends in `.gz`.
+pub const SAVED_MESH: crate::output::OutputKind = crate::output::OutputKind {
+    what: "a mesh (binary STL or OBJ)",
+    extensions: &["stl", "stl.gz", "obj", "obj.gz"],
+};
+
+/// Writes a mesh in the format its name says ([`SAVED_MESH`]: [`save_stl`] or [`save_obj`]);
+/// any other name is refused, so that a file's bytes always match its extension.
+pub fn save(mesh: &Mesh, path: &Path) -> Result<()> {
+    SAVED_MESH.check(path)?;
+    match Format::from_path(path)? {
+        Format::Obj => save_obj(mesh, path),
+        _ => save_stl(mesh, path),
+    }
+}
+
 /// Writes a mesh as binary STL (coordinates rounded to `f32`, facet normals from the
 /// corners); gzip-compressed when the path ends in `.gz`.
 pub fn save_stl(mesh: &Mesh, path: &Path) -> Result<()> {

@@ -1246,6 +1246,26 @@ fn occlusion_map_writes_the_signed_gaps_of_both_meshes() {
         assert_eq!(code(&out), 2, "{bad:?}: {}", stdout(&out));
         assert!(stderr(&out).starts_with("error: "), "{bad:?}");
     }
+    // Far poses: refused at once with the range (1e17 ran for hours, 1e300 wrote `inf`).
+    for far in ["1e17 0 0 1 0 0 0", "1e300 0 0 1 0 0 0", "0 -2e9 0 1 0 0 0"] {
+        let ply = dir.path("far.ply");
+        let out = ist(&[
+            "occlusion-map",
+            s(&box_stl),
+            s(&ball),
+            "--pose",
+            far,
+            "--out-b",
+            s(&ply),
+        ]);
+        assert_eq!(code(&out), 2, "{far}: {}", stdout(&out));
+        assert!(
+            stderr(&out).contains("beyond the supported"),
+            "{far}: {}",
+            stderr(&out)
+        );
+        assert!(!ply.exists());
+    }
 }
 
 /// `ist splint` between generated arches: a watertight STL that `ist inspect` calls closed

@@ -33,8 +33,9 @@ pub struct ContactMap {
 
 impl ContactMap {
     /// The gaps of `a` at `pose_a` and `b` at `pose_b` (world poses), capped at `cap` (see
-    /// [`vertex_gaps`]; `f64::INFINITY` for none). Errors on a non-finite pose or a NaN or
-    /// negative cap.
+    /// [`vertex_gaps`]; `f64::INFINITY` for none). Errors on a pose that is not finite or
+    /// places its mesh beyond the supported coordinates
+    /// ([`Pose::ensure_places_within_range`]), or a NaN or negative cap.
     pub fn new(
         a: &ExactMesh,
         pose_a: &Pose,
@@ -42,12 +43,9 @@ impl ContactMap {
         pose_b: &Pose,
         cap: f64,
     ) -> Result<ContactMap> {
-        for p in [pose_a, pose_b] {
-            if !(p.translation.is_finite() && p.rotation.is_finite()) {
-                return Err(Error::InvalidOption(format!(
-                    "a contact map needs finite poses, got {p:?}"
-                )));
-            }
+        for (p, m, what) in [(pose_a, a, "A"), (pose_b, b, "B")] {
+            let (lo, hi) = m.mesh().bbox();
+            p.ensure_places_within_range(lo, hi, what)?;
         }
         if cap.is_nan() || cap < 0.0 {
             return Err(Error::InvalidOption(format!(

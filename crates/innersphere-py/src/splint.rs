@@ -20,12 +20,14 @@ type SplintOut<'py> = (
 /// frame and a dict of its measurements (the JSON of `ist splint`, with `opened` and
 /// `pose`). `open`: an incisal opening about the hinge (mm) applied after the pose, or
 /// "auto" for the least that leaves room for the wafer. Options default as in `ist splint`.
+/// A wafer that fails one of its guarantees (the report's `checks`) raises ValueError
+/// unless `keep_unfit` (then it is returned, and written, with `fit` false).
 /// `out`: also write it there, as binary STL (`.stl`) or OBJ (`.obj`), compressed when the
 /// name ends in `.gz`; another name is refused before the work. Runs on all cores with the interpreter
 /// released.
 #[pyfunction]
 #[pyo3(signature = (a, b, pose_b=None, open=None, clearance=None, coverage=None,
-                    min_thickness=None, rim=None, voxel=None, out=None))]
+                    min_thickness=None, rim=None, voxel=None, out=None, keep_unfit=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn splint<'py>(
     py: Python<'py>,
@@ -39,6 +41,7 @@ pub fn splint<'py>(
     rim: Option<f64>,
     voxel: Option<f64>,
     out: Option<&Bound<'py, PyAny>>,
+    keep_unfit: bool,
 ) -> PyResult<SplintOut<'py>> {
     let pose = pose_or_identity(pose_b, "pose_b")?;
     let d = SplintOptions::default();
@@ -68,12 +71,25 @@ pub fn splint<'py>(
     let s = py
         .detach(|| -> innersphere::Result<_> {
             let s = make_opened(&ma, &mb, &pose, opening, &opts)?;
-            if let Some(p) = &out {
+            if let Some(p) = out.as_ref().filter(|_| s.report.fit || keep_unfit) {
                 innersphere::mesh::save(&s.mesh, p)?;
             }
             Ok(s)
         })
         .map_err(error)?;
+    if !(s.report.fit || keep_unfit) {
+        let failed: Vec<String> = s
+            .report
+            .checks
+            .iter()
+            .filter(|c| !c.ok)
+            .map(|c| format!("{}: {}", c.name, c.detail))
+            .collect();
+        return Err(PyValueError::new_err(format!(
+            "the wafer is not fit to print ({}); keep_unfit=True returns it for inspection",
+            failed.join("; ")
+        )));
+    }
     let report =
         serde_json::to_value(&s.report).map_err(|e| PyValueError::new_err(e.to_string()))?;
     let n = s.mesh.vertices.len();

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 /// Arguments of `ist splint`. Lengths in the meshes' units (millimetres for dental scans).
 #[derive(clap::Args)]
 #[command(
-    after_help = "The wafer is made in A's frame and inserted along the pair's occlusal axis: undercuts along it are blocked out, so it goes on and comes off each arch.\nJSON: volume (mm³), triangles, vertices, bodies, watertight, manifold, winding_consistent, min_thickness / thickness_p01 (mm, along inward normals), min_distance_a / _b (mm, exact, over the splint's vertices), a/b_vertices_inside, coverage_a / _b (share of each arch's occlusal surface — within 3.5 mm of the other arch — within clearance + 0.15 mm of the splint), perforated_area (mm²), seconds."
+    after_help = "The wafer is made in A's frame and inserted along the pair's occlusal axis: undercuts along it are blocked out, so it goes on and comes off each arch.\nEvery measurement is made on the mesh as written and read back. Exit codes: 0 a wafer fit to print; 3 a wafer that fails a guarantee (one closed manifold body, the clearance to each arch, no arch vertex inside, the least thickness, 85 % coverage of each arch): it is not written unless --keep-unfit; 2 inputs that cannot make a wafer (another unit, flat arches, arches not facing each other, more than 10 mm apart or passing through each other), with the reason.\nJSON: fit, checks (name, ok, detail), volume (mm³), triangles, vertices, bodies, watertight, manifold, winding_consistent, min_thickness / thickness_p01 (mm, along the insertion axis), min_distance_a / _b (mm, exact, over the splint's vertices), a/b_vertices_inside, coverage_a / _b (share of each arch's occlusal surface — what the other arch sees of it along the insertion axis, up to the coverage cap — within clearance + 0.15 mm of the splint), perforated_area (mm²), out (null when not written), seconds."
 )]
 pub struct Args {
     /// Mesh of arch A (upper, fixed): .stl, .obj, .ply or .off, optionally .gz.
@@ -44,6 +44,10 @@ pub struct Args {
     /// when the name ends in `.gz`.
     #[arg(short, long)]
     out: PathBuf,
+    /// Write the wafer even when it fails one of its guarantees, for inspection (the exit
+    /// code is still 3).
+    #[arg(long)]
+    keep_unfit: bool,
     /// Print JSON.
     #[arg(long)]
     json: bool,
@@ -58,9 +62,9 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let opening = match args.open.trim() {
         "auto" => Opening::Auto,
         text => match text.parse::<f64>() {
-            Ok(o) if o.is_finite() && o.abs() <= 50.0 => Opening::By(o),
+            Ok(o) if o.is_finite() => Opening::By(o),
             _ => anyhow::bail!(
-                "--open must be `auto` or a number of millimetres within ±50, got \"{}\"",
+                "--open must be `auto` or a number of millimetres, got \"{}\"",
                 args.open
             ),
         },
@@ -80,12 +84,38 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let a = crate::files::load_mesh(&args.a)?;
     let b = crate::files::load_mesh(&args.b)?;
     let s = splint::make_opened(&a, &b, &pose, opening, &opts)?;
-    innersphere::mesh::save(&s.mesh, &args.out)
-        .with_context(|| format!("writing {}", args.out.display()))?;
     let r = &s.report;
+    let write = r.fit || args.keep_unfit;
+    if write {
+        innersphere::mesh::save(&s.mesh, &args.out)
+            .with_context(|| format!("writing {}", args.out.display()))?;
+    }
+    if !r.fit {
+        eprintln!(
+            "error: the wafer is NOT fit to print{}:",
+            if write {
+                format!(
+                    " (written to {} for inspection, --keep-unfit)",
+                    args.out.display()
+                )
+            } else {
+                format!(
+                    "; {} was not written (--keep-unfit writes it for inspection)",
+                    args.out.display()
+                )
+            }
+        );
+        for c in r.checks.iter().filter(|c| !c.ok) {
+            eprintln!("  {}: {}", c.name, c.detail);
+        }
+    }
     if args.json {
         let mut v = serde_json::to_value(r)?;
-        v["out"] = args.out.display().to_string().into();
+        v["out"] = if write {
+            args.out.display().to_string().into()
+        } else {
+            serde_json::Value::Null
+        };
         crate::print::print_json(&v)?;
     } else {
         if r.opened != 0.0 {
@@ -98,7 +128,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             r.volume,
             r.bodies,
             if r.bodies == 1 { "y" } else { "ies" },
-            if r.watertight && r.manifold && r.winding_consistent {
+            if r.checks.iter().any(|c| c.name == "solid" && c.ok) {
                 "watertight and manifold"
             } else {
                 "NOT a clean solid"
@@ -114,5 +144,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             r.seconds
         );
     }
-    Ok(0)
+    Ok(if r.fit { 0 } else { UNFIT })
 }
+
+/// The exit code of a wafer that fails one of its guarantees.
+pub const UNFIT: i32 = 3;

@@ -1304,8 +1304,54 @@ fn splint_writes_a_closed_wafer_and_refuses_bad_input() {
     assert_eq!(inspect["winding_consistent"], true);
     assert_eq!(inspect["components"], 1);
     assert_eq!(inspect["triangles"], r["triangles"]);
+    assert_eq!(r["fit"], true, "{r}");
+    // `-o x.obj` writes OBJ (it wrote STL bytes).
+    let obj = dir.path("splint.obj");
+    ist_json(
+        &[
+            "splint",
+            s(&a),
+            s(&b),
+            "--open",
+            "3",
+            "--voxel",
+            "0.2",
+            "-o",
+            s(&obj),
+            "--json",
+        ],
+        0,
+    );
+    let text = std::fs::read_to_string(&obj).unwrap();
+    assert!(text.starts_with("# written by innersphere\nv "), "{}", &text[..80]);
+    // An unfit wafer (at the interlocking bite, no room for the plate: coverage falls short)
+    // exits 3, says which guarantee failed, and is not written unless --keep-unfit.
+    let unfit = dir.path("unfit.stl");
+    let o = ist(&["splint", s(&a), s(&b), "--voxel", "0.2", "-o", s(&unfit)]);
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("NOT fit to print") && stderr(&o).contains("coverage"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!unfit.exists());
+    let o = ist(&[
+        "splint",
+        s(&a),
+        s(&b),
+        "--voxel",
+        "0.2",
+        "-o",
+        s(&unfit),
+        "--keep-unfit",
+    ]);
+    assert_eq!(code(&o), 3);
+    assert!(unfit.exists());
     let help = stdout(&ist(&["splint", "--help"]));
-    assert!(help.contains("mm") && help.contains("auto"), "{help}");
+    assert!(
+        help.contains("mm") && help.contains("auto") && help.contains("Exit codes"),
+        "{help}"
+    );
     for bad in [
         vec!["splint", s(&a), s(&b), "-o", s(&a)],
         vec!["splint", s(&a), s(&b), "--open", "wide", "-o", s(&out)],
@@ -1321,6 +1367,17 @@ fn splint_writes_a_closed_wafer_and_refuses_bad_input() {
             s(&out),
         ],
         vec!["splint", s(&a), s(&dir.path("none.stl")), "-o", s(&out)],
+        vec![
+            "splint",
+            s(&a),
+            s(&b),
+            "--pose",
+            "0 0 -100 1 0 0 0",
+            "-o",
+            s(&out),
+        ],
+        vec!["splint", s(&a), s(&b), "--open", "-50", "-o", s(&out)],
+        vec!["splint", s(&a), s(&b), "-o", s(&dir.path("splint.ply"))],
     ] {
         let o = ist(&bad);
         assert_eq!(code(&o), 2, "{bad:?}: {}", stdout(&o));

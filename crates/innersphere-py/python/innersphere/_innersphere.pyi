@@ -456,6 +456,7 @@ def splint(
     rim: Optional[float] = None,
     voxel: Optional[float] = None,
     out: Optional[_PathLike] = None,
+    keep_unfit: bool = False,
 ) -> Tuple[_FloatArray, npt.NDArray[np.uint32], Dict[str, Any]]:
     """The occlusal splint (surgical wafer) between arch ``a`` (upper, fixed) and arch ``b``
     at ``pose_b`` (default the identity), each a file path, a ``(vertices, faces)`` pair or a
@@ -464,8 +465,11 @@ def splint(
     ``opened`` and ``pose``). ``open``: an incisal opening about the hinge (mm) applied after
     the pose, or ``"auto"`` for the least that leaves room for the wafer. The options default
     as in ``ist splint`` (mm: clearance 0.1, coverage 2, min_thickness 1, rim 1.5, voxel
-    0.1). ``out``: also write it as a binary STL there. Raises OSError for unreadable or
-    unwritable files, ValueError for bad meshes, poses or options."""
+    0.1). ``out``: also write it there, as binary STL (``.stl``) or OBJ (``.obj``),
+    compressed when the name ends in ``.gz``. Every measurement is made on the mesh as
+    written; a wafer that fails a guarantee (``checks`` in the dict, ``fit`` false) raises
+    ValueError unless ``keep_unfit``. Raises OSError for unreadable or unwritable files,
+    ValueError for bad meshes, poses or options and for inputs that cannot make a wafer."""
 
 def occlude(
     tree_a: Tree,

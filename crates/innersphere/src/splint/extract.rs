@@ -19,12 +19,36 @@ use rayon::prelude::*;
 
 use super::shape::Shape;
 use crate::error::{Error, Result};
-use crate::field::grid::MAX_CELLS;
 use crate::mesh::union_find::UnionFind;
 use crate::mesh::Mesh;
 
 /// Field values are clamped to ± this many cells: only values near zero place vertices.
 const CLAMP_CELLS: f32 = 4.0;
+/// The most memory (bytes) the wafer's surface may take: its grid and the surface made from
+/// it. A bound on bytes, not on cells, so that a finer voxel is refused with a message
+/// before the allocation fails (the grid grows with the inverse cube of the voxel size).
+pub const MAX_SPLINT_BYTES: u64 = 3 << 30;
+/// Bytes per cell of the extraction grid: the field (`f32`) and surface nets' index (`u32`).
+const GRID_BYTES_PER_CELL: u64 = 8;
+/// Bytes of surface per kept column: about four vertices (surface nets' position, normal and
+/// cell, then the mesh's `f64` point) and eight triangles (surface nets' and the mesh's
+/// indices) for the top, the bottom and the walls.
+const SURFACE_BYTES_PER_COLUMN: u64 = 4 * 56 + 8 * 24;
+
+/// The refusal of a voxel size `h` whose splint would take `bytes`, naming the smallest voxel
+/// size that fits (memory grows with the inverse cube of the voxel size).
+pub fn too_fine(h: f64, bytes: u64) -> Error {
+    let fits = h * (bytes as f64 / MAX_SPLINT_BYTES as f64).cbrt();
+    Error::InvalidOption(format!(
+        "a voxel size of {h} would take about {:.1} GB for these arches, more than the {:.0} GB a splint may use; a voxel size of {:.3} or more fits",
+        bytes as f64 / 1e9,
+        MAX_SPLINT_BYTES as f64 / 1e9,
+        (fits * 1000.0).ceil() / 1000.0
+    ))
+}
+
+/// Field values within ± this many cells of zero are moved outside ([`extract`]).
+const SNAP_CELLS: f32 = 1e-3;
 
 /// The closed surface of the wafer, in A's frame.
 /// Also returns how many specks apart from the wafer were left out.
@@ -50,12 +74,13 @@ pub fn extract(s: &Shape) -> Result<(Mesh, usize)> {
     let nz = ((zhi + h - zlo) / h).ceil() as usize + 3;
     let (nx, ny) = (cx + 3, cy + 3);
     let cells = nx as u64 * ny as u64 * nz as u64;
-    if cells > MAX_CELLS || nx > u32::MAX as usize / 2 || nz > u32::MAX as usize / 2 {
-        return Err(Error::InvalidOption(format!(
-            "the splint grid would have {cells} cells (more than {MAX_CELLS}); use a larger voxel size"
-        )));
+    let kept = s.keep.iter().filter(|k| **k).count() as u64;
+    let bytes = cells * GRID_BYTES_PER_CELL + kept * SURFACE_BYTES_PER_COLUMN;
+    if bytes > MAX_SPLINT_BYTES || nx > u32::MAX as usize / 2 || nz > u32::MAX as usize / 2 {
+        return Err(too_fine(h, bytes));
     }
     let clamp = CLAMP_CELLS * h as f32;
+    let snap = SNAP_CELLS * h as f32;
     let slice = nx * ny;
     let mut sdf = vec![clamp; slice * nz];
     sdf.par_chunks_mut(slice)
@@ -79,8 +104,12 @@ pub fn extract(s: &Shape) -> Result<(Mesh, usize)> {
                     } else {
                         (z - s.lower[k]).min(s.upper[k] - z).min(side)
                     };
-                    // Surface nets: negative inside.
-                    layer[i + nx * j] = (-(g as f32)).clamp(-clamp, clamp);
+                    // Surface nets: negative inside. A node within a hair of the level set
+                    // counts as outside (the hair is material removed, never added): where a
+                    // node sits on the level set, every cell around it puts its vertex at the
+                    // node, and the surface pinches there into coinciding vertices.
+                    let v = (-(g as f32)).clamp(-clamp, clamp);
+                    layer[i + nx * j] = if v.abs() < snap { snap } else { v };
                 }
             }
         });

@@ -25,10 +25,13 @@
 //!
 //! `docs/SPLINT.md` gives the method and the parameters' clinical meaning.
 
+pub mod checks;
 pub mod extract;
+pub mod inputs;
 pub mod raster;
 pub mod report;
 pub mod shape;
+pub mod written;
 
 use std::time::Instant;
 
@@ -103,16 +106,19 @@ pub struct Splint {
 }
 
 /// Makes the splint between arch `a` (upper) and arch `b` (lower) with B at `pose` in A's
-/// frame; see the [module docs](self). Fails on invalid meshes, a non-finite pose, absurd
-/// options or arches that leave no room for a wafer.
+/// frame; see the [module docs](self). Fails on invalid meshes, a pose that is not finite or
+/// places B beyond the supported coordinates, absurd options, and arches that cannot make a
+/// wafer ([`inputs`]: another unit, flat, not facing each other, too far apart, passing
+/// through each other). The report is measured on the mesh as written and read back
+/// ([`written`]); [`SplintReport::fit`] says whether it keeps every guarantee
+/// ([`checks::judge`]), and a door must not hand out an unfit wafer as fit.
 pub fn make(a: &Mesh, b: &Mesh, pose: &Pose, opts: &SplintOptions) -> Result<Splint> {
     let start = Instant::now();
     opts.validate()?;
     a.validate()?;
     b.validate()?;
-    if !(pose.translation.is_finite() && pose.rotation.is_finite()) {
-        return Err(Error::InvalidOption("the pose is not finite".into()));
-    }
+    let (lo, hi) = b.bbox();
+    pose.ensure_places_within_range(lo, hi, "B")?;
     let (bvh_a, bvh_b) = rayon::join(|| TriangleBvh::new(a), || TriangleBvh::new(b));
     let t_shape = Instant::now();
     let s = shape::shape(a, b, pose, opts)?;
@@ -120,10 +126,14 @@ pub fn make(a: &Mesh, b: &Mesh, pose: &Pose, opts: &SplintOptions) -> Result<Spl
     let (mut mesh, specks) = extract::extract(&s)?;
     let t_seat = Instant::now();
     let moved = seat(&mut mesh, &bvh_a, &bvh_b, pose, opts.clearance);
+    let (mesh, separated) = written::as_written(mesh)?;
     let t_report = Instant::now();
     let mut report = report::report(&mesh, a, &bvh_a, b, &bvh_b, pose, opts, &s);
     report.moved_vertices = moved;
+    report.separated_vertices = separated;
     report.dropped_specks = specks;
+    report.checks = checks::judge(&report, opts);
+    report.fit = report.checks.iter().all(|c| c.ok);
     report.stage_seconds = [
         t_shape - start,
         t_surface - t_shape,
@@ -137,10 +147,19 @@ pub fn make(a: &Mesh, b: &Mesh, pose: &Pose, opts: &SplintOptions) -> Result<Spl
     Ok(Splint { mesh, report })
 }
 
+/// The widest incisal opening (mm) a wafer is made at: an intermediate wafer opens a few
+/// millimetres, and beyond this B swings so far about the hinge that its crowns no longer
+/// face A's along one axis.
+pub const MAX_OPENING: f64 = 20.0;
+/// The most B may be closed beyond the given pose (a negative opening, mm): enough to press
+/// a slightly open scan together, not to swing B through A.
+pub const MAX_CLOSING: f64 = 2.0;
+
 /// How far B is opened about the hinge before the splint is made ([`make_opened`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Opening {
-    /// This far at the incisors (model units; 0: at the pose as given).
+    /// This far at the incisors (model units; 0: at the pose as given), within
+    /// −[`MAX_CLOSING`] ..= [`MAX_OPENING`].
     By(f64),
     /// The least that leaves room for the wafer ([`least_opening`]).
     Auto,
@@ -157,7 +176,12 @@ pub fn make_opened(
     opts: &SplintOptions,
 ) -> Result<Splint> {
     let o = match opening {
-        Opening::By(o) => o,
+        Opening::By(o) if (-MAX_CLOSING..=MAX_OPENING).contains(&o) => o,
+        Opening::By(o) => {
+            return Err(Error::InvalidOption(format!(
+                "the opening must be within -{MAX_CLOSING} ..= {MAX_OPENING} mm at the incisors, got {o}: a wafer is made between facing arches"
+            )))
+        }
         Opening::Auto => least_opening(a, b, pose, opts)?,
     };
     let at = if o != 0.0 {

@@ -11,8 +11,12 @@ use crate::mesh::bvh::TriangleBvh;
 use crate::mesh::Mesh;
 use crate::pose::Pose;
 
-/// An arch's occlusal surface: the part within this distance of the other arch.
-pub const OCCLUSAL_BAND: f64 = 3.5;
+/// An arch's occlusal surface is the part the other arch sees along the insertion axis: over
+/// the other arch, up to the coverage cap, and within this of the first surface a line along
+/// the axis meets (the imprint), so that the crowns' steep sides and undercuts, which no
+/// wafer inserted along the axis can carry, do not count. Defined whatever the gap between
+/// the arches, so an open pair has one too.
+pub const VISIBLE_TOLERANCE: f64 = 0.5;
 /// A point of the occlusal surface is carried by the splint when the splint's surface is
 /// within `clearance` plus this of it.
 pub const CARRIED_TOLERANCE: f64 = 0.15;
@@ -47,7 +51,7 @@ pub struct SplintReport {
     pub a_vertices_inside: usize,
     /// Vertices of arch B inside the splint.
     pub b_vertices_inside: usize,
-    /// Share (by area) of A's occlusal surface ([`OCCLUSAL_BAND`]) within clearance +
+    /// Share (by area) of A's occlusal surface ([`VISIBLE_TOLERANCE`]) within clearance +
     /// [`CARRIED_TOLERANCE`] of the splint.
     pub coverage_a: f64,
     /// The same for B.
@@ -60,6 +64,13 @@ pub struct SplintReport {
     pub dropped_specks: usize,
     /// Vertices pushed out to the clearance after extraction.
     pub moved_vertices: usize,
+    /// Vertices moved apart by a few `f32` steps because they would have coincided in the
+    /// file ([`written`](super::written)).
+    pub separated_vertices: usize,
+    /// Every guarantee kept ([`checks`](Self::checks)): the wafer is fit to print.
+    pub fit: bool,
+    /// The guarantees, each judged on these measurements ([`judge`](super::checks::judge)).
+    pub checks: Vec<super::checks::Check>,
     /// How far B was opened about the hinge at the incisors before the splint was made
     /// ([`make_opened`](super::make_opened); 0 for [`make`](super::make)).
     pub opened: f64,
@@ -122,14 +133,14 @@ pub fn report(
             .count()
     };
     let carried = opts.clearance + CARRIED_TOLERANCE;
-    let coverage = |m: &Mesh, pts: &[DVec3], other: &(dyn Fn(DVec3) -> f64 + Sync)| -> f64 {
+    let coverage = |m: &Mesh, pts: &[DVec3], facing: &(dyn Fn(DVec3) -> bool + Sync)| -> f64 {
         let area = vertex_areas(m);
         // The distances in parallel, the sums in vertex order: a parallel reduction would
         // group the terms as the scheduling fell, and the last bits with them.
         let terms: Vec<(f64, f64)> = pts
             .par_iter()
             .zip(&area)
-            .filter(|(p, _)| other(**p) <= OCCLUSAL_BAND)
+            .filter(|(p, _)| facing(**p))
             .map(|(p, w)| {
                 let d = splint_bvh.distance_sq(*p).sqrt();
                 (if d <= carried { *w } else { 0.0 }, *w)
@@ -142,10 +153,27 @@ pub fn report(
             0.0
         }
     };
+    // The imprints are laid at the clearance plus the field's margin.
+    let off = opts.clearance + super::shape::FIELD_MARGIN;
+    let column = |p: DVec3| -> Option<(f64, usize)> {
+        let c = shape.frame.coords(p);
+        let g = &shape.grid;
+        let i = ((c.x - g.origin.x) / g.h).round();
+        let j = ((c.y - g.origin.y) / g.h).round();
+        let inside = i >= 0.0 && j >= 0.0 && (i as usize) < g.dims[0] && (j as usize) < g.dims[1];
+        inside.then(|| (c.z, g.index(i as usize, j as usize)))
+    };
+    let both = |k: usize| shape.a_low[k].is_finite() && shape.b_high[k].is_finite();
     let coverage_a = coverage(a, &a.vertices, &|p| {
-        bvh_b.distance_sq(inv.transform_point(p)).sqrt()
+        column(p).is_some_and(|(z, k)| {
+            both(k) && z <= shape.a_low[k] + off + VISIBLE_TOLERANCE && z <= shape.cap_a[k]
+        })
     });
-    let coverage_b = coverage(b, &b_world, &|p| bvh_a.distance_sq(p).sqrt());
+    let coverage_b = coverage(b, &b_world, &|p| {
+        column(p).is_some_and(|(z, k)| {
+            both(k) && z >= shape.b_high[k] - off - VISIBLE_TOLERANCE && z >= shape.cap_b[k]
+        })
+    });
     let (min_thickness, thickness_p01) = thickness(mesh, &splint_bvh, shape.frame.axes[2]);
     let ia = inside(&a.vertices);
     let ib = inside(&b_world);
@@ -171,6 +199,9 @@ pub fn report(
         pose: [0.0; 7],
         dropped_specks: 0,
         moved_vertices: 0,
+        separated_vertices: 0,
+        fit: false,
+        checks: Vec::new(),
         insertion_axis: shape.frame.axes[2].to_array(),
         options: *opts,
         seconds: 0.0,

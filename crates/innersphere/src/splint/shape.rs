@@ -15,6 +15,7 @@
 
 use glam::{DVec2, DVec3};
 
+use super::inputs;
 use super::raster::{self, Dims};
 use super::SplintOptions;
 use crate::anatomy::AnatomicalFrame;
@@ -23,8 +24,9 @@ use crate::field::columns::{lowest_offset, ColumnGrid};
 use crate::mesh::Mesh;
 use crate::pose::Pose;
 
-/// The most columns a splint grid may have.
-pub const MAX_COLUMNS: usize = 16_000_000;
+/// Bytes per column of the height field: about twenty `f64` maps (imprints, cusp tips, caps,
+/// outline, margins, heights) alive at once.
+const COLUMN_BYTES: u64 = 20 * 8;
 
 /// Radius (model units) of the neighbourhood within which a cusp tip is the lowest point of
 /// the imprint: about half a molar's cusp spacing.
@@ -93,6 +95,16 @@ pub struct Shape {
     pub side: Vec<f64>,
     /// The kept columns: one 4-connected part.
     pub keep: Vec<bool>,
+    /// A's imprint per column: the lowest point within the clearance (and
+    /// [`FIELD_MARGIN`]) of A, infinite where the column misses A.
+    pub a_low: Vec<f64>,
+    /// B's imprint per column: the highest point within the clearance of B, minus infinity
+    /// where the column misses B.
+    pub b_high: Vec<f64>,
+    /// How high the wafer climbs A per column (A's cusp level plus the coverage).
+    pub cap_a: Vec<f64>,
+    /// How low the wafer climbs B per column.
+    pub cap_b: Vec<f64>,
     /// Area of the perforations: columns inside the outline that are too thin.
     pub perforated_area: f64,
     /// Area inside the outline.
@@ -110,6 +122,9 @@ pub fn shape(a: &Mesh, b: &Mesh, pose: &Pose, o: &SplintOptions) -> Result<Shape
         .collect();
     let anat = AnatomicalFrame::from_points(&a.vertices, &b_world)?;
     let frame = OcclusalFrame::of(&anat);
+    inputs::check_arch("A", a.vertices.iter().map(|v| frame.coords(*v)))?;
+    inputs::check_arch("B", b_world.iter().map(|v| frame.coords(*v)))?;
+    inputs::check_directions(&a.vertices, &b_world, &anat)?;
     let tris_a: Vec<[DVec3; 3]> = a
         .triangles
         .iter()
@@ -138,11 +153,12 @@ pub fn shape(a: &Mesh, b: &Mesh, pose: &Pose, o: &SplintOptions) -> Result<Shape
     let (lo, hi) = (lo - pad, hi + pad);
     let nx = ((hi.x - lo.x) / h).ceil() + 1.0;
     let ny = ((hi.y - lo.y) / h).ceil() + 1.0;
-    if (nx * ny).is_nan() || nx * ny > MAX_COLUMNS as f64 {
-        return Err(Error::InvalidOption(format!(
-            "a voxel size of {h} gives {} × {} columns over these arches, more than {MAX_COLUMNS}; use a larger voxel size",
-            nx, ny
-        )));
+    let bytes = nx * ny * COLUMN_BYTES as f64;
+    if bytes.is_nan() || bytes > super::extract::MAX_SPLINT_BYTES as f64 {
+        return Err(super::extract::too_fine(
+            h,
+            bytes.min(u64::MAX as f64) as u64,
+        ));
     }
     let grid = ColumnGrid {
         origin: lo,
@@ -156,6 +172,7 @@ pub fn shape(a: &Mesh, b: &Mesh, pose: &Pose, o: &SplintOptions) -> Result<Shape
         .into_iter()
         .map(|z| -z)
         .collect();
+    inputs::check_facing(&a_low, &b_high, &grid, c)?;
 
     // Each arch's occlusal surface: a smooth surface through its cusp tips (the columns
     // where the imprint is lowest within CUSP_RADIUS), carried over the columns without
@@ -236,6 +253,10 @@ pub fn shape(a: &Mesh, b: &Mesh, pose: &Pose, o: &SplintOptions) -> Result<Shape
         mid,
         side,
         keep,
+        a_low,
+        b_high,
+        cap_a,
+        cap_b,
         perforated_area: perforated as f64 * h * h,
         outline_area: within as f64 * h * h,
         dropped_parts: parts - 1,

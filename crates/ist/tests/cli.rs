@@ -1323,7 +1323,11 @@ fn splint_writes_a_closed_wafer_and_refuses_bad_input() {
         0,
     );
     let text = std::fs::read_to_string(&obj).unwrap();
-    assert!(text.starts_with("# written by innersphere\nv "), "{}", &text[..80]);
+    assert!(
+        text.starts_with("# written by innersphere\nv "),
+        "{}",
+        &text[..80]
+    );
     // An unfit wafer (at the interlocking bite, no room for the plate: coverage falls short)
     // exits 3, says which guarantee failed, and is not written unless --keep-unfit.
     let unfit = dir.path("unfit.stl");

@@ -9,11 +9,13 @@ pub mod mass;
 pub mod ray;
 pub mod report;
 pub mod union_find;
+pub mod unit;
 pub mod winding;
 
 pub use io::{load, load_bytes, save, save_obj, save_stl, Format, SAVED_MESH};
 pub use mass::MassProperties;
 pub use report::MeshReport;
+pub use unit::Unit;
 
 use glam::DVec3;
 
@@ -84,6 +86,31 @@ impl Mesh {
     /// are kept in the file's own unit (the library is unit-agnostic).
     pub fn load(path: impl AsRef<std::path::Path>) -> crate::error::Result<Mesh> {
         io::load(path.as_ref())
+    }
+
+    /// [`Mesh::load`] of a file whose coordinates are in `unit`, converted to millimetres
+    /// ([`unit`]): the unit every preset and planning tool assumes. Refused when the
+    /// conversion carries a coordinate beyond [`MAX_COORDINATE`].
+    pub fn load_in(path: impl AsRef<std::path::Path>, unit: Unit) -> crate::error::Result<Mesh> {
+        let mut mesh = io::load(path.as_ref())?;
+        mesh.scale(unit.to_mm());
+        mesh.validate().map_err(|e| match e {
+            crate::error::Error::InvalidMesh(m) => crate::error::Error::InvalidMesh(format!(
+                "{} in {unit} converted to mm: {m}",
+                path.as_ref().display()
+            )),
+            e => e,
+        })?;
+        Ok(mesh)
+    }
+
+    /// Multiplies every coordinate by `factor` (a change of unit).
+    pub fn scale(&mut self, factor: f64) {
+        if factor != 1.0 {
+            for v in &mut self.vertices {
+                *v *= factor;
+            }
+        }
     }
 
     /// The three corners of triangle `t`.

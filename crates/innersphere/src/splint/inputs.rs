@@ -13,13 +13,9 @@ use glam::DVec3;
 use crate::anatomy::AnatomicalFrame;
 use crate::error::{Error, Result};
 use crate::field::columns::ColumnGrid;
+use crate::mesh::unit::{unit_warning, DENTAL_SPAN_MM};
+use crate::mesh::Unit;
 
-/// The smallest longest side (mm) of an arch a wafer is made for: below it, the mesh is
-/// likely in another unit (an arch in metres is 0.06 across).
-pub const MIN_ARCH_SIZE: f64 = 5.0;
-/// The largest longest side (mm) of an arch: above it, the mesh is likely in µm or is not
-/// an arch.
-pub const MAX_ARCH_SIZE: f64 = 300.0;
 /// The least height (mm) of an arch along the insertion axis: a crown alone is 5 mm or more.
 pub const MIN_ARCH_HEIGHT: f64 = 1.0;
 /// The least area (mm²) over which the arches must face each other, seen along the insertion
@@ -36,18 +32,8 @@ pub const MAX_OVERLAP: f64 = 2.0;
 /// arch is turned against the other.
 pub const MAX_ANTERIOR_ANGLE: f64 = 60.0;
 
-/// The unit advice for an arch whose longest side is `size` model units.
-fn unit_hint(size: f64) -> &'static str {
-    if size < 0.5 {
-        " (it looks like metres: give the meshes' unit, e.g. --unit m)"
-    } else if size < MIN_ARCH_SIZE {
-        " (it looks like centimetres or inches: give the meshes' unit, e.g. --unit cm)"
-    } else {
-        " (is it in micrometres, or not a dental arch?)"
-    }
-}
-
-/// Refuses an arch at the wrong scale or flat along the insertion axis. `coords` are its
+/// Refuses an arch at the wrong scale ([`DENTAL_SPAN_MM`]; the message names the unit that
+/// fits, [`unit_warning`]) or flat along the insertion axis. `coords` are its
 /// vertices in the occlusal frame (z along the insertion axis).
 pub fn check_arch(name: &str, coords: impl Iterator<Item = DVec3>) -> Result<()> {
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
@@ -57,10 +43,13 @@ pub fn check_arch(name: &str, coords: impl Iterator<Item = DVec3>) -> Result<()>
     }
     let ext = hi - lo;
     let size = ext.max_element();
-    if !(MIN_ARCH_SIZE..=MAX_ARCH_SIZE).contains(&size) {
+    if let Some(w) = unit_warning(size, Unit::Mm) {
+        return Err(Error::InvalidMesh(format!("arch {name}: {w}")));
+    }
+    let (lo, hi) = DENTAL_SPAN_MM;
+    if !(lo..=hi).contains(&size) {
         return Err(Error::InvalidMesh(format!(
-            "arch {name} is {size:.3} mm across, not the {MIN_ARCH_SIZE}–{MAX_ARCH_SIZE} mm of a dental arch{}",
-            unit_hint(size)
+            "arch {name} is {size:.3} mm across, not the {lo}–{hi} mm of teeth and jaws: not a dental arch (or in a unit smaller than mm)"
         )));
     }
     if ext.z < MIN_ARCH_HEIGHT {

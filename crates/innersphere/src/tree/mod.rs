@@ -51,24 +51,40 @@ pub struct TreeMeta {
 pub struct MeshSource {
     /// Its path, absolute where it could be resolved.
     pub path: String,
-    /// [`Mesh::content_hash`](crate::mesh::Mesh::content_hash) of the mesh as loaded.
+    /// [`Mesh::content_hash`](crate::mesh::Mesh::content_hash) of the mesh as loaded
+    /// (converted to millimetres).
     pub hash: String,
+    /// The unit of the file's coordinates, converted to millimetres at load
+    /// ([`Mesh::load_in`](crate::mesh::Mesh::load_in)); absent (mm) in trees of millimetre
+    /// meshes.
+    #[serde(default, skip_serializing_if = "crate::mesh::Unit::is_mm")]
+    pub unit: crate::mesh::Unit,
 }
 
 impl MeshSource {
-    /// The record of `mesh`, loaded from `path`.
+    /// The record of `mesh`, loaded from `path` (in millimetres).
     pub fn of(path: &std::path::Path, mesh: &crate::mesh::Mesh) -> MeshSource {
+        Self::of_unit(path, mesh, crate::mesh::Unit::Mm)
+    }
+
+    /// The record of `mesh`, loaded from `path` in `unit` ([`Mesh::load_in`](crate::mesh::Mesh::load_in)).
+    pub fn of_unit(
+        path: &std::path::Path,
+        mesh: &crate::mesh::Mesh,
+        unit: crate::mesh::Unit,
+    ) -> MeshSource {
         let abs = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
         MeshSource {
             path: abs.to_string_lossy().into_owned(),
             hash: mesh.content_hash(),
+            unit,
         }
     }
 
     /// The mesh at [`path`](Self::path) when it still is the one the tree was built from;
     /// otherwise an error that says which (missing, unreadable, another mesh now).
     pub fn load(&self) -> crate::error::Result<crate::mesh::Mesh> {
-        let mesh = crate::mesh::Mesh::load(&self.path)?;
+        let mesh = crate::mesh::Mesh::load_in(&self.path, self.unit)?;
         if mesh.content_hash() != self.hash {
             return Err(crate::error::Error::InvalidMesh(format!(
                 "{} holds another mesh than the tree was built from",

@@ -8,7 +8,7 @@ use innersphere::progress::{Progress, Silent};
 use innersphere::tree::file;
 use innersphere::{BuildOptions, Mesh, Resolution, SharedTree, SphereTree};
 use numpy::{AllowTypeChange, IxDyn, PyArray2, PyArrayLike};
-use pyo3::exceptions::{PyUserWarning, PyValueError};
+use pyo3::exceptions::{PyOSError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyList, PyString, PyTuple};
 use std::collections::HashMap;
@@ -361,7 +361,7 @@ impl Tree {
     /// The same tree with the mesh it was built from (a mesh file path, a (vertices, faces)
     /// pair or a trimesh.Trimesh), for Pair.refined_distance; this tree is unchanged. About
     /// a second per jaw arch. Raises ValueError when the mesh is not this tree's source
-    /// (bounding box and volume against the tree's meta).
+    /// (bounding box, volume and its centroid against the tree's meta).
     fn with_mesh(&self, py: Python<'_>, mesh: &Bound<'_, PyAny>) -> PyResult<Tree> {
         let mesh = mesh_like(py, mesh, "mesh", true)?;
         let shared = self.shared.clone();
@@ -473,7 +473,8 @@ impl Tree {
 
     /// Build parameters and facts about the source mesh, as a dict: fanout, voxel_size,
     /// min_radius, mesh_volume, center_of_mass, bbox_min, bbox_max, coverage, mesh_closed,
-    /// built_by (library, revision, refine_steps) and inertia when known.
+    /// built_by (library, revision, refine_steps), inertia, source_volume and source_centroid
+    /// (what recognises the source mesh, open or closed) when known.
     #[getter]
     fn meta<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let v = serde_json::to_value(&self.shared.meta)
@@ -513,21 +514,30 @@ fn sphere_array(py: Python<'_>, rows: Vec<[f64; 4]>) -> Bound<'_, PyArray2<f64>>
 }
 
 /// The build cache of `Tree.build(cache=...)`: None or False (none), True (the platform's
-/// cache folder), or a folder.
+/// cache folder), or a folder (whose subfolder `innersphere-trees-v1` holds the trees).
 fn build_cache(cache: Option<&Bound<'_, PyAny>>) -> PyResult<Option<BuildCache>> {
     let Some(c) = cache.filter(|c| !c.is_none()) else {
         return Ok(None);
     };
-    if let Ok(b) = c.extract::<bool>() {
-        if !b {
-            return Ok(None);
-        }
-        return match BuildCache::default_dir() {
-            Some(d) => Ok(Some(BuildCache::new(d, DEFAULT_MAX_BYTES))),
-            None => Err(PyValueError::new_err(
+    let dir = match c.extract::<bool>() {
+        Ok(false) => return Ok(None),
+        Ok(true) => BuildCache::default_dir().ok_or_else(|| {
+            PyValueError::new_err(
                 "cache=True: this platform has no cache folder; give one (cache=\"/path\")",
-            )),
-        };
+            )
+        })?,
+        Err(_) => convert::path(c)?,
+    };
+    let cache = BuildCache::new(dir, DEFAULT_MAX_BYTES);
+    // A folder that cannot be the cache's: the library's sentence, and what to give instead.
+    match cache.prepare() {
+        Ok(()) => Ok(Some(cache)),
+        Err(innersphere::Error::Io { path, source }) if source.raw_os_error().is_none() => {
+            Err(PyOSError::new_err(format!(
+                "{}: {source}; give cache= a folder, or cache=None to build without one",
+                path.display()
+            )))
+        }
+        Err(e) => Err(error(e)),
     }
-    Ok(Some(BuildCache::new(convert::path(c)?, DEFAULT_MAX_BYTES)))
 }

@@ -214,11 +214,37 @@ def test_build_with_a_cache_reads_the_same_tree_back(meshes, tmp_path):
     assert first.report["cache"]["outcome"] == "built"
     assert again.report["cache"]["outcome"] == "hit"
     assert first.to_bytes() == again.to_bytes() == want
-    (entry,) = list(tmp_path.glob("*.ist"))
+    (entry,) = list(tmp_path.glob("innersphere-trees-v1/*.ist"))
     entry.write_bytes(entry.read_bytes()[:100])
-    fixed = innersphere.Tree.build(meshes["box"], preset="fast", cache=tmp_path)
+    with pytest.warns(UserWarning, match="failed the tree file's checks"):
+        fixed = innersphere.Tree.build(meshes["box"], preset="fast", cache=tmp_path)
     assert fixed.report["cache"]["outcome"] == "rebuilt" and fixed.to_bytes() == want
     # Other options: another entry.
     innersphere.Tree.build(meshes["box"], preset="default", cache=tmp_path)
-    assert len(list(tmp_path.glob("*.ist"))) == 2
+    assert len(list(tmp_path.glob("innersphere-trees-v1/*.ist"))) == 2
     assert innersphere.Tree.build(meshes["box"], preset="fast", cache=False).report.get("cache") is None
+
+
+def test_the_cache_keeps_to_its_own_subfolder_and_checks_what_it_reads(meshes, tmp_path):
+    """cache= a folder of the user's own: their files stay byte for byte, the trees go to
+    the cache's own subfolder; a valid tree planted under another mesh's key is rebuilt
+    with a warning; a cache path that is a file is an OSError in a sentence."""
+    mine = {
+        "my_maxilla.ist": innersphere.Tree.build(meshes["ellipsoid"], preset="fast").to_bytes(),
+        "notes.txt": b"bite on the left",
+    }
+    for name, data in mine.items():
+        (tmp_path / name).write_bytes(data)
+    box = innersphere.Tree.build(meshes["box"], preset="fast", cache=tmp_path)
+    ball = innersphere.Tree.build(meshes["ellipsoid"], preset="fast", cache=tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([*mine, "innersphere-trees-v1"])
+    for name, data in mine.items():
+        assert (tmp_path / name).read_bytes() == data
+    # The box's entry replaced by the ball's (valid) tree.
+    entries = {p.read_bytes(): p for p in tmp_path.glob("innersphere-trees-v1/*.ist")}
+    entries[box.to_bytes()].write_bytes(ball.to_bytes())
+    with pytest.warns(UserWarning, match="not the tree of this mesh"):
+        again = innersphere.Tree.build(meshes["box"], preset="fast", cache=tmp_path)
+    assert again.report["cache"]["outcome"] == "rebuilt" and again.to_bytes() == box.to_bytes()
+    with pytest.raises(OSError, match="notes.txt: is a file, not a folder.*give cache= a folder"):
+        innersphere.Tree.build(meshes["box"], preset="fast", cache=tmp_path / "notes.txt")

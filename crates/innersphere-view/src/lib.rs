@@ -82,12 +82,19 @@ impl Scene {
 
     /// The scene whose trees carry the drawn meshes when both are the trees' own, so that
     /// the distance shown is the refined distance between the meshes
-    /// ([`innersphere::Pair::refined_distance`]); else unchanged, with the reason (meshes
-    /// missing, or not the ones the trees were built from). Prepares both meshes for exact
-    /// queries (about a second per jaw arch).
+    /// ([`innersphere::Pair::refined_distance`]); else unchanged, with a sentence that says
+    /// the distance falls back to the sphere packings and why (meshes missing, or which body's
+    /// mesh is not the one its tree was built from), for the caller to show as a warning.
+    /// Prepares both meshes for exact queries (about a second per jaw arch).
     pub fn refining_with_meshes(mut self) -> (Scene, Option<String>) {
+        const FALLBACK: &str = "the distance shown is between the sphere packings, not the meshes";
         let (Some(ma), Some(mb)) = (&self.mesh_a, &self.mesh_b) else {
-            return (self, Some("the distance is the spheres': no meshes".into()));
+            return (
+                self,
+                Some(format!(
+                    "{FALLBACK}: the meshes of both bodies are needed (--mesh-a, --mesh-b)"
+                )),
+            );
         };
         match (self.a.clone().with_mesh(ma), self.b.clone().with_mesh(mb)) {
             (Ok(a), Ok(b)) => {
@@ -95,10 +102,63 @@ impl Scene {
                 self.b = b;
                 (self, None)
             }
-            (Err(e), _) | (_, Err(e)) => {
-                let why = format!("the distance is the spheres': {e}");
-                (self, Some(why))
-            }
+            (Err(e), _) => (self, Some(format!("{FALLBACK}: body A's mesh: {e}"))),
+            (_, Err(e)) => (self, Some(format!("{FALLBACK}: body B's mesh: {e}"))),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use innersphere::glam::DVec3;
+
+    fn scene(a: &Mesh, b: &Mesh, drawn_b: &Mesh) -> Scene {
+        let opts = BuildOptions {
+            resolution: Resolution::Cells(24),
+            ..Default::default()
+        };
+        Scene {
+            a: SharedTree::new(SphereTree::build(a, &opts).unwrap()),
+            b: SharedTree::new(SphereTree::build(b, &opts).unwrap()),
+            mesh_a: Some(a.clone()),
+            mesh_b: Some(drawn_b.clone()),
+            motion: None,
+            teeth_a: None,
+            teeth_b: None,
+            splint: None,
+            start: None,
+        }
+    }
+
+    /// A tree of an open mesh was refused its own mesh, and the view fell back to the
+    /// spheres' distance with a line that did not say it was a fallback. Now an open mesh's
+    /// tree takes its mesh (the distance is the meshes'), and a fallback (B drawn with
+    /// another mesh) says so, naming the body.
+    #[test]
+    fn open_meshes_refine_and_a_fallback_says_so() {
+        let a = innersphere::shapes::icosphere(3);
+        let mut b = a.clone();
+        b.triangles
+            .retain(|t| t.iter().all(|&i| a.vertices[i as usize].z < 0.8));
+        for v in &mut b.vertices {
+            *v += DVec3::new(3.0, 0.0, 0.0);
+        }
+        let (s, why) = scene(&a, &b, &b).refining_with_meshes();
+        assert_eq!(why, None);
+        assert!(s.b.mesh().is_some());
+        let mut other = b.clone();
+        for v in &mut other.vertices {
+            v.y += 0.5;
+        }
+        let (s, why) = scene(&a, &b, &other).refining_with_meshes();
+        let why = why.unwrap();
+        assert!(
+            why.starts_with(
+                "the distance shown is between the sphere packings, not the meshes: body B's mesh:"
+            ) && why.contains("not the mesh this tree was built from"),
+            "{why}"
+        );
+        assert!(s.b.mesh().is_none());
     }
 }

@@ -16,9 +16,12 @@ pub struct BodyArgs {
     /// recommendation for a mesh of unknown unit, `fine`; `jaw` for dental scans in mm).
     #[arg(long, value_enum)]
     pub preset: Option<PresetArg>,
-    /// Folder of the trees built from meshes, keyed by the mesh's content, the options and
-    /// the library's version; bounded to 2 GiB, least recently used first out (default:
-    /// $IST_CACHE, else the platform's cache folder, e.g. ~/.cache/innersphere).
+    /// Folder of the build cache: the trees built from meshes, keyed by the mesh's content,
+    /// the options and the library's version, and checked against the mesh when read. They
+    /// are kept in its own subfolder innersphere-trees-v1 (tagged with a CACHEDIR.TAG), which
+    /// is bounded to 2 GiB, least recently used first out; nothing else in the folder is
+    /// touched (default: $IST_CACHE, else the platform's cache folder, e.g.
+    /// ~/.cache/innersphere).
     #[arg(long, env = "IST_CACHE")]
     pub cache: Option<PathBuf>,
     /// Build meshes without reading or writing the cache.
@@ -65,19 +68,20 @@ pub fn load_body(
         (Some(d), false) => Some(d.clone()),
         (None, false) => BuildCache::default_dir(),
     };
-    // A cache folder that cannot be made (a file in its way, no permission) costs the
-    // cache, not the command.
-    let dir = dir.filter(|d| match std::fs::create_dir_all(d) {
-        Ok(()) => true,
-        Err(e) => {
-            eprintln!(
-                "warning: the build cache folder {} cannot be used ({e}): building without it",
-                d.display()
-            );
-            false
-        }
-    });
-    let Some(dir) = dir else {
+    // A cache that cannot be used (a file in its way, no permission) costs the cache, not
+    // the command.
+    let cache = dir
+        .map(|d| BuildCache::new(d, innersphere::build::cache::DEFAULT_MAX_BYTES))
+        .filter(|c| match c.prepare() {
+            Ok(()) => true,
+            Err(e) => {
+                eprintln!(
+                    "warning: the build cache cannot be used: {e}; building without it (--cache DIR or IST_CACHE name another folder, --no-cache turns the cache off)"
+                );
+                false
+            }
+        });
+    let Some(cache) = cache else {
         eprintln!(
             "{}: a mesh; building its tree with {why}, not cached",
             path.display()
@@ -88,7 +92,6 @@ pub fn load_body(
         }
         return Ok((tree, Some(mesh)));
     };
-    let cache = BuildCache::new(dir, innersphere::build::cache::DEFAULT_MAX_BYTES);
     eprintln!("{}: a mesh; its tree with {why}", path.display());
     let (tree, outcome, report) = cache.get_or_build(&mesh, &opts, &bars)?;
     for w in report.iter().flat_map(|r| &r.warnings) {
@@ -99,17 +102,17 @@ pub fn load_body(
         CacheOutcome::Hit => eprintln!(
             "{}: tree read from the cache {} in {secs:.2} s",
             path.display(),
-            cache.dir().display()
+            cache.entries_dir().display()
         ),
         CacheOutcome::Built | CacheOutcome::Rebuilt => eprintln!(
             "{}: tree built in {secs:.1} s{} and cached in {}",
             path.display(),
             if outcome == CacheOutcome::Rebuilt {
-                " (the cached entry failed its checks)"
+                " (the cached entry was not used: see the warning)"
             } else {
                 ""
             },
-            cache.dir().display()
+            cache.entries_dir().display()
         ),
     }
     Ok((tree, Some(mesh)))

@@ -139,7 +139,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     };
     match why {
         None => eprintln!("distance: between the meshes (refined from the spheres)"),
-        Some(why) => eprintln!("{why}"),
+        Some(why) => eprintln!("warning: {why}"),
     }
     if !meshes && (args.contact_map || teeth_a.is_some() || teeth_b.is_some()) {
         anyhow::bail!(

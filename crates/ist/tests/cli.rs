@@ -1424,11 +1424,13 @@ fn meshes_open_directly_through_the_build_cache() {
     }
     let want = ist_json(&args(&query(&box_t, &ball_t, &[])), 0)["distance"].clone();
     let by_mesh = query(&box_stl, &ball_obj, &["--preset", "fast"]);
+    // The cache's entries, in its own subfolder (beside its tag).
     let entries = |c: &Path| {
-        let mut v: Vec<String> = std::fs::read_dir(c)
+        let mut v: Vec<String> = std::fs::read_dir(c.join("innersphere-trees-v1"))
             .map(|r| {
                 r.filter_map(|e| e.ok())
                     .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .filter(|n| n != "CACHEDIR.TAG")
                     .collect()
             })
             .unwrap_or_default();
@@ -1454,13 +1456,15 @@ fn meshes_open_directly_through_the_build_cache() {
     assert_eq!(r["distance"], want);
     // Truncated entries are rebuilt, and the answer stays.
     for e in entries(&cache) {
-        let p = cache.join(e);
+        let p = cache.join("innersphere-trees-v1").join(e);
         let bytes = std::fs::read(&p).unwrap();
         std::fs::write(&p, &bytes[..bytes.len() / 3]).unwrap();
     }
     let out = run(&args(&by_mesh), &cache);
     assert_eq!(
-        stderr(&out).matches("failed its checks").count(),
+        stderr(&out)
+            .matches("was not used: it failed the tree file's checks")
+            .count(),
         2,
         "{}",
         stderr(&out)

@@ -77,10 +77,14 @@ class Tree:
 
         cache: None or False (build), True (the platform's cache folder, e.g.
             ~/.cache/innersphere) or a folder: a tree built before from the same mesh with
-            the same options and library is read back instead (checked; a corrupt entry is
-            rebuilt); ``tree.report["cache"]`` says ``{"outcome": "hit" | "built" |
-            "rebuilt", "dir": ...}``. The folder is bounded to 2 GiB, least recently used
-            first out.
+            the same options and library is read back instead (checked as a tree file and
+            against the mesh; an entry that fails is rebuilt, with a UserWarning saying
+            why); ``tree.report["cache"]`` says ``{"outcome": "hit" | "built" |
+            "rebuilt", "dir": ...}``. The trees are kept in the cache's own subfolder
+            ``innersphere-trees-v1`` of that folder (tagged with a CACHEDIR.TAG), bounded
+            to 2 GiB, least recently used first out; nothing else in the folder is read,
+            touched or removed. OSError, in a sentence naming the path, when the folder is
+            a file or the subfolder's name is taken by something the cache did not make.
 
         Warnings of the build (open mesh, flipped faces, ...) are issued as UserWarnings
         and kept in ``tree.report``. Raises ValueError for a bad option or mesh, OSError
@@ -126,7 +130,8 @@ class Tree:
     def meta(self) -> Dict[str, Any]:
         """Build parameters and facts about the source mesh: fanout, voxel_size, min_radius,
         mesh_volume, center_of_mass, bbox_min, bbox_max, coverage, mesh_closed, built_by,
-        inertia."""
+        inertia, source_volume, source_centroid (what recognises the source mesh, open or
+        closed)."""
     @property
     def report(self) -> Optional[Dict[str, Any]]:
         """The build report (spheres, coverage, stage times, warnings, ...) of a tree built

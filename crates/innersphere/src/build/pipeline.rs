@@ -287,11 +287,14 @@ pub fn build_tree(
     };
     let coverage = sphere_volume / basis.max(f64::MIN_POSITIVE);
     let (com, inertia) = mass_of(&mesh, closed, &spheres);
+    let source = crate::tree::check::source_shape(&mesh, (lo + hi) * 0.5);
     let meta = TreeMeta {
         fanout: opts.hierarchy.fanout,
         voxel_size: grid.h,
         min_radius: opts.packing.min_radius,
         mesh_volume: if closed { mesh_volume } else { inside_volume },
+        source_volume: Some(source.0),
+        source_centroid: source.1.map(|c| c.to_array()),
         center_of_mass: com.to_array(),
         bbox_min: lo.to_array(),
         bbox_max: hi.to_array(),

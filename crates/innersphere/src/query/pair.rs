@@ -49,8 +49,8 @@ impl SharedTree {
 
     /// The same tree with the mesh it was built from, prepared for exact queries (its
     /// triangle BVH: about a second per jaw arch), for [`Pair::refined_distance`]. Refuses a
-    /// mesh that is not the tree's source (bounding box and volume against the tree's
-    /// meta, as `ist check` does).
+    /// mesh that is not the tree's source (bounding box, volume and its centroid against the
+    /// tree's meta, as `ist check` does; open meshes too).
     pub fn with_mesh(self, mesh: &Mesh) -> Result<SharedTree> {
         self.with_exact_mesh(Arc::new(ExactMesh::new(mesh)?))
     }

@@ -7,6 +7,7 @@ use super::SphereTree;
 use crate::mesh::bvh::TriangleBvh;
 use crate::mesh::winding::FastWinding;
 use crate::mesh::Mesh;
+use glam::DVec3;
 use rayon::prelude::*;
 
 /// Result of [`check`]; `ok` is the verdict.
@@ -35,24 +36,35 @@ pub struct CheckReport {
 /// Why `mesh` is not the mesh `tree` was built from, from the facts the tree keeps about its
 /// source ([`TreeMeta`](super::TreeMeta)): the bounding box, each coordinate within 1e-5 of
 /// the larger of the box's diagonal and its farthest coordinate from the origin (rounding the
-/// coordinates to f32 or to 6 significant digits moves them by less), and the enclosed volume,
-/// within 1e-4 of itself. `None` when both agree. A tree of the same shape moved, scaled or
-/// edited, or of another shape with another box or volume, is caught; a tree is never
-/// compared with a mesh by its spheres here (that is [`check`]'s job).
+/// coordinates to f32 or to 6 significant digits moves them by less); the volume and its
+/// centroid of [`source_shape`] about the centre of the tree's box, within 1e-4 (of the
+/// volume, of the box's diagonal) plus what moving every vertex by that coordinate tolerance
+/// can change them by (first order: the area, and for an open mesh its rim's length times
+/// the diagonal). `None` when all agree. A mesh moved, scaled or edited, the same surface
+/// with triangles added or removed (a hole closed, widened, or made elsewhere), or another
+/// shape is caught; two meshes with the same box, volume and centroid within those
+/// tolerances (a nearly symmetric shape and its mirror image) are not told apart (a tree is
+/// never compared with a mesh by its spheres here: that is [`check`]'s job).
+///
+/// Open meshes are checked like closed ones: their enclosed volume is not defined (the
+/// tree's [`mesh_volume`](super::TreeMeta::mesh_volume) holds its inside voxels' volume
+/// there), but [`source_shape`]'s is, and the build records it
+/// ([`source_volume`](super::TreeMeta::source_volume),
+/// [`source_centroid`](super::TreeMeta::source_centroid)). A tree written before they were
+/// recorded is compared by its enclosed volume when its mesh was closed, and by its box
+/// alone when it was open.
 pub fn source_mismatch(tree: &SphereTree, mesh: &Mesh) -> Option<String> {
     let m = &tree.meta;
     let (lo, hi) = mesh.bbox();
-    let (tlo, thi) = (
-        glam::DVec3::from_array(m.bbox_min),
-        glam::DVec3::from_array(m.bbox_max),
-    );
+    let (tlo, thi) = (DVec3::from_array(m.bbox_min), DVec3::from_array(m.bbox_max));
     let reach = lo
         .abs()
         .max(hi.abs())
         .max(tlo.abs())
         .max(thi.abs())
         .max_element();
-    let tol = 1e-5 * (hi - lo).length().max((thi - tlo).length()).max(reach);
+    let diag = (hi - lo).length().max((thi - tlo).length());
+    let tol = 1e-5 * diag.max(reach);
     let mut why = Vec::new();
     let off = (lo - tlo).abs().max((hi - thi).abs()).max_element();
     // NaN (a mesh or a tree with non-finite facts) counts as a mismatch.
@@ -65,17 +77,101 @@ pub fn source_mismatch(tree: &SphereTree, mesh: &Mesh) -> Option<String> {
             m.bbox_max
         ));
     }
-    let volume = mesh.signed_volume().abs();
-    let vtol = 1e-4 * volume.max(m.mesh_volume.abs()) + 1e-12 * tol.powi(3);
-    let dv = (volume - m.mesh_volume).abs();
+    let ((volume, centroid), recorded) = match m.source_volume {
+        Some(v) => (
+            source_shape(mesh, (tlo + thi) * 0.5),
+            (v, m.source_centroid.map(DVec3::from_array)),
+        ),
+        None if m.mesh_closed => ((mesh.signed_volume().abs(), None), (m.mesh_volume, None)),
+        // An open mesh's tree from before the source's shape was recorded: its mesh_volume
+        // is the inside voxels', which no mesh reproduces; the box is all there is.
+        None => return (!why.is_empty()).then(|| why.join("; ")),
+    };
+    let (recorded, recorded_centroid) = recorded;
+    let big = volume.max(recorded.abs()).max(f64::MIN_POSITIVE);
+    let dv = (volume - recorded).abs();
+    let dc = match (centroid, recorded_centroid) {
+        (Some(c), Some(r)) => (c - r).length(),
+        _ => 0.0,
+    };
+    let mut vtol = 1e-4 * big + 1e-12 * tol.powi(3);
+    let mut ctol = 1e-4 * diag;
+    if dv > vtol || dc > ctol {
+        // What moving each vertex by up to `tol` can change the volume by (first order):
+        // the swept area, plus the cones' sides along edges whose uses do not cancel; the
+        // centroid moves by at most twice that, times the diagonal, over the volume.
+        // Computed only here: a matching mesh mostly agrees to far less.
+        let (area, rim) = area_and_rim(mesh);
+        let swept = tol * (area + rim * diag);
+        vtol += swept;
+        ctol += 2.0 * swept * diag / big;
+    }
     if dv.is_nan() || dv > vtol {
         why.push(format!(
-            "its volume is {volume:.6e}, the tree's source's was {:.6e} (relative difference {:.1e}, tolerance 1e-4)",
-            m.mesh_volume,
-            dv / volume.max(m.mesh_volume.abs()).max(f64::MIN_POSITIVE)
+            "its volume is {volume:.6e}, the tree's source's was {recorded:.6e} (relative difference {:.1e}, tolerance {:.1e})",
+            dv / big,
+            vtol / big
         ));
     }
+    if let (Some(c), Some(r)) = (centroid, recorded_centroid) {
+        if dc.is_nan() || dc > ctol {
+            why.push(format!(
+                "the centroid of its volume is {:?}, the tree's source's was {:?} (off by {dc:.3e}, tolerance {ctol:.1e})",
+                c.to_array(),
+                r.to_array()
+            ));
+        }
+    }
     (!why.is_empty()).then(|| why.join("; "))
+}
+
+/// The volume and its centroid that a tree records of its source
+/// ([`TreeMeta::source_volume`](super::TreeMeta::source_volume),
+/// [`source_centroid`](super::TreeMeta::source_centroid)) and [`source_mismatch`] compares:
+/// of the signed cones from `apex` (the centre of the source's bounding box) to the
+/// triangles, `|Σ (a−o)·((b−o)×(c−o))| / 6` and the centroid of that signed volume. For a
+/// closed mesh these are its enclosed volume and centre of mass, wherever the apex lies; for
+/// an open mesh, whose enclosed volume is not defined, they are numbers its triangles fix
+/// (removing, adding or moving one changes them), unlike the inside that a build decides by
+/// the winding number. Orientation does not matter (the build flips an inward mesh). The
+/// centroid is `None` when the volume is zero.
+pub fn source_shape(mesh: &Mesh, apex: DVec3) -> (f64, Option<DVec3>) {
+    let (mut vol, mut moment) = (0.0, DVec3::ZERO);
+    for t in 0..mesh.triangles.len() {
+        let [a, b, c] = mesh.triangle(t);
+        let (a, b, c) = (a - apex, b - apex, c - apex);
+        let v = a.dot(b.cross(c));
+        vol += v;
+        // The centroid of the tetrahedron (apex, a, b, c), relative to the apex.
+        moment += v * (a + b + c) / 4.0;
+    }
+    let centroid = (vol != 0.0).then(|| apex + moment / vol);
+    ((vol / 6.0).abs(), centroid.filter(|c| c.is_finite()))
+}
+
+/// The area of `mesh`, and the length of its edges whose uses do not cancel (each counted
+/// `|uses a→b − uses b→a|` times: none on a closed, consistently oriented mesh, the boundary
+/// of an open one): what bounds how much [`source_shape`] moves when the vertices do.
+fn area_and_rim(mesh: &Mesh) -> (f64, f64) {
+    let mut area = 0.0;
+    let mut edges: Vec<(u32, u32, i32)> = Vec::with_capacity(3 * mesh.triangles.len());
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        let [a, b, c] = mesh.triangle(t);
+        area += 0.5 * (b - a).cross(c - a).length();
+        for k in 0..3 {
+            let (u, v) = (tri[k], tri[(k + 1) % 3]);
+            edges.push(if u < v { (u, v, 1) } else { (v, u, -1) });
+        }
+    }
+    edges.sort_unstable_by_key(|e| (e.0, e.1));
+    let rim = edges
+        .chunk_by(|x, y| (x.0, x.1) == (y.0, y.1))
+        .map(|g| {
+            let net = g.iter().map(|e| e.2).sum::<i32>().unsigned_abs() as f64;
+            net * (mesh.vertices[g[0].1 as usize] - mesh.vertices[g[0].0 as usize]).length()
+        })
+        .sum();
+    (area, rim)
 }
 
 /// [`check`] of `tree` against the mesh it was built from: an error when `mesh` is not that

@@ -67,6 +67,7 @@ pub fn check_writable(tree: &SphereTree) -> Result<()> {
         ("voxel_size", m.voxel_size),
         ("min_radius", m.min_radius),
         ("mesh_volume", m.mesh_volume),
+        ("source_volume", m.source_volume.unwrap_or_default()),
         ("coverage", m.coverage),
     ];
     let points = [
@@ -75,6 +76,10 @@ pub fn check_writable(tree: &SphereTree) -> Result<()> {
         ("bbox_max", m.bbox_max),
     ];
     let inertia = m.inertia.unwrap_or_default().map(|x| ("inertia", x));
+    let centroid = m
+        .source_centroid
+        .unwrap_or_default()
+        .map(|x| ("source_centroid", x));
     let values = scalars
         .into_iter()
         .chain(
@@ -82,7 +87,8 @@ pub fn check_writable(tree: &SphereTree) -> Result<()> {
                 .into_iter()
                 .flat_map(|(name, p)| p.into_iter().map(move |x| (name, x))),
         )
-        .chain(inertia);
+        .chain(inertia)
+        .chain(centroid);
     for (name, x) in values {
         if !x.is_finite() {
             return Err(Error::CorruptTree(format!(

@@ -14,8 +14,20 @@ pub struct TreeMeta {
     pub voxel_size: f64,
     /// Smallest inner-sphere radius kept (model units).
     pub min_radius: f64,
-    /// Enclosed volume of the source mesh.
+    /// Enclosed volume of the source mesh; for an open mesh (not closed, see
+    /// [`mesh_closed`](Self::mesh_closed)) the volume of the voxels the build found inside.
     pub mesh_volume: f64,
+    /// The volume of the source mesh's triangles by [`check::source_shape`] (about the centre
+    /// of its bounding box): its enclosed volume when closed, a number its triangles fix when
+    /// open; with [`source_centroid`](Self::source_centroid), what lets
+    /// [`check::source_mismatch`] recognise the mesh a tree was built from, open or closed.
+    /// `None` in files written before it was stored.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source_volume: Option<f64>,
+    /// The centroid of that volume ([`check::source_shape`]): the centre of mass of a closed
+    /// mesh. `None` when the volume is zero and in files written before it was stored.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source_centroid: Option<[f64; 3]>,
     /// Centre of mass of the source mesh (uniform density), for torques.
     pub center_of_mass: [f64; 3],
     /// Bounding box of the source mesh.
@@ -98,8 +110,8 @@ impl MeshSource {
 impl TreeMeta {
     /// The meta of spheres that were not packed from a mesh (a hand-made or analytic sphere
     /// set given to [`hierarchy::build`](crate::hierarchy::build)): its fan-out, voxel size
-    /// and box; a mesh volume of 1, the centre of mass at the origin, no coverage, no stamp,
-    /// no inertia. Change the fields that matter afterwards.
+    /// and box; a mesh volume of 1 (no source volume), the centre of mass at the origin, no
+    /// coverage, no stamp, no inertia. Change the fields that matter afterwards.
     pub fn unmeasured(
         fanout: u32,
         voxel_size: f64,
@@ -111,6 +123,8 @@ impl TreeMeta {
             voxel_size,
             min_radius: 0.0,
             mesh_volume: 1.0,
+            source_volume: None,
+            source_centroid: None,
             center_of_mass: [0.0; 3],
             bbox_min,
             bbox_max,

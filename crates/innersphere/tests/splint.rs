@@ -112,7 +112,7 @@ fn inputs_that_cannot_make_a_wafer_are_refused_with_the_reason() {
         &scaled(&a, 1e3),
         &scaled(&b, 1e3),
         Pose::IDENTITY,
-        "micrometres",
+        "not a dental arch",
     );
     let flat = |m: &Mesh| Mesh {
         vertices: m

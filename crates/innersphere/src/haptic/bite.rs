@@ -7,11 +7,11 @@
 
 use super::free_occlusion::{occlude_free, Candidate, FreeOcclusionOptions};
 use super::occlusion::{occlude, unit, Joints, Occlusion, OcclusionOptions};
-use super::occlusion_limits::check;
+use super::occlusion_limits::{check_options, check_start};
 use super::occlusion_status::StatusCounts;
 use super::reach::Reach;
 use crate::anatomy::{check_opposed, AnatomicalFrame};
-use crate::error::{vec3, Error, Result};
+use crate::error::{Error, Result};
 use crate::pose::Pose;
 use crate::query::{Pair, SharedTree};
 use crate::tree::SphereTree;
@@ -144,29 +144,19 @@ pub fn bite(a: &SharedTree, b: &SharedTree, from: &Pose, opts: &BiteOptions) -> 
         seed: opts.seed,
         ..FreeOcclusionOptions::default()
     };
-    // The options first (what the user typed; the joints' stretch, which depends on the
-    // poses, after them), then the bodies and the poses.
-    check(
-        &OcclusionOptions {
-            joints: None,
-            ..closing
-        },
-        &Pose::IDENTITY,
-    )?;
+    // The options first (what the user typed), then the bodies and the poses.
+    check_options(&closing)?;
     if opts.free {
         fo.check()?;
     }
-    if !opts.reference.translation.is_finite() || !opts.reference.rotation.is_finite() {
-        return Err(Error::InvalidOption(
-            "the reference pose must be finite".into(),
-        ));
+    for (what, pose) in [("start", from), ("reference", &opts.reference)] {
+        if !pose.translation.is_finite() || !pose.rotation.is_finite() {
+            return Err(Error::InvalidOption(format!(
+                "the {what} pose must be finite"
+            )));
+        }
     }
-    let axis = unit(closing.axis).ok_or_else(|| {
-        Error::InvalidOption(format!(
-            "the closing axis must be a finite non-zero vector, not {}",
-            vec3(closing.axis)
-        ))
-    })?;
+    let axis = unit(closing.axis).expect("checked");
     let reach = Reach::new(a.tree(), b.tree());
     let (ca, cb) = reach.centres();
     check_opposed(&ca, &cb, frame.up)?;
@@ -175,7 +165,7 @@ pub fn bite(a: &SharedTree, b: &SharedTree, from: &Pose, opts: &BiteOptions) -> 
     if !opts.free {
         reach.check_pose("the reference pose", &opts.reference, axis, frame.left)?;
     }
-    check(&closing, from)?;
+    check_start(&closing, from)?;
     if !opts.free {
         let mut pair = Pair::new(a, b);
         let occlusion = occlude(&mut pair, &Pose::IDENTITY, from, &closing)?;

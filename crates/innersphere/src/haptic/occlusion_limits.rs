@@ -103,6 +103,12 @@ fn within(what: &str, x: f64, (lo, hi): (f64, f64), unit: &str, why: &str) -> Re
 /// Refuses options (and a start) that cannot make a bite or that the dynamics cannot hold:
 /// see the module docs.
 pub(super) fn check(o: &OcclusionOptions, from: &Pose) -> Result<()> {
+    check_options(o)?;
+    check_start(o, from)
+}
+
+/// [`check`] without the start: the options alone.
+pub(super) fn check_options(o: &OcclusionOptions) -> Result<()> {
     within(
         "the closing force",
         o.force,
@@ -177,9 +183,6 @@ pub(super) fn check(o: &OcclusionOptions, from: &Pose) -> Result<()> {
             vec3(o.axis)
         )));
     }
-    if !from.translation.is_finite() || !from.rotation.is_finite() {
-        return Err(Error::InvalidOption("the start pose must be finite".into()));
-    }
     if let Some(j) = &o.joints {
         if !j.points.iter().chain(&j.anchors).all(|p| p.is_finite()) {
             return Err(Error::InvalidOption(
@@ -194,6 +197,17 @@ pub(super) fn check(o: &OcclusionOptions, from: &Pose) -> Result<()> {
                 num(j.stiffness)
             )));
         }
+    }
+    Ok(())
+}
+
+/// [`check`]'s part that depends on the start: finite, and the joints stretched at most
+/// [`MAX_JOINT_STRETCH`] there.
+pub(super) fn check_start(o: &OcclusionOptions, from: &Pose) -> Result<()> {
+    if !from.translation.is_finite() || !from.rotation.is_finite() {
+        return Err(Error::InvalidOption("the start pose must be finite".into()));
+    }
+    if let Some(j) = &o.joints {
         for (p, anchor) in j.points.iter().zip(&j.anchors) {
             let stretch = (from.transform_point(*p) - *anchor).length();
             if !(stretch <= MAX_JOINT_STRETCH) {

@@ -182,11 +182,25 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 .map(|(s, n)| format!("{n} {s}"))
                 .collect();
             println!(
-                "{total} closings: {} ({} candidates)",
+                "starts: {total} ({}); candidates: {}",
                 each.join(", "),
                 found.candidates.len()
             );
         }
     }
     Ok(exit_code(o.status))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_status_has_its_own_exit_code_and_none_is_the_error_code() {
+        let codes: Vec<i32> = OcclusionStatus::ALL.iter().map(|s| exit_code(*s)).collect();
+        assert_eq!(codes, [0, 3, 1, 4, 5]);
+        for (i, c) in codes.iter().enumerate() {
+            assert!(*c != 2 && !codes[..i].contains(c), "{codes:?}");
+        }
+    }
 }

@@ -210,7 +210,7 @@ pub(super) fn check_start(o: &OcclusionOptions, from: &Pose) -> Result<()> {
     if let Some(j) = &o.joints {
         for (p, anchor) in j.points.iter().zip(&j.anchors) {
             let stretch = (from.transform_point(*p) - *anchor).length();
-            if !(stretch <= MAX_JOINT_STRETCH) {
+            if stretch.is_nan() || stretch > MAX_JOINT_STRETCH {
                 return Err(Error::InvalidOption(format!(
                     "the start puts a joint {} mm from where it is held, more than the {} mm \
                      a condyle can move: is the start (or the reference pose) in A's frame?",

@@ -110,7 +110,7 @@ impl Reach {
             .map(|(c, r)| pose.transform_point(*c).dot(axis) + r)
             .fold(f64::NEG_INFINITY, f64::max);
         let open = a_low - b_high;
-        if !(open <= MAX_OPENING) {
+        if open.is_nan() || open > MAX_OPENING {
             return Err(Error::InvalidOption(format!(
                 "{what} puts B {} mm below A along the closing axis; a bite closes from at most \
                  {} mm open: is {what} in A's frame, in millimetres?",

@@ -220,7 +220,7 @@ fn occlusion_finds_the_scanned_bite_from_open_starts() {
         let mut pair = Pair::new(j.a.clone(), j.b.clone());
         let o = occlude(&mut pair, &Pose::IDENTITY, &from, &opts).unwrap();
         let secs = t.elapsed().as_secs_f64();
-        assert!(o.converged, "from {from:?}: {} steps", o.steps);
+        assert!(o.converged(), "from {from:?}: {} steps", o.steps);
         assert!(secs <= 10.0, "{secs} s");
         let worst = landmarks
             .iter()
@@ -246,7 +246,7 @@ fn the_final_splint_at_the_found_bite_seats_on_both_arches() {
     let from = Pose::from_translation(j.frame.up * -3.0);
     let mut pair = Pair::new(j.a.clone(), j.b.clone());
     let bite = occlude(&mut pair, &Pose::IDENTITY, &from, &opts).unwrap();
-    assert!(bite.converged);
+    assert!(bite.converged());
     let load = |rel: &str| Mesh::load(common::data(rel)).unwrap();
     let a = load("jaw/ofj_p26_maxilla_teeth.stl.gz");
     let b = load("jaw/ofj_p26_mandible_teeth.stl.gz");
@@ -305,7 +305,7 @@ fn free_occlusion_finds_the_scanned_bite_from_random_open_starts() {
         let secs = t0.elapsed().as_secs_f64();
         let worst = crowns
             .iter()
-            .map(|p| (f.pose.transform_point(*p) - *p).length())
+            .map(|p| (f.closing.pose.transform_point(*p) - *p).length())
             .fold(0.0, f64::max);
         eprintln!(
             "open {open:.2}: {} candidates, chosen reached from {} of {} starts, {secs:.2} s, crowns within {worst:.3} mm",
@@ -313,7 +313,7 @@ fn free_occlusion_finds_the_scanned_bite_from_random_open_starts() {
             f.candidates[0].starts,
             opts.starts
         );
-        assert!(f.converged);
+        assert!(f.closing.converged());
         assert!(secs <= 10.0, "{secs} s");
         assert!(
             worst <= 0.5,

@@ -13,9 +13,13 @@ use pyo3::prelude::*;
 /// they are with B at `reference` (default the identity: a pair scanned in occlusion), or,
 /// with `free=True`, no joints and `starts` closings spread within `spread` mm (yaw: twice
 /// that in degrees) from `seed`, the rest poses ranked. Returns `ist occlude --json`'s dict
-/// (less its wall time and landmarks): `pose` (7 numbers), `converged`, `steps`, `seconds`,
-/// `volume`, `max_depth`, `patches`, `axis`, `force`, `contact_stiffness`, `joints`,
-/// `frame`, `candidates`. Options default as in `ist occlude`. Runs with the interpreter
+/// (less its wall time and landmarks): `pose` (7 numbers), `status` (`"converged"` only at
+/// rest in contact; `"no_contact"`, `"time_limit"`, `"passed_through"`, `"escaped"`),
+/// `converged` (status is converged), `steps`, `seconds`, `volume`, `max_depth`, `patches`,
+/// `axis`, `force`, `contact_stiffness`, `joints`, `frame`, `candidates`, `closings` (free:
+/// the closings per status). Options default and are limited as in `ist occlude`; what
+/// cannot make a bite (options out of range, arches that do not face each other, a start
+/// far open, beside A, beyond it or turned) raises ValueError. Runs with the interpreter
 /// released (free: on all cores).
 #[pyfunction]
 #[pyo3(signature = (tree_a, tree_b, from_pose, *, free=false, axis=None, force=None,

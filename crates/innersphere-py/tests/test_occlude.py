@@ -1,5 +1,6 @@
 """The bite of a jaw pair (`innersphere.occlude`): the same answer as `ist occlude` bit for bit,
-with the joints and free, the teeth brought together, and clear errors."""
+with the joints and free, the teeth brought together, a status that says how each closing
+ended ("converged" only at rest in contact), and clear errors for what cannot bite."""
 
 import json
 
@@ -48,7 +49,8 @@ def test_the_bite_equals_ist_occlude_with_the_joints(jaws, ist):
     got = innersphere.occlude(a, b, START)
     assert got == cli(ist, pa, pb)
     # Closed: from 1.5 mm apart, B turned about its joints until the crowns touch, at rest.
-    assert got["converged"] and got["volume"] > 0 and got["candidates"] is None
+    assert got["status"] == "converged" and got["converged"]
+    assert got["volume"] > 0 and got["candidates"] is None and got["closings"] is None
     pair = innersphere.Pair(a, b)
     assert pair.distance(START).distance > 1.4
     assert pair.penetration(got["pose"]).volume > 0
@@ -64,7 +66,45 @@ def test_the_free_bite_equals_ist_occlude_free(jaws, ist):
     assert got == cli(ist, pa, pb, "--free", "--starts", 6, "--spread", 1.0, "--seed", 3)
     assert got["joints"] is None and got["contact_stiffness"] == 1000.0
     assert 1 <= len(got["candidates"]) <= 6 and got["candidates"][0]["pose"] == got["pose"]
-    assert sum(c["starts"] for c in got["candidates"]) <= 6
+    # Every start accounted for, by status; the candidates are the converged ones.
+    assert got["status"] == "converged"
+    assert set(got["closings"]) == {"converged", "no_contact", "time_limit", "passed_through", "escaped"}
+    assert sum(got["closings"].values()) == 6
+    assert sum(c["starts"] for c in got["candidates"]) == got["closings"]["converged"]
+
+
+def test_a_closing_out_of_time_says_so(jaws):
+    a, b, _, _ = jaws
+    got = innersphere.occlude(a, b, START, max_seconds=0.05)
+    assert got["status"] == "time_limit" and not got["converged"] and got["steps"] == 50
+    # Still open: the exact gap between the spheres is more than the 0.25 mm it closed.
+    assert innersphere.Pair(a, b).distance(got["pose"]).distance > 1.0
+
+
+def test_what_cannot_bite_is_refused_with_the_limit_named(jaws):
+    a, b, _, _ = jaws
+    for kw, want in [
+        (dict(force=0.001), "0.5 to 1000 N"),
+        (dict(force=2000.0), "0.5 to 1000 N"),
+        (dict(force=100.0), "2 mm³"),
+        (dict(contact_stiffness=1e300), "at most 100000 N/mm³"),
+        (dict(free=True, spread=1000.0), "at most 10 mm"),
+        (dict(free=True, starts=5000), "1 to 1000"),
+    ]:
+        with pytest.raises(ValueError, match=want):
+            innersphere.occlude(a, b, START, **kw)
+    # An arch against its own copy: they do not face each other.
+    for free in (False, True):
+        with pytest.raises(ValueError, match="do not face each other"):
+            innersphere.occlude(a, a, START, free=free, starts=2)
+    # A start far open, beside A, beyond it.
+    for start, want in [
+        ([0, 0, -1e15, 1, 0, 0, 0], "at most 30 mm open"),
+        ([60, 0, -1, 1, 0, 0, 0], "side by side"),
+        ([0, 0, 20, 1, 0, 0, 0], "beyond A's"),
+    ]:
+        with pytest.raises(ValueError, match=want):
+            innersphere.occlude(a, b, start)
 
 
 def test_bad_options_are_value_errors(jaws):

@@ -212,6 +212,45 @@ impl AnatomicalFrame {
     }
 }
 
+/// Opposed bodies' centroids lie at least this share of their mean height apart along up,
+/// with B at the identity (in A's frame). Arches in occlusion lie about half their height
+/// apart (0.67 for the generated arch pair of [`shapes::arch_pair`](crate::shapes::arch_pair),
+/// 0.57 for the project's jaw pair), an arch and its own copy 0: their frame's up has no
+/// sign, and closing one onto the other bites nothing.
+pub const OPPOSED_SEPARATION: f64 = 0.25;
+
+/// Refuses two bodies that do not face each other along `up` (unit, from B towards A) with
+/// B at the identity: their centroids must lie at least [`OPPOSED_SEPARATION`] of their
+/// mean height (their extent along `up`) apart along it, B's below A's. What a bite of A
+/// and B needs before any closing: two upper arches, or an arch and its own copy, fail it.
+pub fn check_opposed(a: &[DVec3], b: &[DVec3], up: DVec3) -> Result<()> {
+    if a.is_empty() || b.is_empty() {
+        return Err(Error::InvalidMesh(
+            "the bite needs points of both bodies".into(),
+        ));
+    }
+    let height = |p: &[DVec3]| {
+        let (lo, hi) = p
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v.dot(up)), hi.max(v.dot(up)))
+            });
+        hi - lo
+    };
+    let apart = (centroid(a) - centroid(b)).dot(up);
+    let need = OPPOSED_SEPARATION * 0.5 * (height(a) + height(b));
+    if apart >= need {
+        return Ok(());
+    }
+    Err(Error::InvalidMesh(format!(
+        "the two arches do not face each other along the occlusal axis: with B in A's frame \
+         their centres lie {:.1} mm apart along it, where opposed arches lie about half their \
+         height apart (at least {:.1} mm here). Is B the lower arch, and is it in A's frame?",
+        apart.max(0.0),
+        need
+    )))
+}
+
 fn centroid(v: &[DVec3]) -> DVec3 {
     if v.is_empty() {
         DVec3::ZERO
@@ -330,5 +369,44 @@ mod tests {
         }
         let (vals, _) = symmetric_eigen([[2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]]);
         assert_eq!(vals, [2.0; 3]);
+    }
+
+    /// The corners of a box `w` wide (x, y) and `h` high (z), its base at height `z`.
+    fn slab(w: f64, h: f64, z: f64) -> Vec<DVec3> {
+        let mut p = vec![];
+        for i in 0..8 {
+            let bit = |k: usize| ((i >> k) & 1) as f64;
+            p.push(DVec3::new(w * bit(0), w * bit(1), z + h * bit(2)));
+        }
+        p
+    }
+
+    #[test]
+    fn opposed_bodies_lie_a_quarter_of_their_mean_height_apart_along_up() {
+        // Two slabs 10 mm high (mean height 10): opposed from 2.5 mm apart along up.
+        let b = slab(40.0, 10.0, 0.0);
+        for (z, ok) in [
+            (8.0, true),
+            (2.5, true),
+            (2.49, false),
+            (0.0, false),
+            (-8.0, false),
+        ] {
+            let a = slab(40.0, 10.0, z);
+            assert_eq!(check_opposed(&a, &b, DVec3::Z).is_ok(), ok, "A {z} mm up");
+        }
+        // The mean height: a 30 mm block over a 10 mm slab needs 5 mm.
+        assert!(check_opposed(&slab(40.0, 30.0, -5.01), &b, DVec3::Z).is_err());
+        assert!(check_opposed(&slab(40.0, 30.0, -5.0), &b, DVec3::Z).is_ok());
+        // A body against its own copy: refused with the sentence a surgeon reads.
+        let e = check_opposed(&b, &b, DVec3::Z).unwrap_err().to_string();
+        assert!(
+            e.contains("do not face each other")
+                && e.contains("0.0 mm apart")
+                && e.contains("at least 2.5 mm")
+                && e.contains("Is B the lower arch"),
+            "{e}"
+        );
+        assert!(check_opposed(&[], &b, DVec3::Z).is_err());
     }
 }

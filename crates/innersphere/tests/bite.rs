@@ -6,7 +6,7 @@
 use glam::DVec3;
 use innersphere::haptic::{
     bite, frame_of, occlude, occlude_free, BiteOptions, FreeOcclusionOptions, Joints,
-    OcclusionOptions, CONDYLE_HALF_SPAN,
+    OcclusionOptions, OcclusionStatus, CONDYLE_HALF_SPAN,
 };
 use innersphere::{shapes, BuildOptions, Pair, Pose, Resolution, SharedTree, SphereTree};
 use serde_json::Value;
@@ -50,11 +50,13 @@ fn the_bite_with_the_joints_is_the_occlusion_with_the_frame_and_joints_it_report
         ..Default::default()
     };
     let got = bite(a, b, &from, &opts).unwrap();
-    // What it documents it runs: the pair's up, the force asked for, 10 N/mm³, the joints
-    // held where the condyles are at the reference.
+    // What it documents it runs: the pair's up, the force asked for (closing at 5 mm/s:
+    // the damping 8 N / 5 mm/s), 10 N/mm³, the joints held where the condyles are at the
+    // reference.
     let closing = OcclusionOptions {
         axis: frame.up,
         force: 8.0,
+        damping: 1.6,
         contact_stiffness: 10.0,
         max_seconds: 10.0,
         joints: Some(Joints::temporomandibular(&frame, &Pose::IDENTITY, 20.0)),
@@ -69,7 +71,7 @@ fn the_bite_with_the_joints_is_the_occlusion_with_the_frame_and_joints_it_report
     // It closed: in contact, at rest, back near the scanned bite.
     let o = &got.occlusion;
     assert!(
-        o.converged && o.volume > 0.0 && !o.patches.is_empty(),
+        o.converged() && o.volume > 0.0 && !o.patches.is_empty(),
         "{o:?}"
     );
     let closed = o.pose.translation.dot(frame.up);
@@ -78,6 +80,8 @@ fn the_bite_with_the_joints_is_the_occlusion_with_the_frame_and_joints_it_report
     let j = got.to_json();
     assert_eq!(array(&j["pose"]), o.pose.to_array());
     assert_eq!(j["converged"], true);
+    assert_eq!(j["status"], "converged");
+    assert!(j["closings"].is_null());
     assert_eq!(j["steps"].as_u64().unwrap() as usize, o.steps);
     assert_eq!(num(&j["seconds"]), o.seconds);
     assert_eq!(num(&j["volume"]), o.volume);
@@ -181,7 +185,8 @@ fn the_free_bite_is_the_free_occlusion_with_the_spread_it_documents() {
     )
     .unwrap();
     assert_eq!(got.candidates, want.candidates);
-    assert_eq!(Some(&got.occlusion), want.closing.as_ref());
+    assert_eq!(got.occlusion, want.closing);
+    assert_eq!(got.closings.as_ref(), Some(&want.closings));
     assert!(!got.candidates.is_empty());
     assert_eq!(got.occlusion.pose, got.candidates[0].pose);
     let j = got.to_json();
@@ -192,7 +197,6 @@ fn the_free_bite_is_the_free_occlusion_with_the_spread_it_documents() {
     for (v, k) in c.iter().zip(&got.candidates) {
         assert_eq!(array(&v["pose"]), k.pose.to_array());
         assert_eq!(v["starts"].as_u64().unwrap() as usize, k.starts);
-        assert_eq!(v["converged"].as_bool().unwrap(), k.converged);
         assert_eq!(v["contacts"].as_u64().unwrap() as usize, k.contacts);
         assert_eq!(
             v["contacts_left"].as_u64().unwrap() as usize,
@@ -206,11 +210,11 @@ fn the_free_bite_is_the_free_occlusion_with_the_spread_it_documents() {
 }
 
 #[test]
-fn a_free_bite_that_never_touches_stays_at_its_start() {
+fn a_free_bite_where_no_closing_converges_answers_with_the_starts_own_closing() {
     let (a, b) = arches();
     let frame = frame_of(a.tree(), b.tree()).unwrap();
-    // 30 mm open with a tenth of a second to close: no closing reaches A.
-    let from = Pose::from_translation(-30.0 * frame.up);
+    // 25 mm open with a tenth of a second to close: no closing reaches A.
+    let from = Pose::from_translation(-25.0 * frame.up);
     let opts = BiteOptions {
         free: true,
         axis: Some(frame.up * 3.0),
@@ -220,9 +224,26 @@ fn a_free_bite_that_never_touches_stays_at_its_start() {
     };
     let got = bite(a, b, &from, &opts).unwrap();
     assert!(got.candidates.is_empty());
+    // Every start accounted for: three closings out of time.
+    let closings = got.closings.as_ref().unwrap();
+    assert_eq!(closings[&OcclusionStatus::TimeLimit], 3, "{closings:?}");
+    assert_eq!(closings.values().sum::<usize>(), 3);
+    // The answer is the start's own closing: 100 steps of 1 ms at 5 mm/s along up.
     let o = &got.occlusion;
-    assert_eq!((o.pose, o.converged, o.steps), (from, false, 0));
-    assert_eq!((o.seconds, o.volume, o.max_depth), (0.0, 0.0, 0.0));
+    assert_eq!((o.status, o.steps), (OcclusionStatus::TimeLimit, 100));
+    assert!(!o.converged());
+    let moved = o.pose.translation - from.translation;
+    assert!((moved.dot(frame.up) - 0.5).abs() < 0.01, "{moved}");
+    assert!(moved.reject_from(frame.up).length() < 1e-9, "{moved}");
+    assert_eq!((o.volume, o.max_depth), (0.0, 0.0));
     assert!(o.patches.is_empty());
     assert!((o.axis - frame.up).length() < 1e-12, "{}", o.axis);
+    let j = got.to_json();
+    assert_eq!(j["status"], "time_limit");
+    assert_eq!(j["converged"], false);
+    assert_eq!(
+        j["closings"],
+        serde_json::json!({"converged": 0, "no_contact": 0, "time_limit": 3,
+                           "passed_through": 0, "escaped": 0})
+    );
 }

@@ -3,14 +3,29 @@
 
 use anyhow::Context;
 use innersphere::glam::DVec3;
-use innersphere::haptic::{bite, BiteOptions};
+use innersphere::haptic::{bite, BiteOptions, OcclusionStatus};
 use innersphere::{Pose, SharedTree};
 use innersphere_eval::haptic::crown_centres;
 use serde_json::json;
 use std::path::PathBuf;
 
+/// The exit code of each status (the error exit, 2, is a refusal: bad input, or bodies or
+/// poses that cannot bite).
+pub fn exit_code(status: OcclusionStatus) -> i32 {
+    match status {
+        OcclusionStatus::Converged => 0,
+        OcclusionStatus::TimeLimit => 1,
+        OcclusionStatus::NoContact => 3,
+        OcclusionStatus::PassedThrough => 4,
+        OcclusionStatus::Escaped => 5,
+    }
+}
+
 /// Arguments of `ist occlude`. Units: millimetres, newtons, seconds.
 #[derive(clap::Args)]
+#[command(
+    after_help = "Status (JSON `status`, the first word printed) and exit code:\n  converged       0  B rests in contact with A, held by the contact (at rest, the net force below 5 % of the closing force)\n  time_limit      1  still moving when --max-seconds ran out\n  (refused)       2  an error: options outside their limits, arches that do not face each other, a start that cannot bite\n  no_contact      3  at rest without touching A (the joints hold B open)\n  passed_through  4  B ended on the far side of A along the closing axis (through A, or slid off past it); the pose is not a bite\n  escaped         5  B moved away from A; the pose is not a bite\nWith --free the status is the chosen candidate's (converged), or, when no closing converged, the closing from --from's; JSON `closings` counts the closings in each status.\nLimits: --force 0.5–1000 N and at most 2 mm³ × --contact-stiffness (the overlap that carries it at rest); --contact-stiffness up to 1e5 N/mm³; --joint-stiffness 0–1e4 N/mm; --max-seconds up to 60; --starts 1–1000; --spread up to 10 mm; B at --from (and --reference with the joints) at most 30 mm open, turned at most 30°, below A and not beside it."
+)]
 pub struct Args {
     /// Tree file of body A (fixed, at the identity pose), or its mesh (built with --preset,
     /// cached).
@@ -28,7 +43,9 @@ pub struct Args {
     /// finds it from the meshes.
     #[arg(long, num_args = 3, allow_hyphen_values = true)]
     axis: Option<Vec<f64>>,
-    /// Closing force (N).
+    /// Closing force (N): 0.5 to 1000, at most 2 mm³ × the contact stiffness (20 N with
+    /// the joints' default 10 N/mm³; up to 1000 N needs 500 N/mm³). B closes at 5 mm/s
+    /// whatever the force.
     #[arg(long, default_value_t = 5.0)]
     force: f64,
     /// Contact stiffness: penalty force per penetration volume (N/mm³). Default 10 with the
@@ -36,7 +53,7 @@ pub struct Args {
     /// each other and slide over).
     #[arg(long)]
     contact_stiffness: Option<f64>,
-    /// Give up after this much simulated time (s).
+    /// Give up after this much simulated time (s), at most 60.
     #[arg(long, default_value_t = 30.0)]
     max_seconds: f64,
     /// The pose to compare the bite with (default the identity: the scanned bite of a pair
@@ -59,11 +76,11 @@ pub struct Args {
     /// candidates.
     #[arg(long)]
     free: bool,
-    /// With --free: closings in all.
+    /// With --free: closings in all (1 to 1000).
     #[arg(long, default_value_t = 120)]
     starts: usize,
-    /// With --free: how far the starts spread sideways and forwards (mm; yaw: twice this in
-    /// degrees).
+    /// With --free: how far the starts spread sideways and forwards (mm, at most 10; yaw:
+    /// twice this in degrees).
     #[arg(long, default_value_t = 2.5)]
     spread: f64,
     /// With --free: the seed of the spread.
@@ -143,18 +160,47 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         let p = o.pose.to_array();
         println!(
             "{} after {} steps ({:.3} s simulated, {:.2} s wall): pose {:.4} {:.4} {:.4} {:.6} {:.6} {:.6} {:.6}\n\
+             {}.\n\
              volume {:.4} mm³, max depth {:.4} mm, {} patches; landmarks within {:.3} mm of the reference (worst of {})",
-            if o.converged { "converged" } else { "NOT converged" },
+            o.status,
             o.steps,
             o.seconds,
             wall,
             p[0], p[1], p[2], p[3], p[4], p[5], p[6],
+            o.status.describe(),
             o.volume,
             o.max_depth,
             o.patches.len(),
             worst,
             errors.len()
         );
+        if let Some(counts) = &found.closings {
+            let total: usize = counts.values().sum();
+            let each: Vec<String> = counts
+                .iter()
+                .filter(|(_, n)| **n > 0)
+                .map(|(s, n)| format!("{n} {s}"))
+                .collect();
+            println!(
+                "starts: {total} ({}); candidates: {}",
+                each.join(", "),
+                found.candidates.len()
+            );
+        }
     }
-    Ok(if o.converged { 0 } else { 1 })
+    Ok(exit_code(o.status))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_status_has_its_own_exit_code_and_none_is_the_error_code() {
+        let codes: Vec<i32> = OcclusionStatus::ALL.iter().map(|s| exit_code(*s)).collect();
+        assert_eq!(codes, [0, 3, 1, 4, 5]);
+        for (i, c) in codes.iter().enumerate() {
+            assert!(*c != 2 && !codes[..i].contains(c), "{codes:?}");
+        }
+    }
 }

@@ -1040,7 +1040,7 @@ fn haptic_and_occlude_run_on_generated_bodies_and_refuse_bad_input() {
                 "0 0 2 1 0 0 0",
                 "--joint-stiffness=-1",
             ],
-            "the joint stiffness must be finite and at least 0, not -1 N/mm",
+            "the joint stiffness must be finite and 0 to 10000 N/mm",
         ),
     ] {
         let t = std::time::Instant::now();
@@ -1055,51 +1055,22 @@ fn haptic_and_occlude_run_on_generated_bodies_and_refuse_bad_input() {
             t.elapsed()
         );
     }
-    // A huge closing axis is a direction like any other.
+    // A box and a ball in the same place do not face each other: no bite to close (the
+    // closings themselves are tested on generated arches in tests/occlude.rs).
     let out = ist(&[
         "occlude",
         s(&ta),
         s(&tb),
         "--from",
         "0 0 2 1 0 0 0",
-        "--axis",
-        "0",
-        "0",
-        "-1e200",
         "--free",
-        "--max-seconds",
-        "0.5",
-        "--json",
     ]);
-    assert!(matches!(code(&out), 0 | 1), "{}", stderr(&out));
-    let v: Value = serde_json::from_str(&stdout(&out)).unwrap();
-    assert_eq!(v["axis"], serde_json::json!([0.0, 0.0, -1.0]), "{v}");
-    // Occlusion runs and reports (a frictionless ball on a flat top need not come to rest:
-    // exit 1 says so; convergence is tested in the library on a seat that holds).
-    let out = ist(&[
-        "occlude",
-        s(&ta),
-        s(&tb),
-        "--from",
-        "0 0 2 1 0 0 0",
-        "--axis",
-        "0",
-        "0",
-        "-1",
-        "--free",
-        "--max-seconds",
-        "2",
-        "--json",
-    ]);
-    assert!(matches!(code(&out), 0 | 1), "{}", stderr(&out));
-    let v: Value = serde_json::from_str(&stdout(&out)).unwrap();
-    assert_eq!(v["converged"].as_bool().unwrap(), code(&out) == 0);
-    assert!(v["pose"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .all(|x| x.as_f64().unwrap().is_finite()));
-    assert!(v["steps"].as_u64().unwrap() > 0);
+    assert_eq!(code(&out), 2, "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("do not face each other"),
+        "{}",
+        stderr(&out)
+    );
 }
 
 /// The vertices and `gap`s of a contact-map PLY written by `ist occlusion-map`.

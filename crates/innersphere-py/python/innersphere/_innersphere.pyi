@@ -500,8 +500,15 @@ def occlude(
     ``free=True``, no joints and ``starts`` closings (default 120) spread within ``spread``
     mm (default 2.5; yaw twice that in degrees) from ``seed`` (default 1), the rest poses
     ranked. ``contact_stiffness`` defaults to 10 N/mm³ with the joints, 1000 free;
-    ``max_seconds`` of simulated time to 30. Returns ``ist occlude --json``'s dict less its
-    wall time and landmarks: ``pose`` (7 numbers), ``converged``, ``steps``, ``seconds``,
-    ``volume``, ``max_depth``, ``patches``, ``axis``, ``force``, ``contact_stiffness``,
-    ``joints``, ``frame``, ``candidates``. Raises ValueError for bad options or poses, or a
-    tree B without mass properties."""
+    ``max_seconds`` of simulated time to 30. Limits as in ``ist occlude``: ``force`` 0.5–1000
+    N and at most 2 mm³ × ``contact_stiffness``, ``contact_stiffness`` up to 1e5,
+    ``joint_stiffness`` 0–1e4, ``max_seconds`` up to 60, ``starts`` 1–1000, ``spread`` up to
+    10. Returns ``ist occlude --json``'s dict less its wall time and landmarks: ``pose`` (7
+    numbers), ``status`` (``"converged"``: at rest in contact; ``"no_contact"``,
+    ``"time_limit"``, ``"passed_through"``, ``"escaped"``), ``converged`` (status is
+    ``"converged"``), ``steps``, ``seconds``, ``volume``, ``max_depth``, ``patches``,
+    ``axis``, ``force``, ``contact_stiffness``, ``joints``, ``frame``, ``candidates``,
+    ``closings`` (free: how many closings ended in each status). Raises ValueError for
+    options out of range, poses that cannot bite (far open, beside A, beyond it, turned),
+    arches that do not face each other (B is not the lower arch in A's frame), or a tree B
+    without mass properties."""

@@ -387,9 +387,10 @@ def occlude_many(
     """``occlude(a, b, from_pose, **options)`` for each jaw pair ``(a, b)`` (``Tree``
     objects, or paths of ``.ist`` files every worker can read), across the cluster, in
     order: per pair the bite's dict, or the exception raised for that pair (one bad pair
-    does not lose the others). ``from_poses``: one start per pair, or one pose for all.
-    ``options`` are ``occlude``'s (``free=True, starts=…`` runs each free closing on one
-    worker's cores)."""
+    does not lose the others; a pair that cannot bite is a ValueError there, and a bite that
+    did not converge says so in its ``status``). ``from_poses``: one start per pair, or one
+    pose for all. ``options`` are ``occlude``'s (``free=True, starts=…`` runs each free
+    closing on one worker's cores)."""
     one = np.asarray(from_poses, dtype=np.float64)
     poses = [one] * len(pairs) if one.shape in ((7,), (4, 4)) else list(one)
     if len(poses) != len(pairs):

@@ -6,9 +6,12 @@
 //! `occlude_many` run: one place decides the frame, the joints and the defaults.
 
 use super::free_occlusion::{occlude_free, Candidate, FreeOcclusionOptions};
-use super::occlusion::{occlude, Joints, Occlusion, OcclusionOptions};
-use crate::anatomy::AnatomicalFrame;
-use crate::error::Result;
+use super::occlusion::{occlude, unit, Joints, Occlusion, OcclusionOptions};
+use super::occlusion_limits::{check_options, check_start};
+use super::occlusion_status::StatusCounts;
+use super::reach::Reach;
+use crate::anatomy::{check_opposed, AnatomicalFrame};
+use crate::error::{Error, Result};
 use crate::pose::Pose;
 use crate::query::{Pair, SharedTree};
 use crate::tree::SphereTree;
@@ -17,17 +20,23 @@ use glam::DVec3;
 /// Half the distance between a human's condyles (mm, at the frame's scale 1).
 pub const CONDYLE_HALF_SPAN: f64 = 50.0;
 
+/// How fast B closes in free flight (mm/s): the damping is the force over it, so that a
+/// larger force presses harder without closing faster (one 1 ms step moves B 5 µm, a tenth
+/// of [`MAX_STEP_TRAVEL`](super::occlusion_limits::MAX_STEP_TRAVEL)).
+pub const CLOSING_SPEED: f64 = 5.0;
+
 /// Settings of [`bite`]. Units: mm, N, s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BiteOptions {
     /// Closing direction (A's frame); `None`: the pair's occlusal "up" (from B towards A).
     pub axis: Option<DVec3>,
-    /// Closing force (N).
+    /// Closing force (N): 0.5 to 1000, and at most 2 mm³ × the contact stiffness
+    /// ([`occlusion_limits`](super::occlusion_limits)).
     pub force: f64,
     /// Penalty force per penetration volume (N/mm³); `None`: 10 with the joints, 1000 free
     /// (stiff, so that a free segment's cusps do not sink into each other and slide over).
     pub contact_stiffness: Option<f64>,
-    /// Simulated time before giving up (s).
+    /// Simulated time before giving up (s), at most 60.
     pub max_seconds: f64,
     /// Where B's condyles are held: where they are with B at this pose (the scanned bite of
     /// a pair scanned in occlusion: the identity).
@@ -37,10 +46,10 @@ pub struct BiteOptions {
     /// B is a free segment (no joints): closed from `starts` places around the start, the
     /// rest poses ranked ([`occlude_free`]).
     pub free: bool,
-    /// Free: closings in all.
+    /// Free: closings in all (1 to 1000).
     pub starts: usize,
-    /// Free: how far the starts spread sideways and forwards (mm); the yaw spread is twice
-    /// this in degrees.
+    /// Free: how far the starts spread sideways and forwards (mm, at most 10); the yaw
+    /// spread is twice this in degrees.
     pub spread: f64,
     /// Free: the seed of the spread.
     pub seed: u64,
@@ -68,8 +77,9 @@ impl Default for BiteOptions {
 /// What [`bite`] found.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Bite {
-    /// B's rest pose and its closing (steps, volume, depth, patches). Free with no closing
-    /// in contact: the start, not converged.
+    /// B's final pose and its closing (status, steps, volume, depth, patches). Free: the
+    /// chosen candidate's closing; when no closing converged, the closing from the start
+    /// itself, whose status says how it ended.
     pub occlusion: Occlusion,
     /// The pair's anatomical frame (B at the identity) the axis and the joints came from.
     pub frame: AnatomicalFrame,
@@ -77,6 +87,8 @@ pub struct Bite {
     pub closing: OcclusionOptions,
     /// Free: the distinct rest poses, best first (empty with the joints).
     pub candidates: Vec<Candidate>,
+    /// Free: how many closings ended in each status (`None` with the joints).
+    pub closings: Option<StatusCounts>,
 }
 
 impl Joints {
@@ -102,8 +114,13 @@ pub fn frame_of(a: &SphereTree, b: &SphereTree) -> Result<AnatomicalFrame> {
 }
 
 /// B closed onto A (fixed at the identity) from `from` (B's pose in A's frame): see the
-/// [module docs](self). Fails on bad options, a B without mass properties, or a pair
-/// whose frame cannot be found (e.g. no points).
+/// [module docs](self). The damping is the force over [`CLOSING_SPEED`]. Refused before any
+/// closing: options outside their limits ([`occlusion_limits`](super::occlusion_limits),
+/// [`FreeOcclusionOptions`]'s), arches that do not face each other with B at the identity
+/// ([`check_opposed`]), a closing axis far from the pair's up, and a start (or, with the
+/// joints, a reference pose) from which B cannot bite A (turned, beyond A, far open, or
+/// beside it). Fails too on a B without mass properties, or a pair whose frame cannot be
+/// found (e.g. no points).
 pub fn bite(a: &SharedTree, b: &SharedTree, from: &Pose, opts: &BiteOptions) -> Result<Bite> {
     let frame = frame_of(a, b)?;
     let closing = OcclusionOptions {
@@ -112,21 +129,12 @@ pub fn bite(a: &SharedTree, b: &SharedTree, from: &Pose, opts: &BiteOptions) -> 
         contact_stiffness: opts
             .contact_stiffness
             .unwrap_or(if opts.free { 1000.0 } else { 10.0 }),
+        damping: opts.force / CLOSING_SPEED,
         max_seconds: opts.max_seconds,
         joints: (!opts.free)
             .then(|| Joints::temporomandibular(&frame, &opts.reference, opts.joint_stiffness)),
         ..OcclusionOptions::default()
     };
-    if !opts.free {
-        let mut pair = Pair::new(a, b);
-        let occlusion = occlude(&mut pair, &Pose::IDENTITY, from, &closing)?;
-        return Ok(Bite {
-            occlusion,
-            frame,
-            closing,
-            candidates: vec![],
-        });
-    }
     let fo = FreeOcclusionOptions {
         closing,
         lateral: frame.left,
@@ -136,33 +144,59 @@ pub fn bite(a: &SharedTree, b: &SharedTree, from: &Pose, opts: &BiteOptions) -> 
         seed: opts.seed,
         ..FreeOcclusionOptions::default()
     };
+    // The options first (what the user typed), then the bodies and the poses.
+    check_options(&closing)?;
+    if opts.free {
+        fo.check()?;
+    }
+    for (what, pose) in [("start", from), ("reference", &opts.reference)] {
+        if !pose.translation.is_finite() || !pose.rotation.is_finite() {
+            return Err(Error::InvalidOption(format!(
+                "the {what} pose must be finite"
+            )));
+        }
+    }
+    let axis = unit(closing.axis).expect("checked");
+    let reach = Reach::new(a.tree(), b.tree());
+    let (ca, cb) = reach.centres();
+    check_opposed(&ca, &cb, frame.up)?;
+    Reach::check_axis(axis, frame.up)?;
+    reach.check_pose("the start", from, axis, frame.left)?;
+    if !opts.free {
+        reach.check_pose("the reference pose", &opts.reference, axis, frame.left)?;
+    }
+    check_start(&closing, from)?;
+    if !opts.free {
+        let mut pair = Pair::new(a, b);
+        let occlusion = occlude(&mut pair, &Pose::IDENTITY, from, &closing)?;
+        return Ok(Bite {
+            occlusion,
+            frame,
+            closing,
+            candidates: vec![],
+            closings: None,
+        });
+    }
     let f = occlude_free(a, b, &Pose::IDENTITY, from, &fo)?;
-    let occlusion = f.closing.unwrap_or(Occlusion {
-        pose: *from,
-        converged: false,
-        steps: 0,
-        seconds: 0.0,
-        volume: 0.0,
-        max_depth: 0.0,
-        patches: vec![],
-        axis: closing.axis.normalize(),
-    });
     Ok(Bite {
-        occlusion,
+        occlusion: f.closing,
         frame,
         closing,
         candidates: f.candidates,
+        closings: Some(f.closings),
     })
 }
 
 impl Bite {
     /// The answer as JSON, the shape every door gives (`ist occlude --json` adds the wall
-    /// time and the landmark errors): `pose` (7 numbers), `converged`, `steps`, `seconds`
-    /// (simulated), `volume`, `max_depth`, `patches` (point, normal, volume, depth), `axis`,
-    /// `force`, `contact_stiffness`, `joints` (points, anchors, stiffness; null when free),
-    /// `frame` (up, left, anterior, incisal, hinge, scale) and `candidates` (free: pose,
-    /// starts, converged, contacts, contacts_left, contacts_right, contact_area, volume,
-    /// lateral_stiffness; null with the joints).
+    /// time and the landmark errors): `pose` (7 numbers), `status` (the
+    /// [`OcclusionStatus`](super::OcclusionStatus) word), `converged` (status is
+    /// `converged`), `steps`, `seconds` (simulated), `volume`, `max_depth`, `patches` (point,
+    /// normal, volume, depth), `axis`, `force`, `contact_stiffness`, `joints` (points,
+    /// anchors, stiffness; null when free), `frame` (up, left, anterior, incisal, hinge,
+    /// scale), `candidates` (free: pose, starts, contacts, contacts_left, contacts_right,
+    /// contact_area, volume, lateral_stiffness; null with the joints) and `closings` (free:
+    /// how many closings ended in each status, every status named; null with the joints).
     pub fn to_json(&self) -> serde_json::Value {
         use serde_json::json;
         let o = &self.occlusion;
@@ -174,7 +208,6 @@ impl Bite {
                     json!({
                         "pose": c.pose.to_array(),
                         "starts": c.starts,
-                        "converged": c.converged,
                         "contacts": c.contacts,
                         "contacts_left": c.lateral_side,
                         "contacts_right": c.other_side,
@@ -187,7 +220,8 @@ impl Bite {
         });
         json!({
             "pose": o.pose.to_array(),
-            "converged": o.converged,
+            "status": o.status,
+            "converged": o.converged(),
             "steps": o.steps,
             "seconds": o.seconds,
             "volume": o.volume,
@@ -215,6 +249,7 @@ impl Bite {
                 "scale": f.scale,
             },
             "candidates": candidates,
+            "closings": self.closings,
         })
     }
 }

@@ -23,6 +23,7 @@
 //! (docs/OCCLUSION.md).
 
 use super::occlusion::{occlude, unit, Occlusion, OcclusionOptions};
+use super::occlusion_status::{count_statuses, OcclusionStatus, StatusCounts};
 use crate::error::{num, vec3, Error, Result};
 use crate::pose::Pose;
 use crate::query::{Pair, Patch, PenetrationOptions, SharedTree};
@@ -72,20 +73,34 @@ impl Default for FreeOcclusionOptions {
     }
 }
 
+/// The most closings: the candidates near a start number 70–80 on a real arch (120 starts),
+/// and a thousand starts in the spread's box already meet each one many times; more only
+/// takes minutes.
+pub const MAX_STARTS: usize = 1000;
+/// The widest spread sideways and forwards (mm). A bite search looks for the rests near the
+/// start, whose basins are a cusp wide (2–5 mm); 10 mm moves B by a whole molar, into the
+/// intercuspation one tooth over, which is no longer the bite around the start.
+pub const MAX_SPREAD: f64 = 10.0;
+/// The widest spread of yaw (degrees): twice [`MAX_SPREAD`] in degrees, as
+/// [`bite`](super::bite) spreads it (20° turns the molars of an arch ±8 mm about its centre).
+pub const MAX_SPREAD_DEGREES: f64 = 20.0;
+
 impl FreeOcclusionOptions {
-    /// Refuses what the closings cannot start from (joints, no starts, a negative or
-    /// non-finite spread or same-pose distance, a lateral direction along the closing axis);
+    /// Refuses what the closings cannot start from (joints, no starts or more than
+    /// [`MAX_STARTS`], a negative or non-finite spread or same-pose distance, a spread beyond
+    /// [`MAX_SPREAD`] or [`MAX_SPREAD_DEGREES`], a lateral direction along the closing axis);
     /// gives the unit closing axis and the unit lateral direction across it. The closing's
     /// own options are [`occlude`]'s to check.
-    fn check(&self) -> Result<(DVec3, DVec3)> {
+    pub(super) fn check(&self) -> Result<(DVec3, DVec3)> {
         if self.closing.joints.is_some() {
             return Err(Error::InvalidOption(
                 "a free segment has no joints: give the closing options without them".into(),
             ));
         }
-        if !(1..=100_000).contains(&self.starts) {
+        if !(1..=MAX_STARTS).contains(&self.starts) {
             return Err(Error::InvalidOption(format!(
-                "the starts must be 1 to 100000, not {}",
+                "the starts must be 1 to {MAX_STARTS} (more only takes minutes: the rests near \
+                 a start are met many times over by then), not {}",
                 self.starts
             )));
         }
@@ -101,6 +116,21 @@ impl FreeOcclusionOptions {
                 )));
             }
         }
+        if self.spread > MAX_SPREAD {
+            return Err(Error::InvalidOption(format!(
+                "the spread must be at most {} mm (a bite search looks around its start: \
+                 farther, B lands one tooth over), not {} mm",
+                num(MAX_SPREAD),
+                num(self.spread)
+            )));
+        }
+        if self.spread_angle > MAX_SPREAD_DEGREES.to_radians() {
+            return Err(Error::InvalidOption(format!(
+                "the spread angle must be at most {}°, not {}°",
+                num(MAX_SPREAD_DEGREES),
+                num((self.spread_angle.to_degrees() * 1e3).round() / 1e3)
+            )));
+        }
         // No axis (the closing refuses it): the lateral direction is taken as given.
         let axis = unit(self.closing.axis).unwrap_or(DVec3::ZERO);
         let lateral = (self.lateral - axis * self.lateral.dot(axis)).normalize_or_zero();
@@ -114,15 +144,13 @@ impl FreeOcclusionOptions {
     }
 }
 
-/// One distinct rest pose.
+/// One distinct rest pose: where closings converged (at rest in contact).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Candidate {
     /// B's pose.
     pub pose: Pose,
     /// How many starts ended here (the basin: a stability measure of the pose as a whole).
     pub starts: usize,
-    /// Whether its closing came to rest in the time allowed.
-    pub converged: bool,
     /// Contact patches.
     pub contacts: usize,
     /// Patches on the `lateral` side of B's centre of mass, and on the other.
@@ -142,17 +170,15 @@ pub struct Candidate {
 /// What [`occlude_free`] found.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FreeOcclusion {
-    /// The chosen pose: the first candidate's.
-    pub pose: Pose,
-    /// Whether the chosen candidate's closing came to rest.
-    pub converged: bool,
-    /// The distinct rest poses with contact, best first.
+    /// The answer: the chosen candidate's closing (its pose, steps, volume, depth, patches;
+    /// converged); when no closing converged, the closing from the start itself, whose
+    /// status says how it ended.
+    pub closing: Occlusion,
+    /// The distinct rest poses in contact, best first (empty when no closing converged).
     pub candidates: Vec<Candidate>,
-    /// The chosen candidate's closing (its steps, volume, depth, patches); `None` when no
-    /// closing ended in contact.
-    pub closing: Option<Occlusion>,
-    /// Closings that came to rest, of all.
-    pub converged_starts: usize,
+    /// How many closings ended in each status (they add up to the starts): every start is
+    /// accounted for.
+    pub closings: StatusCounts,
 }
 
 /// Where one closing rested (`o.pose`), its contact patches on the lateral side and on the
@@ -189,6 +215,8 @@ impl Spread {
 /// Closes B (tree `b`, from `from`) onto A (tree `a`, fixed at `pose_a`) from `opts.starts`
 /// places around `from` and ranks the rest poses (see the module doc). The closings run in
 /// parallel (rayon), each on its own [`Pair`]; the answer does not depend on the threads.
+/// Only closings that converged (at rest in contact) are candidates; the others are counted
+/// by status in [`FreeOcclusion::closings`].
 /// Fails on bad options, joints in `opts.closing`, or a tree of B without mass properties.
 pub fn occlude_free(
     a: &SharedTree,
@@ -220,7 +248,10 @@ pub fn occlude_free(
         })
         .collect();
     let probes = Probes::new(com, info.radius);
-    let (mut clusters, converged_starts) = cluster(rests, &probes, opts.same_pose)?;
+    let rests = rests.into_iter().collect::<Result<Vec<Rest>>>()?;
+    let closings = count_statuses(rests.iter().map(|r| r.o.status));
+    let first = rests.first().map(|r| r.o.clone());
+    let mut clusters = cluster(rests, &probes, opts.same_pose);
     // Best first (stable: ties keep the start order).
     clusters.sort_by(|x, y| y.score().total_cmp(&x.score()));
     let popts = PenetrationOptions {
@@ -236,7 +267,6 @@ pub fn occlude_free(
             Candidate {
                 pose: k.o.pose,
                 starts: k.starts,
-                converged: k.o.converged,
                 contacts: k.on + k.off,
                 lateral_side: k.on,
                 other_side: k.off,
@@ -246,13 +276,14 @@ pub fn occlude_free(
             }
         })
         .collect();
-    let closing = clusters.into_iter().next().map(|k| k.o);
+    let closing = match clusters.into_iter().next() {
+        Some(k) => k.o,
+        None => first.expect("at least one start"),
+    };
     Ok(FreeOcclusion {
-        pose: closing.as_ref().map_or(*from, |o| o.pose),
-        converged: closing.as_ref().is_some_and(|o| o.converged),
-        candidates,
-        converged_starts,
         closing,
+        candidates,
+        closings,
     })
 }
 
@@ -284,20 +315,13 @@ impl Probes {
     }
 }
 
-/// The rests with contact, merged into clusters in start order: a rest within `same_pose`
-/// of a cluster's first rest ([`Probes::apart`]) counts as one more start of it. Also gives
-/// how many closings came to rest, with contact or without. Fails with a closing's error.
-fn cluster(
-    rests: impl IntoIterator<Item = Result<Rest>>,
-    probes: &Probes,
-    same_pose: f64,
-) -> Result<(Vec<Rest>, usize)> {
-    let mut converged = 0;
+/// The rests that converged (at rest in contact), merged into clusters in start order: a
+/// rest within `same_pose` of a cluster's first rest ([`Probes::apart`]) counts as one more
+/// start of it.
+fn cluster(rests: impl IntoIterator<Item = Rest>, probes: &Probes, same_pose: f64) -> Vec<Rest> {
     let mut clusters: Vec<Rest> = Vec::new();
     for rest in rests {
-        let rest = rest?;
-        converged += rest.o.converged as usize;
-        if rest.on + rest.off == 0 {
+        if rest.o.status != OcclusionStatus::Converged || rest.on + rest.off == 0 {
             continue;
         }
         match clusters
@@ -308,7 +332,7 @@ fn cluster(
             None => clusters.push(rest),
         }
     }
-    Ok((clusters, converged))
+    clusters
 }
 
 /// The least stiffness of the contact's linear block `m` (N/mm, world) against a push
@@ -455,7 +479,7 @@ mod tests {
     fn rests_rank_by_starts_times_the_weaker_side_over_the_imbalance() {
         let rest = |starts, on, off| Rest {
             starts,
-            ..rest_at(0.0, true, on, off).unwrap()
+            ..rest_at(0.0, OcclusionStatus::Converged, on, off)
         };
         assert_eq!(rest(3, 4, 2).score(), 2.0);
         assert_eq!(rest(3, 2, 4).score(), 2.0);
@@ -513,18 +537,36 @@ mod tests {
         };
         assert_eq!(huge.check().unwrap(), (DVec3::Z, DVec3::X));
         let edges = FreeOcclusionOptions {
-            starts: 100_000,
+            starts: 1000,
             spread: 0.0,
             spread_angle: 0.0,
             same_pose: 0.0,
             ..good
         };
         assert!(edges.check().is_ok());
+        let widest = FreeOcclusionOptions {
+            spread: 10.0,
+            spread_angle: 20f64.to_radians(),
+            ..good
+        };
+        assert!(widest.check().is_ok());
         assert!(FreeOcclusionOptions { starts: 1, ..good }.check().is_ok());
         let mut bad = vec![
             FreeOcclusionOptions { starts: 0, ..good },
             FreeOcclusionOptions {
-                starts: 100_001,
+                starts: 1001,
+                ..good
+            },
+            FreeOcclusionOptions {
+                spread: 10.01,
+                ..good
+            },
+            FreeOcclusionOptions {
+                spread: 1000.0,
+                ..good
+            },
+            FreeOcclusionOptions {
+                spread_angle: 20.01f64.to_radians(),
                 ..good
             },
             FreeOcclusionOptions {
@@ -613,12 +655,13 @@ mod tests {
         assert!((Probes::new(com, 0.0).apart(&p, &shifted) - 0.5).abs() < 1e-12);
     }
 
-    /// A closing that rested at `x` along x, with `on` and `off` patches on either side.
-    fn rest_at(x: f64, converged: bool, on: usize, off: usize) -> Result<Rest> {
-        Ok(Rest {
+    /// A closing that ended at `x` along x in `status`, with `on` and `off` patches on
+    /// either side.
+    fn rest_at(x: f64, status: OcclusionStatus, on: usize, off: usize) -> Rest {
+        Rest {
             o: Occlusion {
                 pose: Pose::new(DVec3::new(x, 0.0, 0.0), DQuat::IDENTITY).unwrap(),
-                converged,
+                status,
                 steps: 0,
                 seconds: 0.0,
                 volume: 0.0,
@@ -629,35 +672,32 @@ mod tests {
             on,
             off,
             starts: 1,
-        })
+        }
     }
 
     #[test]
-    fn rests_within_the_same_pose_distance_of_a_cluster_join_it() {
+    fn converged_rests_within_the_same_pose_distance_of_a_cluster_join_it() {
+        use OcclusionStatus::*;
         let probes = Probes::new(DVec3::ZERO, 1.0);
         let rests = [
-            rest_at(0.0, true, 2, 1),
-            rest_at(0.0625, false, 1, 1),
+            rest_at(0.0, Converged, 2, 1),
+            // In contact but out of time, through A, away: no rest, not clustered.
+            rest_at(0.0625, TimeLimit, 1, 1),
+            rest_at(0.0, PassedThrough, 1, 1),
+            rest_at(0.0, Escaped, 0, 0),
             // Exactly the distance from the first: a cluster of its own.
-            rest_at(0.125, true, 3, 3),
-            // No contact: counted as converged, not clustered.
-            rest_at(5.0, true, 0, 0),
-            rest_at(0.1875, true, 1, 0),
-            rest_at(-0.0625, true, 1, 2),
+            rest_at(0.125, Converged, 3, 3),
+            // At rest without contact: not clustered.
+            rest_at(5.0, NoContact, 0, 0),
+            rest_at(0.1875, Converged, 1, 0),
+            rest_at(-0.0625, Converged, 1, 2),
         ];
-        let (clusters, converged) = cluster(rests, &probes, 0.125).unwrap();
-        assert_eq!(converged, 5);
+        let clusters = cluster(rests, &probes, 0.125);
         let got: Vec<(f64, usize, usize)> = clusters
             .iter()
             .map(|k| (k.o.pose.translation.x, k.starts, k.on))
             .collect();
-        assert_eq!(got, [(0.0, 3, 2), (0.125, 2, 3)]);
-        // A closing's error is the answer.
-        let failing = [
-            rest_at(0.0, true, 1, 1),
-            Err(Error::InvalidOption("x".into())),
-        ];
-        assert!(cluster(failing, &probes, 0.125).is_err());
+        assert_eq!(got, [(0.0, 2, 2), (0.125, 2, 3)]);
     }
 
     #[test]

@@ -7,8 +7,10 @@
 //! - [`device`]: device classes, their limits and default coupling;
 //! - [`body`]: the tool's mass properties and state;
 //! - [`render`]: the loop, one [`HapticLoop::tick`] per device tick, with a deadline;
-//! - [`occlusion`]: the bite found by dynamics; [`free_occlusion`]: a free segment's, from
-//!   many starts; [`bite`](mod@bite): either, set up from the jaw pair's own frame.
+//! - [`occlusion`]: the bite found by dynamics, with [`occlusion_limits`] (what a closing
+//!   accepts) and [`occlusion_status`] (how it ended); [`free_occlusion`]: a free
+//!   segment's, from many starts; [`bite`](mod@bite): either, set up from the jaw pair's own
+//!   frame, refusing bodies and poses that cannot bite (`reach`).
 //!
 //! Units: millimetres, newtons, seconds, kilograms. `docs/HAPTICS.md` explains the model,
 //! the parameters and why the loop is stable and passive.
@@ -23,6 +25,9 @@ mod mat6;
 pub mod model;
 pub mod multirate;
 pub mod occlusion;
+pub mod occlusion_limits;
+pub mod occlusion_status;
+mod reach;
 pub mod realtime;
 pub mod render;
 pub mod servo;
@@ -35,6 +40,7 @@ pub use free_occlusion::{occlude_free, Candidate, FreeOcclusion, FreeOcclusionOp
 pub use model::ContactModel;
 pub use multirate::{CollisionOptions, CollisionStats, MultirateLoop};
 pub use occlusion::{occlude, Joints, Occlusion, OcclusionOptions};
+pub use occlusion_status::{count_statuses, OcclusionStatus, StatusCounts};
 pub use render::{check_step, HapticLoop, HapticOptions, Tick, MIN_RATE};
 pub use servo::Servo;
 pub use step::Wrench;

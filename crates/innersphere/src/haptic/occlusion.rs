@@ -4,9 +4,10 @@
 
 use super::body::{rotation_between, BodyState, RigidBody, TOOTH_DENSITY};
 use super::mat6::Mat6;
+use super::occlusion_limits::{check, short};
+use super::occlusion_status::{OcclusionStatus, BALANCE};
 use super::step::{add_block, contact_damping, implicit_step, Wrench};
-use crate::error::{num, vec3};
-use crate::error::{Error, Result};
+use crate::error::{num, Error, Result};
 use crate::pose::Pose;
 use crate::query::{Pair, Patch, PenetrationOptions};
 use glam::{DMat3, DQuat, DVec3};
@@ -25,15 +26,17 @@ fn cross(r: DVec3) -> DMat3 {
 pub struct OcclusionOptions {
     /// Unit direction B is pushed (world), e.g. A's occlusal "up" for a lower jaw.
     pub axis: DVec3,
-    /// Closing force (N), applied at B's centre of mass.
+    /// Closing force (N), applied at B's centre of mass: 0.5 to 1000 N, and at most
+    /// 2 mm³ × `contact_stiffness` (the overlap that carries it at rest; see
+    /// [`occlusion_limits`](super::occlusion_limits)).
     pub force: f64,
-    /// Penalty force per unit of penetration volume (N/mm³).
+    /// Penalty force per unit of penetration volume (N/mm³), at most 1e5.
     pub contact_stiffness: f64,
     /// Contact damping (s), as [`HapticOptions::contact_damping`](super::HapticOptions::contact_damping).
     pub contact_damping: f64,
     /// Viscous damping of B's motion (N·s/mm); rotations get `damping × r²` N·mm·s/rad,
     /// `r` B's radius of gyration. It sets how fast B closes (`force / damping` mm/s in free
-    /// flight).
+    /// flight; one step moves B at most 0.05 mm in free flight).
     pub damping: f64,
     /// Density of B (kg per model unit³).
     pub density: f64,
@@ -44,7 +47,7 @@ pub struct OcclusionOptions {
     pub rest_distance: f64,
     /// Steps over which rest is judged.
     pub rest_window: usize,
-    /// Give up after this much simulated time (s).
+    /// Give up after this much simulated time (s), at most 60.
     pub max_seconds: f64,
     /// Joints that hold points of B near points of A (see [`Joints`]); `None`: B is a free
     /// body.
@@ -86,36 +89,48 @@ impl Default for OcclusionOptions {
     }
 }
 
-/// Where B came to rest.
+/// Where the closing left B, and how it ended.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Occlusion {
     /// B's final pose.
     pub pose: Pose,
-    /// True when B came to rest within the time allowed.
-    pub converged: bool,
+    /// How the closing ended: [`OcclusionStatus::Converged`] only when B rests in contact
+    /// with A, held there by the contact.
+    pub status: OcclusionStatus,
     /// Integration steps taken.
     pub steps: usize,
     /// Simulated time (s).
     pub seconds: f64,
-    /// Penetration volume at rest (mm³).
+    /// Penetration volume at the final pose (mm³).
     pub volume: f64,
-    /// Deepest leaf-pair overlap at rest (mm).
+    /// Deepest leaf-pair overlap at the final pose (mm).
     pub max_depth: f64,
-    /// Contact regions at rest (world).
+    /// Contact regions at the final pose (world).
     pub patches: Vec<Patch>,
     /// The unit direction B was pushed (the options' axis, normalised).
     pub axis: DVec3,
 }
 
+impl Occlusion {
+    /// True exactly when the closing converged: B at rest in contact.
+    pub fn converged(&self) -> bool {
+        self.status == OcclusionStatus::Converged
+    }
+}
+
 /// Closes B (at `from`) onto A (fixed at `pose_a`) under `opts.force` along `opts.axis` until
-/// it rests. Fails on bad options or a tree of B without mass properties.
+/// it rests, and says how it ended ([`OcclusionStatus`]): at rest in contact (converged), at
+/// rest open, out of time, through A, or away from it (the last two stop the closing at
+/// once). Fails on options outside their limits ([`occlusion_limits`](super::occlusion_limits)),
+/// a tree of B without mass properties, or dynamics that fail (the error says at which step
+/// and why).
 pub fn occlude(
     pair: &mut Pair,
     pose_a: &Pose,
     from: &Pose,
     opts: &OcclusionOptions,
 ) -> Result<Occlusion> {
-    check(opts)?;
+    check(opts, from)?;
     let body = RigidBody::from_tree(pair.tree_b(), opts.density)?;
     let axis = unit(opts.axis).expect("checked");
     let mut state = BodyState::at_rest(*from);
@@ -127,14 +142,17 @@ pub fn occlude(
     let gyration2 = gyration_squared(&body);
     let (b, br) = own_damping(opts.damping, gyration2);
     let mut rest = RestWatch::new(opts.rest_window, opts.rest_distance, gyration2.sqrt());
+    let bounds = Bounds::new(pair, pose_a, from, body.center_of_mass, axis);
+    let balance = (
+        BALANCE * opts.force,
+        BALANCE * opts.force * gyration2.sqrt(),
+    );
     let mut steps = 0;
-    let mut converged = false;
-    while steps < max_steps {
+    let status = loop {
         let p = pair.penetration_with(pose_a, &state.pose, &popts);
         let com = state.pose.transform_point(body.center_of_mass);
-        if rest.at_rest(com, state.pose.rotation) {
-            converged = true;
-            break;
+        if let Some(gone) = bounds.left(com) {
+            break gone;
         }
         // The contact's stiffness, then the joints' springs added to it.
         let kc: Mat6 = p.stiffness.to_matrix6();
@@ -143,23 +161,45 @@ pub fn occlude(
             Some(j) => add_joints(j, &state.pose, com, &mut k),
             None => Wrench::default(),
         };
+        // What pushes B, but for its damping: balanced at rest.
+        let pushed = Wrench {
+            force: axis * opts.force + joints.force + p.force,
+            torque: p.torque_b + joints.torque,
+        };
+        let still = rest.at_rest(com, state.pose.rotation);
+        if still && pushed.force.length() <= balance.0 && pushed.torque.length() <= balance.1 {
+            let touching = p.volume > 0.0 && !pair.patches().is_empty();
+            break if touching {
+                OcclusionStatus::Converged
+            } else {
+                OcclusionStatus::NoContact
+            };
+        }
+        if steps == max_steps {
+            break OcclusionStatus::TimeLimit;
+        }
         // The damping: B's own, and the contact's (β·K of the contact, not of the joints).
         let (dw, d) = damping(&kc, opts.contact_damping, b, br, &state);
         let w = Wrench {
-            force: axis * opts.force + joints.force + p.force + dw.force,
-            torque: p.torque_b + joints.torque + dw.torque,
+            force: pushed.force + dw.force,
+            torque: pushed.torque + dw.torque,
         };
         if !implicit_step(&body, &mut state, h, w, &k, &d) {
-            return Err(Error::InvalidOption(
-                "the occlusion's dynamics became non-finite (a non-finite pose or option?)".into(),
+            return Err(diverged(
+                steps,
+                h,
+                (com - bounds.start).length(),
+                &w,
+                &k,
+                &d,
             ));
         }
         steps += 1;
-    }
+    };
     let p = pair.penetration_with(pose_a, &state.pose, &popts);
     Ok(Occlusion {
         pose: state.pose,
-        converged,
+        status,
         steps,
         seconds: steps as f64 * h,
         volume: p.volume,
@@ -167,6 +207,75 @@ pub fn occlude(
         patches: pair.patches().to_vec(),
         axis,
     })
+}
+
+/// Where B may go: A's centre of mass (world), B's start, on which side of A it started
+/// along the closing axis, and how far it may move before it can no longer touch A.
+struct Bounds {
+    /// A's centre of mass (world).
+    a: DVec3,
+    /// B's centre of mass at the start (world).
+    start: DVec3,
+    /// The unit closing axis.
+    axis: DVec3,
+    /// B started on the near side of A's centre of mass along the axis.
+    near: bool,
+    /// The farthest B's centre of mass may move from its start: its start's distance to A's
+    /// centre of mass plus both bodies' radii about their centres of mass. Farther, their
+    /// bounding spheres are apart and B, pushed on along the axis, cannot touch A again.
+    reach: f64,
+}
+
+impl Bounds {
+    fn new(pair: &Pair, pose_a: &Pose, from: &Pose, com_b: DVec3, axis: DVec3) -> Bounds {
+        let radius = |t: &crate::query::SharedTree| {
+            let i = t.info();
+            (i.root_center - i.center_of_mass).length() + i.radius
+        };
+        let a = pose_a.transform_point(pair.tree_a().info().center_of_mass);
+        let start = from.transform_point(com_b);
+        Bounds {
+            a,
+            start,
+            axis,
+            near: (start - a).dot(axis) < 0.0,
+            reach: (start - a).length() + radius(pair.tree_a()) + radius(pair.tree_b()),
+        }
+    }
+
+    /// Whether B (its centre of mass at `com`) has gone through A or away from it.
+    fn left(&self, com: DVec3) -> Option<OcclusionStatus> {
+        if self.near && (com - self.a).dot(self.axis) > 0.0 {
+            Some(OcclusionStatus::PassedThrough)
+        } else if (com - self.start).length() > self.reach {
+            Some(OcclusionStatus::Escaped)
+        } else {
+            None
+        }
+    }
+}
+
+/// The error of a step that could not be taken: at which step, how far B had moved, and
+/// what failed (forces that overflowed, or a contact too stiff for B's mass at this step).
+fn diverged(steps: usize, h: f64, moved: f64, w: &Wrench, k: &Mat6, d: &Mat6) -> Error {
+    let finite = w.force.is_finite()
+        && w.torque.is_finite()
+        && k.iter().chain(d).flatten().all(|x| x.is_finite());
+    let what = if finite {
+        let largest = k.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        format!(
+            "the contact's stiffness there (up to {} N/mm) cannot be stepped with B's mass in              steps of {} s (the step's equations have no solution); a softer contact or a              shorter step avoids it",
+            num(largest),
+            num(h)
+        )
+    } else {
+        "the forces on B overflowed".to_string()
+    };
+    Error::InvalidOption(format!(
+        "the closing failed at step {steps} ({} s simulated), B {} mm from its start: {what}",
+        num(steps as f64 * h),
+        short(moved)
+    ))
 }
 
 /// Up to this many contact patches are reported at rest.
@@ -283,59 +392,6 @@ pub(super) fn unit(v: DVec3) -> Option<DVec3> {
     }
     let u = v / scale;
     Some(u / u.length())
-}
-
-fn check(o: &OcclusionOptions) -> Result<()> {
-    let positive = [
-        ("the closing force", o.force),
-        ("the contact stiffness", o.contact_stiffness),
-        ("the damping", o.damping),
-        ("the density", o.density),
-        ("the step", o.step),
-        ("the rest distance", o.rest_distance),
-        ("the time limit", o.max_seconds),
-    ];
-    for (what, x) in positive {
-        if !(x.is_finite() && x > 0.0) {
-            return Err(Error::InvalidOption(format!(
-                "{what} must be positive and finite, not {}",
-                num(x)
-            )));
-        }
-    }
-    if !(o.contact_damping.is_finite() && o.contact_damping >= 0.0) {
-        return Err(Error::InvalidOption(format!(
-            "the contact damping must be finite and not negative, not {}",
-            num(o.contact_damping)
-        )));
-    }
-    if unit(o.axis).is_none() {
-        return Err(Error::InvalidOption(format!(
-            "the closing axis must be a finite non-zero vector, not {}",
-            vec3(o.axis)
-        )));
-    }
-    if let Some(j) = &o.joints {
-        if !j.points.iter().chain(&j.anchors).all(|p| p.is_finite()) {
-            return Err(Error::InvalidOption(
-                "the joints' points and anchors must be finite".into(),
-            ));
-        }
-        if !(j.stiffness.is_finite() && j.stiffness >= 0.0) {
-            return Err(Error::InvalidOption(format!(
-                "the joint stiffness must be finite and at least 0, not {} N/mm",
-                num(j.stiffness)
-            )));
-        }
-    }
-    if o.max_seconds / o.step > 1e8 {
-        return Err(Error::InvalidOption(format!(
-            "{} s in steps of {} s is more than 10⁸ steps",
-            num(o.max_seconds),
-            num(o.step)
-        )));
-    }
-    Ok(())
 }
 
 #[cfg(test)]
@@ -531,37 +587,5 @@ mod tests {
     fn rotations_are_damped_as_the_mass_at_the_radius_of_gyration() {
         assert_eq!(own_damping(3.0, 4.0), (3.0, 12.0));
         assert_eq!(own_damping(0.5, 0.25), (0.5, 0.125));
-    }
-
-    #[test]
-    fn the_options_are_checked_at_their_edges() {
-        let base = OcclusionOptions::default();
-        let ok = |o: OcclusionOptions| check(&o).is_ok();
-        assert!(ok(base));
-        // No contact damping is allowed; a negative or non-finite one is not.
-        assert!(ok(OcclusionOptions {
-            contact_damping: 0.0,
-            ..base
-        }));
-        for x in [-1.0, f64::INFINITY, f64::NAN] {
-            assert!(
-                !ok(OcclusionOptions {
-                    contact_damping: x,
-                    ..base
-                }),
-                "{x}"
-            );
-        }
-        // Exactly 10⁸ steps are allowed, more are not.
-        assert!(ok(OcclusionOptions {
-            max_seconds: 5e7,
-            step: 0.5,
-            ..base
-        }));
-        assert!(!ok(OcclusionOptions {
-            max_seconds: 5.000_000_1e7,
-            step: 0.5,
-            ..base
-        }));
     }
 }

@@ -43,6 +43,11 @@ pub(crate) fn io_error(path: &Path, source: &std::io::Error) -> PyErr {
 }
 
 /// A path argument: `str`, `bytes` or `os.PathLike` (`bytes` decoded as `os.fsdecode` does).
+/// A unit name (`"mm"`, `"cm"`, `"m"`, `"in"`), ValueError otherwise.
+pub(crate) fn unit(name: &str) -> PyResult<innersphere::mesh::Unit> {
+    name.parse().map_err(error)
+}
+
 pub(crate) fn path(obj: &Bound<'_, PyAny>) -> PyResult<PathBuf> {
     let os = obj.py().import("os")?;
     let p = os.call_method1("fspath", (obj,))?;

@@ -20,6 +20,7 @@ type SplintOut<'py> = (
 /// frame and a dict of its measurements (the JSON of `ist splint`, with `opened` and
 /// `pose`). `open`: an incisal opening about the hinge (mm) applied after the pose, or
 /// "auto" for the least that leaves room for the wafer. Options default as in `ist splint`.
+/// `unit`: the meshes' unit (mm, cm, m, in), converted to mm; the wafer is in mm.
 /// A wafer that fails one of its guarantees (the report's `checks`) raises ValueError
 /// unless `keep_unfit` (then it is returned, and written, with `fit` false).
 /// `out`: also write it there, as binary STL (`.stl`) or OBJ (`.obj`), compressed when the
@@ -27,7 +28,8 @@ type SplintOut<'py> = (
 /// released.
 #[pyfunction]
 #[pyo3(signature = (a, b, pose_b=None, open=None, clearance=None, coverage=None,
-                    min_thickness=None, rim=None, voxel=None, out=None, keep_unfit=false))]
+                    min_thickness=None, rim=None, voxel=None, out=None, keep_unfit=false,
+                    unit="mm"))]
 #[allow(clippy::too_many_arguments)]
 pub fn splint<'py>(
     py: Python<'py>,
@@ -42,6 +44,7 @@ pub fn splint<'py>(
     voxel: Option<f64>,
     out: Option<&Bound<'py, PyAny>>,
     keep_unfit: bool,
+    unit: &str,
 ) -> PyResult<SplintOut<'py>> {
     let pose = pose_or_identity(pose_b, "pose_b")?;
     let d = SplintOptions::default();
@@ -66,8 +69,8 @@ pub fn splint<'py>(
         innersphere::mesh::SAVED_MESH.check(p).map_err(error)?;
         innersphere::output::ensure_folder_writable(p).map_err(error)?;
     }
-    let ma = mesh_like(py, a, "a", false)?;
-    let mb = mesh_like(py, b, "b", false)?;
+    let ma = mesh_like(py, a, "a", false, unit)?;
+    let mb = mesh_like(py, b, "b", false, unit)?;
     let s = py
         .detach(|| -> innersphere::Result<_> {
             let s = make_opened(&ma, &mb, &pose, opening, &opts)?;

@@ -162,11 +162,22 @@ pub(crate) fn mesh_like(
     obj: &Bound<'_, PyAny>,
     what: &str,
     welded: bool,
+    unit: &str,
 ) -> PyResult<Mesh> {
+    let unit = convert::unit(unit)?;
     if is_path(obj)? {
         let path = convert::path(obj)?;
-        py.detach(|| Mesh::load(&path)).map_err(error)
-    } else if obj.hasattr("vertices")? && obj.hasattr("faces")? {
+        return py.detach(|| Mesh::load_in(&path, unit)).map_err(error);
+    }
+    let mut mesh = mesh_arrays(py, obj, what, welded)?;
+    mesh.scale(unit.to_mm());
+    mesh.validate().map_err(error)?;
+    Ok(mesh)
+}
+
+/// A mesh given as arrays: a (vertices, faces) pair or an object with .vertices and .faces.
+fn mesh_arrays(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str, welded: bool) -> PyResult<Mesh> {
+    if obj.hasattr("vertices")? && obj.hasattr("faces")? {
         mesh_from_arrays(
             py,
             &obj.getattr("vertices")?,
@@ -265,7 +276,7 @@ impl Tree {
     /// OSError when the file cannot be read. Runs with the interpreter released (a jaw arch
     /// at 0.1 mm takes about half a minute).
     #[staticmethod]
-    #[pyo3(signature = (path_or_mesh, *, voxel_size=None, resolution=None, min_radius=0.0, refine_steps=0, fanout=4, progress=false, preset=None, cache=None))]
+    #[pyo3(signature = (path_or_mesh, *, voxel_size=None, resolution=None, min_radius=0.0, refine_steps=0, fanout=4, progress=false, preset=None, cache=None, unit="mm"))]
     #[allow(clippy::too_many_arguments)]
     fn build(
         py: Python<'_>,
@@ -278,9 +289,10 @@ impl Tree {
         progress: bool,
         preset: Option<&str>,
         cache: Option<&Bound<'_, PyAny>>,
+        unit: &str,
     ) -> PyResult<Tree> {
         let cache = build_cache(cache)?;
-        let mesh = mesh_like(py, path_or_mesh, "path_or_mesh", true)?;
+        let mesh = mesh_like(py, path_or_mesh, "path_or_mesh", true, unit)?;
         let mut opts = match preset {
             Some(name) => {
                 let p: Preset = name.parse().map_err(error)?;
@@ -313,9 +325,10 @@ impl Tree {
             state: Mutex::new((String::new(), 0, 0, 0)),
         };
         let source = if is_path(path_or_mesh)? {
-            Some(innersphere::tree::MeshSource::of(
+            Some(innersphere::tree::MeshSource::of_unit(
                 &convert::path(path_or_mesh)?,
                 &mesh,
+                convert::unit(unit)?,
             ))
         } else {
             None
@@ -362,8 +375,9 @@ impl Tree {
     /// pair or a trimesh.Trimesh), for Pair.refined_distance; this tree is unchanged. About
     /// a second per jaw arch. Raises ValueError when the mesh is not this tree's source
     /// (bounding box, volume and its centroid against the tree's meta).
-    fn with_mesh(&self, py: Python<'_>, mesh: &Bound<'_, PyAny>) -> PyResult<Tree> {
-        let mesh = mesh_like(py, mesh, "mesh", true)?;
+    #[pyo3(signature = (mesh, *, unit="mm"))]
+    fn with_mesh(&self, py: Python<'_>, mesh: &Bound<'_, PyAny>, unit: &str) -> PyResult<Tree> {
+        let mesh = mesh_like(py, mesh, "mesh", true, unit)?;
         let shared = self.shared.clone();
         let shared = py.detach(|| shared.with_mesh(&mesh)).map_err(error)?;
         Ok(Tree {
@@ -400,7 +414,8 @@ impl Tree {
         let tree = py.detach(|| file::from_bytes(data)).map_err(error)?;
         let tree = Tree::new(tree, None);
         match mesh {
-            Some(m) => tree.with_mesh(py, m),
+            // The mesh a pickled tree carries is already in mm.
+            Some(m) => tree.with_mesh(py, m, "mm"),
             None => Ok(tree),
         }
     }

@@ -64,3 +64,16 @@ def test_bad_input_raises():
         innersphere.contact_map("/nonexistent/mesh.stl", ball)
     with pytest.raises(ValueError):
         innersphere.contact_map((np.zeros((3, 3)), np.array([[0, 1, 5]])), ball)
+
+
+def test_a_unit_converts_the_meshes_to_millimetres():
+    """`unit="m"` reads metre arrays as the same meshes in mm: the gaps are the mm gaps."""
+    ball = icosphere(3)
+    box = box_mesh()
+    pose = [1.5, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
+    ga, gb = innersphere.contact_map(box, ball, pose)
+    m = lambda mesh: (np.asarray(mesh[0]) * 1e-3, mesh[1])
+    ga_m, gb_m = innersphere.contact_map(m(box), m(ball), pose, unit="m")
+    assert np.allclose(ga_m, ga, atol=1e-9) and np.allclose(gb_m, gb, atol=1e-9)
+    with pytest.raises(ValueError, match="mm, cm, m or in"):
+        innersphere.contact_map(box, ball, pose, unit="furlong")

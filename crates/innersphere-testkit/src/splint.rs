@@ -98,10 +98,11 @@ pub fn assert_seats(a: &Mesh, b: &Mesh, pose: &Pose, opts: &SplintOptions, s: &s
 }
 
 /// Which vertices of `m` (at `pose_m`) form its occlusal surface towards the other arch
-/// (its triangle tree `bvh_o`, at `pose_o`), looking along `dir` (world frame, from `m` towards `other`): a vertex whose
-/// ray along `dir` leaves `m` without meeting it again and then meets `other`, and whose
-/// distance to `other` along the ray is at most `coverage` more than the least such
-/// distance within 3 mm around it (the crowns' band that a wafer climbs, whatever the gap).
+/// (its triangle tree `bvh_o`, at `pose_o`), looking along `dir` (world frame, from `m`
+/// towards the other arch): a vertex whose ray along `dir` leaves `m` without meeting it
+/// again and then meets the other arch, and that lies at most `coverage` behind the
+/// foremost such vertex within 3 mm around it along `dir` (the band of the crowns beyond
+/// their cusp tips that a wafer climbs, whatever the gap between the arches).
 pub fn occlusal(
     m: &Mesh,
     pose_m: &Pose,
@@ -134,11 +135,12 @@ pub fn occlusal(
             )?;
             match own {
                 Some(o) if o.t < hit.t => None,
-                _ => Some(hit.t),
+                // How far behind: the cusp tips, foremost towards the other arch, least.
+                _ => Some(-w.dot(dir)),
             }
         })
         .collect();
-    // The least reach per 3 mm cell across the axis.
+    // The foremost per 3 mm cell across the axis.
     let (e1, e2) = {
         let t = if dir.x.abs() < 0.9 {
             DVec3::X

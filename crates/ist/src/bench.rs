@@ -53,6 +53,8 @@ enum What {
         /// from, where those files still hold them).
         #[arg(long, num_args = 2, value_names = ["MESH_A", "MESH_B"])]
         meshes: Option<Vec<PathBuf>>,
+        #[command(flatten)]
+        unit: crate::files::UnitArg,
         /// Thread counts to time (0 = all cores).
         #[arg(long, value_delimiter = ',', default_value = "1,0")]
         threads: Vec<usize>,
@@ -81,6 +83,8 @@ enum What {
         /// Output folder.
         #[arg(long)]
         out: PathBuf,
+        #[command(flatten)]
+        unit: crate::files::UnitArg,
         /// Build options of the main trees (backtracking, multipoint, ours vs paper);
         /// default: voxel size = longest side / 384.
         #[command(flatten)]
@@ -106,6 +110,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             b,
             motion,
             out,
+            unit,
             opts,
             sweep,
             every,
@@ -131,8 +136,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 })
                 .collect();
             crate::files::check_outputs(&outputs, &[&a, &b, &motion])?;
-            let ma = crate::files::load_mesh(&a)?;
-            let mb = crate::files::load_mesh(&b)?;
+            let ma = crate::files::load_mesh(&a, unit.unit)?;
+            let mb = crate::files::load_mesh(&b, unit.unit)?;
             let m = innersphere_eval::motion::Motion::load(&motion)?;
             let size = [ma.bbox(), mb.bbox()]
                 .iter()
@@ -176,6 +181,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             seed,
             query,
             meshes,
+            unit,
             threads,
             chunk,
             repeat,
@@ -188,8 +194,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             let mut tb = innersphere::SharedTree::new(crate::files::load_tree(&b)?);
             if query == "refined-distance" {
                 let given = meshes.as_deref().unwrap_or(&[]);
-                ta = crate::bodies::with_mesh(ta, given.first(), None, "A")?;
-                tb = crate::bodies::with_mesh(tb, given.get(1), None, "B")?;
+                ta = crate::bodies::with_mesh(ta, given.first(), None, "A", unit.unit)?;
+                tb = crate::bodies::with_mesh(tb, given.get(1), None, "B", unit.unit)?;
             }
             let centre = innersphere::glam::DVec3::from_array(tb.meta.center_of_mass);
             let p = innersphere_eval::bench::perturbed_poses(poses, seed, mm, deg, centre);

@@ -27,6 +27,9 @@ pub struct BodyArgs {
     /// Build meshes without reading or writing the cache.
     #[arg(long)]
     pub no_cache: bool,
+    /// The unit of the bodies' mesh files (and of --meshes).
+    #[command(flatten)]
+    pub unit: crate::files::UnitArg,
 }
 
 /// Whether `path` names a mesh (by its extension) rather than a tree file.
@@ -50,7 +53,10 @@ pub fn load_body(
         crate::files::warn_if_stale(path, &tree);
         return Ok((tree, None));
     }
-    let mesh = crate::files::load_mesh(path)?;
+    let mesh = crate::files::load_mesh(path, args.unit.unit)?;
+    if args.preset.is_some_and(|p| Preset::from(p).is_dental()) {
+        crate::files::warn_unit(path, &mesh, args.unit.unit);
+    }
     let (opts, why) = match args.preset {
         Some(p) => (
             BuildOptions::preset(p.into(), &mesh)?,
@@ -118,16 +124,18 @@ pub fn load_body(
     Ok((tree, Some(mesh)))
 }
 
-/// `tree` with its mesh for the refined distance: `given` (--meshes), else the body's own
-/// mesh, else the mesh the tree names as its source; an error that says which to give.
+/// `tree` with its mesh for the refined distance: `given` (--meshes, in `unit`), else the
+/// body's own mesh, else the mesh the tree names as its source (in the unit it recorded); an
+/// error that says which to give.
 pub fn with_mesh(
     tree: innersphere::SharedTree,
     given: Option<&PathBuf>,
     own: Option<innersphere::Mesh>,
     body: &str,
+    unit: innersphere::mesh::Unit,
 ) -> anyhow::Result<innersphere::SharedTree> {
     let mesh = match (given, own) {
-        (Some(p), _) => crate::files::load_mesh(p)?,
+        (Some(p), _) => crate::files::load_mesh(p, unit)?,
         (None, Some(m)) => m,
         (None, None) => match &tree.meta.source {
             Some(src) => src.load().with_context(|| {

@@ -13,6 +13,8 @@ use std::time::Instant;
 pub struct Args {
     /// Mesh file: .stl, .obj, .ply or .off, optionally .gz.
     mesh: PathBuf,
+    #[command(flatten)]
+    unit: crate::files::UnitArg,
     /// Output tree file.
     #[arg(short, long)]
     output: PathBuf,
@@ -129,7 +131,10 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     innersphere::build::validate_options(&args.opts.options())?;
     crate::files::check_outputs(&[(&args.output, crate::files::TREE_FILE)], &[&args.mesh])?;
     let bars = Bars::new(args.quiet);
-    let mesh = crate::files::load_mesh(&args.mesh)?;
+    let mesh = crate::files::load_mesh(&args.mesh, args.unit.unit)?;
+    if args.preset.is_some_and(|p| Preset::from(p).is_dental()) {
+        crate::files::warn_unit(&args.mesh, &mesh, args.unit.unit);
+    }
     let t_load = t0.elapsed().as_secs_f64();
     let opts = match args.preset {
         Some(p) => args.opts.apply(
@@ -141,7 +146,11 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     innersphere::build::validate_options(&opts)?;
     let (mut tree, report) = SphereTree::build_with_progress(&mesh, &opts, &bars)
         .with_context(|| format!("building the tree of {}", args.mesh.display()))?;
-    tree.meta.source = Some(innersphere::tree::MeshSource::of(&args.mesh, &mesh));
+    tree.meta.source = Some(innersphere::tree::MeshSource::of_unit(
+        &args.mesh,
+        &mesh,
+        args.unit.unit,
+    ));
     let t1 = Instant::now();
     // Through a temporary file renamed into place: a failed write leaves no partial tree.
     let bytes = innersphere::tree::file::to_bytes(&tree);

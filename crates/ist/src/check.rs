@@ -11,6 +11,10 @@ pub struct Args {
     /// The mesh the tree was built from.
     #[arg(long)]
     mesh: PathBuf,
+    /// The unit of the mesh file (mm, cm, m, in; default: the unit the tree recorded for its
+    /// source, else mm).
+    #[arg(long, value_parser = crate::files::parse_unit)]
+    unit: Option<innersphere::mesh::Unit>,
     /// Print JSON.
     #[arg(long)]
     json: bool,
@@ -19,7 +23,11 @@ pub struct Args {
 /// Runs the subcommand; returns the process exit code (1 when not ok).
 pub fn run(args: Args) -> anyhow::Result<i32> {
     let tree = crate::files::load_tree(&args.tree)?;
-    let mesh = crate::files::load_mesh(&args.mesh)?;
+    let unit = args
+        .unit
+        .or(tree.meta.source.as_ref().map(|s| s.unit))
+        .unwrap_or_default();
+    let mesh = crate::files::load_mesh(&args.mesh, unit)?;
     // A mesh other than the tree's own (by the facts the tree keeps) is an error, not "ok".
     let report = innersphere::tree::check::check_built_from(&tree, &mesh).with_context(|| {
         format!(

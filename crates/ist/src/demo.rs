@@ -15,6 +15,8 @@ pub struct Args {
     preset: Option<PresetArg>,
     #[command(flatten)]
     opts: BuildArgs,
+    #[command(flatten)]
+    unit: crate::files::UnitArg,
     /// No progress on stderr (neither bars on a terminal nor stage lines otherwise).
     #[arg(short, long)]
     quiet: bool,
@@ -40,7 +42,10 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         "--seconds must be between 0 and 600"
     );
     let (ma, mb) = match (&args.a, &args.b) {
-        (Some(a), Some(b)) => (crate::files::load_mesh(a)?, crate::files::load_mesh(b)?),
+        (Some(a), Some(b)) => (
+            crate::files::load_mesh(a, args.unit.unit)?,
+            crate::files::load_mesh(b, args.unit.unit)?,
+        ),
         _ => innersphere::shapes::tooth_pair(innersphere_eval::demo::TOOTH_SUBDIVISIONS),
     };
     let generated = args.a.is_none();

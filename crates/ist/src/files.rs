@@ -68,10 +68,37 @@ pub fn load_tree(path: &std::path::Path) -> anyhow::Result<innersphere::SphereTr
     }
 }
 
-/// Loads a mesh file; a tree file given instead (by its magic number) is named as such, with
-/// the fix. Every error names the file once.
-pub fn load_mesh(path: &std::path::Path) -> anyhow::Result<innersphere::Mesh> {
-    match innersphere::Mesh::load(path) {
+/// The unit of the mesh files a command reads (`--unit`).
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct UnitArg {
+    /// The unit of the mesh files' coordinates: mm, cm, m or in. They are converted to mm as
+    /// they are read; everything else (poses, lengths, answers, written files) is in mm.
+    #[arg(long, default_value = "mm", value_parser = parse_unit)]
+    pub unit: innersphere::mesh::Unit,
+}
+
+/// `--unit`'s parser: the library's names, its message.
+pub fn parse_unit(s: &str) -> Result<innersphere::mesh::Unit, String> {
+    s.parse().map_err(|e: innersphere::Error| e.to_string())
+}
+
+/// Prints a warning when `mesh` (read in `unit`, now in mm) has a size that suggests another
+/// unit for a dental body ([`innersphere::mesh::unit::unit_warning`]); the command goes on.
+pub fn warn_unit(path: &std::path::Path, mesh: &innersphere::Mesh, unit: innersphere::mesh::Unit) {
+    let (lo, hi) = mesh.bbox();
+    if let Some(w) = innersphere::mesh::unit::unit_warning((hi - lo).max_element(), unit) {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+}
+
+/// Loads a mesh file whose coordinates are in `unit`, converted to mm
+/// ([`innersphere::Mesh::load_in`]); a tree file given instead (by its magic number) is named
+/// as such, with the fix. Every error names the file once.
+pub fn load_mesh(
+    path: &std::path::Path,
+    unit: innersphere::mesh::Unit,
+) -> anyhow::Result<innersphere::Mesh> {
+    match innersphere::Mesh::load_in(path, unit) {
         Ok(mesh) => Ok(mesh),
         Err(e @ (innersphere::Error::UnsupportedFormat(_) | innersphere::Error::Parse { .. })) => {
             if is_tree_file(path) {

@@ -9,6 +9,8 @@ use std::path::PathBuf;
 pub struct Args {
     /// Mesh file: .stl, .obj, .ply or .off, optionally .gz.
     mesh: PathBuf,
+    #[command(flatten)]
+    unit: crate::files::UnitArg,
     /// Print JSON (the report's fields, plus "verdict": closed, closed_inward, open or soup,
     /// and "verdict_text", the sentence of the last line of the plain output).
     #[arg(long)]
@@ -74,7 +76,7 @@ pub fn verdict_text(r: &MeshReport) -> String {
 
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
-    let mesh = crate::files::load_mesh(&args.mesh)?;
+    let mesh = crate::files::load_mesh(&args.mesh, args.unit.unit)?;
     let report = MeshReport::of(&mesh);
     let verdict = MeshVerdict::of(&report);
     let text = verdict_text(&report);

@@ -11,6 +11,8 @@ use std::time::Instant;
 /// Arguments of `ist motion`.
 #[derive(clap::Args)]
 pub struct Args {
+    #[command(flatten)]
+    unit: crate::files::UnitArg,
     /// What the motion does: chew, open-close, grind or contact (random contact); or press, a smooth 6 s haptic device
     /// trajectory (3 mm open → 1 mm past the bite, hold, ±0.8 mm sideways while pressing,
     /// release; --seconds, --seed and the labels do not apply).
@@ -70,8 +72,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     outputs.extend(args.labels.as_deref().map(|p| (p, crate::files::CSV_FILE)));
     crate::files::check_outputs(&outputs, &[&args.a, &args.b])?;
     // The library's errors name the file; the context says which body it was.
-    let a = crate::files::load_mesh(&args.a).context("loading body A (--a)")?;
-    let b = crate::files::load_mesh(&args.b).context("loading body B (--b)")?;
+    let a = crate::files::load_mesh(&args.a, args.unit.unit).context("loading body A (--a)")?;
+    let b = crate::files::load_mesh(&args.b, args.unit.unit).context("loading body B (--b)")?;
     let scenario = match args.scenario {
         Kind::Hand(s) => s,
         Kind::Press => {

@@ -26,6 +26,8 @@ pub struct Args {
     a: PathBuf,
     /// Mesh of arch B.
     b: PathBuf,
+    #[command(flatten)]
+    unit: crate::files::UnitArg,
     /// Pose of B in A's frame, "tx ty tz qw qx qy qz" (p' = R(q)·p + t; mm).
     #[arg(long, default_value = "0 0 0 1 0 0 0", allow_hyphen_values = true)]
     pose: String,
@@ -70,9 +72,9 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let teeth_a = args.teeth_a.as_deref().map(Teeth::load).transpose()?;
     let teeth_b = args.teeth_b.as_deref().map(Teeth::load).transpose()?;
     let t0 = Instant::now();
-    let a = ExactMesh::new(&crate::files::load_mesh(&args.a)?)
+    let a = ExactMesh::new(&crate::files::load_mesh(&args.a, args.unit.unit)?)
         .with_context(|| format!("{}", args.a.display()))?;
-    let b = ExactMesh::new(&crate::files::load_mesh(&args.b)?)
+    let b = ExactMesh::new(&crate::files::load_mesh(&args.b, args.unit.unit)?)
         .with_context(|| format!("{}", args.b.display()))?;
     let prepared = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();

@@ -134,8 +134,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let (mut a, mut b) = (SharedTree::new(a), SharedTree::new(b));
     if args.query == Kind::RefinedDistance {
         let given = args.meshes.as_deref().unwrap_or(&[]);
-        a = crate::bodies::with_mesh(a, given.first(), mesh_a, "A")?;
-        b = crate::bodies::with_mesh(b, given.get(1), mesh_b, "B")?;
+        a = crate::bodies::with_mesh(a, given.first(), mesh_a, "A", args.body.unit.unit)?;
+        b = crate::bodies::with_mesh(b, given.get(1), mesh_b, "B", args.body.unit.unit)?;
     }
     let pose_a = Pose::IDENTITY;
     let mut pair = Pair::new(a, b);

@@ -108,8 +108,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let exact = match &args.exact {
         Some(m) => {
             let (ma, mb) = (
-                crate::files::load_mesh(&m[0])?,
-                crate::files::load_mesh(&m[1])?,
+                crate::files::load_mesh(&m[0], args.body.unit.unit)?,
+                crate::files::load_mesh(&m[1], args.body.unit.unit)?,
             );
             // Meshes that are not the trees' own make the accuracy meaningless: say so.
             for (mesh, path, tree, tree_path) in

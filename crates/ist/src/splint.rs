@@ -16,6 +16,8 @@ pub struct Args {
     a: PathBuf,
     /// Mesh of arch B (lower).
     b: PathBuf,
+    #[command(flatten)]
+    unit: crate::files::UnitArg,
     /// Planned pose of B in A's frame, "tx ty tz qw qx qy qz" (p' = R(q)·p + t; mm).
     #[arg(long, default_value = "0 0 0 1 0 0 0", allow_hyphen_values = true)]
     pose: String,
@@ -81,8 +83,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         voxel: args.voxel,
     };
     opts.validate()?;
-    let a = crate::files::load_mesh(&args.a)?;
-    let b = crate::files::load_mesh(&args.b)?;
+    let a = crate::files::load_mesh(&args.a, args.unit.unit)?;
+    let b = crate::files::load_mesh(&args.b, args.unit.unit)?;
     let s = splint::make_opened(&a, &b, &pose, opening, &opts)?;
     let r = &s.report;
     let write = r.fit || args.keep_unfit;

@@ -83,7 +83,10 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         };
         let mesh = |p: &Option<PathBuf>, which: &str| -> anyhow::Result<_> {
             p.as_ref()
-                .map(|p| crate::files::load_mesh(p).with_context(|| format!("loading {which}")))
+                .map(|p| {
+                    crate::files::load_mesh(p, args.body.unit.unit)
+                        .with_context(|| format!("loading {which}"))
+                })
                 .transpose()
         };
         // A body given as a mesh is also its drawn surface (unless --mesh-a/-b say otherwise).
@@ -151,7 +154,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     scene.splint = args
         .splint
         .as_ref()
-        .map(|p| crate::files::load_mesh(p).context("loading --splint"))
+        .map(|p| crate::files::load_mesh(p, args.body.unit.unit).context("loading --splint"))
         .transpose()?;
     scene.start = args
         .pose_b

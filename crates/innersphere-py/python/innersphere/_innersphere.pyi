@@ -56,6 +56,7 @@ class Tree:
         progress: bool = False,
         preset: Optional[str] = None,
         cache: Union[None, bool, _PathLike] = None,
+        unit: str = "mm",
     ) -> "Tree":
         """Builds the Inner Sphere Tree of a closed triangle mesh.
 
@@ -85,6 +86,9 @@ class Tree:
             to 2 GiB, least recently used first out; nothing else in the folder is read,
             touched or removed. OSError, in a sentence naming the path, when the folder is
             a file or the subfolder's name is taken by something the cache did not make.
+        unit: the mesh's unit, "mm", "cm", "m" or "in": converted to mm as it is read
+            (everything after, the tree and its answers, is in mm; the tree records the
+            unit of its source file).
 
         Warnings of the build (open mesh, flipped faces, ...) are issued as UserWarnings
         and kept in ``tree.report``. Raises ValueError for a bad option or mesh, OSError
@@ -97,10 +101,10 @@ class Tree:
     def save(self, path: _PathLike) -> None:
         """Writes the tree file (through a temporary file renamed into place). Raises
         OSError when it cannot be written."""
-    def with_mesh(self, mesh: _MeshLike) -> "Tree":
+    def with_mesh(self, mesh: _MeshLike, *, unit: str = "mm") -> "Tree":
         """The same tree with the mesh it was built from (path, (vertices, faces) or a
-        trimesh.Trimesh), for ``Pair.refined_distance``. Raises ValueError when the mesh is
-        not the tree's source."""
+        trimesh.Trimesh; ``unit`` its unit, converted to mm), for ``Pair.refined_distance``.
+        Raises ValueError when the mesh is not the tree's source."""
     @property
     def has_mesh(self) -> bool:
         """True when the tree carries its mesh (``Tree.with_mesh``)."""
@@ -442,12 +446,14 @@ def contact_map(
     b: _MeshLike,
     pose_b: Optional[_PoseLike] = None,
     pose_a: Optional[_PoseLike] = None,
+    unit: str = "mm",
 ) -> Tuple[_FloatArray, _FloatArray]:
     """The contact map of meshes ``a`` and ``b`` (each a file path, a ``(vertices, faces)``
     pair or a ``trimesh.Trimesh``) at ``pose_b`` (and ``pose_a``, default the identity): per
     vertex of each, its exact distance to the other's surface, negative inside the other
     (``ist occlusion-map``'s ``gap``). Arrays keep their vertex order; a file's vertices are
-    the loader's (welded). Raises OSError for unreadable files, ValueError for bad meshes or
+    the loader's (welded). ``unit``: the meshes' unit ("mm", "cm", "m", "in"), converted to
+    mm; the gaps are in mm. Raises OSError for unreadable files, ValueError for bad meshes or
     poses."""
 
 def splint(
@@ -462,6 +468,7 @@ def splint(
     voxel: Optional[float] = None,
     out: Optional[_PathLike] = None,
     keep_unfit: bool = False,
+    unit: str = "mm",
 ) -> Tuple[_FloatArray, npt.NDArray[np.uint32], Dict[str, Any]]:
     """The occlusal splint (surgical wafer) between arch ``a`` (upper, fixed) and arch ``b``
     at ``pose_b`` (default the identity), each a file path, a ``(vertices, faces)`` pair or a
@@ -473,7 +480,8 @@ def splint(
     0.1). ``out``: also write it there, as binary STL (``.stl``) or OBJ (``.obj``),
     compressed when the name ends in ``.gz``. Every measurement is made on the mesh as
     written; a wafer that fails a guarantee (``checks`` in the dict, ``fit`` false) raises
-    ValueError unless ``keep_unfit``. Raises OSError for unreadable or unwritable files,
+    ValueError unless ``keep_unfit``. ``unit``: the meshes' unit ("mm", "cm", "m", "in"),
+    converted to mm; the wafer is in mm. Raises OSError for unreadable or unwritable files,
     ValueError for bad meshes, poses or options and for inputs that cannot make a wafer."""
 
 def occlude(

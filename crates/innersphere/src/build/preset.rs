@@ -64,6 +64,13 @@ impl Preset {
         Preset::JawFast,
     ];
 
+    /// True for the presets made for dental scans in millimetres (`jaw`, `jaw-fast`): a mesh
+    /// built with them is expected to be tooth- to skull-sized in mm
+    /// ([`unit_warning`](crate::mesh::unit::unit_warning)).
+    pub fn is_dental(self) -> bool {
+        matches!(self, Preset::Jaw | Preset::JawFast)
+    }
+
     /// The name used on the command line (`ist build --preset NAME`): `fast`, `default`,
     /// `fine`, `jaw`, `jaw-fast`.
     pub fn name(self) -> &'static str {
@@ -149,7 +156,7 @@ impl BuildOptions {
                 Ok(calibrated(voxel_mm, min_radius_mm))
             } else {
                 Err(Error::InvalidOption(format!(
-                    "preset {preset} is in millimetres, for dental scans {}–{} mm across; this mesh is {longest:.4} model units across (not millimetres? scale it, or use the unit-free presets fast, default or fine)",
+                    "preset {preset} is in millimetres, for dental scans {}–{} mm across; this mesh is {longest:.4} model units across (is the file in another unit? give it: --unit m, cm or in converts to mm; or use the unit-free presets fast, default or fine)",
                     JAW_PRESET_SIZE_MM.start(),
                     JAW_PRESET_SIZE_MM.end()
                 )))

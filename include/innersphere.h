@@ -95,6 +95,26 @@
 #define IST_DEVICE_OMEGA 1
 
 /*
+ Mesh files in millimetres.
+ */
+#define IST_UNIT_MM 0
+
+/*
+ Mesh files in centimetres.
+ */
+#define IST_UNIT_CM 1
+
+/*
+ Mesh files in metres.
+ */
+#define IST_UNIT_M 2
+
+/*
+ Mesh files in inches.
+ */
+#define IST_UNIT_IN 3
+
+/*
  A haptic loop (opaque). ist_haptic_tick and ist_haptic_energy are called from one thread
  at a time: the device's servo thread. With a collision thread, that thread is the
  library's own; the caller never calls into it.
@@ -519,6 +539,12 @@ typedef struct ist_build_options {
    Stop after this many spheres (0 = no limit).
    */
   uint64_t max_spheres;
+  /*
+   The unit of the mesh file's coordinates, converted to mm as it is read:
+   IST_UNIT_MM (0, the default), IST_UNIT_CM, IST_UNIT_M or IST_UNIT_IN. The tree and
+   every answer are then in mm.
+   */
+  int unit;
 } ist_build_options;
 
 #ifdef __cplusplus
@@ -813,8 +839,8 @@ struct ist_tree *ist_tree_load(const char *path);
 struct ist_tree *ist_tree_build(const char *mesh_path, const struct ist_build_options *opts);
 
 /*
- A new handle to the same tree with the mesh it was built from (a mesh file), for
- ist_refined_distance; `tree` itself is unchanged (pairs made from it have no mesh). About
+ A new handle to the same tree with the mesh it was built from (a mesh file, in the unit the
+ tree recorded for its source, else mm), for ist_refined_distance; `tree` itself is unchanged (pairs made from it have no mesh). About
  a second per jaw arch. NULL on error: a file that is not a mesh, or not this tree's
  source (IST_ERR_MESH).
 

@@ -22,7 +22,22 @@ pub extern "C" fn ist_build_options_default() -> ist_build_options {
         min_radius: 0.0,
         refine_steps: 0,
         max_spheres: 0,
+        unit: crate::types::IST_UNIT_MM,
     }
+}
+
+/// The library's unit of `ist_build_options::unit`.
+fn unit(u: c_int) -> Result<innersphere::mesh::Unit, Fail> {
+    use innersphere::mesh::Unit;
+    Ok(match u {
+        crate::types::IST_UNIT_MM => Unit::Mm,
+        crate::types::IST_UNIT_CM => Unit::Cm,
+        crate::types::IST_UNIT_M => Unit::M,
+        crate::types::IST_UNIT_IN => Unit::In,
+        _ => return Err(Fail::arg(format!(
+            "unit {u} is none of IST_UNIT_MM (0), IST_UNIT_CM (1), IST_UNIT_M (2), IST_UNIT_IN (3)"
+        ))),
+    })
 }
 
 fn build_options(o: &ist_build_options) -> Result<BuildOptions, Fail> {
@@ -84,16 +99,18 @@ pub unsafe extern "C" fn ist_tree_build(
         } else {
             *unsafe { reference(opts, "opts") }?
         };
-        let mesh = Mesh::load(&path)?;
-        let tree = SphereTree::build(&mesh, &build_options(&o)?)?;
+        let unit = unit(o.unit)?;
+        let mesh = Mesh::load_in(&path, unit)?;
+        let mut tree = SphereTree::build(&mesh, &build_options(&o)?)?;
+        tree.meta.source = Some(innersphere::tree::MeshSource::of_unit(&path, &mesh, unit));
         Ok(Box::new(ist_tree {
             tree: SharedTree::new(tree),
         }))
     })
 }
 
-/// A new handle to the same tree with the mesh it was built from (a mesh file), for
-/// ist_refined_distance; `tree` itself is unchanged (pairs made from it have no mesh). About
+/// A new handle to the same tree with the mesh it was built from (a mesh file, in the unit the
+/// tree recorded for its source, else mm), for ist_refined_distance; `tree` itself is unchanged (pairs made from it have no mesh). About
 /// a second per jaw arch. NULL on error: a file that is not a mesh, or not this tree's
 /// source (IST_ERR_MESH).
 ///
@@ -107,7 +124,14 @@ pub unsafe extern "C" fn ist_tree_with_mesh(
     pointer(|| {
         let t = unsafe { reference(tree, "tree") }?;
         let path = unsafe { path_arg(mesh_path, "mesh_path") }?;
-        let mesh = Mesh::load(&path)?;
+        let unit = t
+            .tree
+            .meta
+            .source
+            .as_ref()
+            .map(|s| s.unit)
+            .unwrap_or_default();
+        let mesh = Mesh::load_in(&path, unit)?;
         Ok(Box::new(ist_tree {
             tree: t.tree.clone().with_mesh(&mesh)?,
         }))

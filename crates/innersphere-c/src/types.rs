@@ -45,7 +45,20 @@ pub struct ist_build_options {
     pub refine_steps: u32,
     /// Stop after this many spheres (0 = no limit).
     pub max_spheres: u64,
+    /// The unit of the mesh file's coordinates, converted to mm as it is read:
+    /// IST_UNIT_MM (0, the default), IST_UNIT_CM, IST_UNIT_M or IST_UNIT_IN. The tree and
+    /// every answer are then in mm.
+    pub unit: c_int,
 }
+
+/// Mesh files in millimetres.
+pub const IST_UNIT_MM: c_int = 0;
+/// Mesh files in centimetres.
+pub const IST_UNIT_CM: c_int = 1;
+/// Mesh files in metres.
+pub const IST_UNIT_M: c_int = 2;
+/// Mesh files in inches.
+pub const IST_UNIT_IN: c_int = 3;
 
 /// Result of ist_distance (world frame).
 #[repr(C)]

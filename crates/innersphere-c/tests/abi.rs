@@ -115,6 +115,28 @@ fn the_build_options_reach_the_build() {
         })
     );
     assert!(leaves(&packing) <= 40);
+    // A unit: the file read as centimetres is the box ten times as large, in mm (the same
+    // leaves at the same cell count, a voxel ten times as wide); an unknown unit is refused.
+    let cm = ist_build_options {
+        voxel_size: 3.0,
+        unit: IST_UNIT_CM,
+        ..def
+    };
+    assert_eq!(leaves(&cm), leaves(&voxel));
+    let t = build(&cm);
+    assert!(!t.is_null());
+    let with = unsafe { ist_tree_with_mesh(t, mesh.as_ptr()) };
+    assert!(
+        !with.is_null(),
+        "the mesh in the tree's recorded unit: {}",
+        last_error()
+    );
+    unsafe {
+        ist_tree_free(with);
+        ist_tree_free(t);
+    }
+    assert!(build(&ist_build_options { unit: 7, ..def }).is_null());
+    assert!(last_error().contains("IST_UNIT_MM"), "{}", last_error());
     // Neither a voxel size nor a resolution, or a negative voxel size: refused, saying why.
     for bad in [
         ist_build_options {

@@ -5,6 +5,7 @@ import json
 import os
 import pathlib
 
+import manifold3d
 import numpy as np
 import pytest
 import trimesh
@@ -30,12 +31,28 @@ def arches():
     return arch(9.0), arch(0.0)
 
 
-def check_solid(vertices, faces, report):
+def manifold(vertices, faces):
+    """manifold3d's solid of a mesh (its own manifold check: status NoError)."""
+    m = manifold3d.Manifold(manifold3d.Mesh(vert_properties=np.asarray(vertices, np.float32),
+                                            tri_verts=np.asarray(faces, np.uint32)))
+    assert m.status() == manifold3d.Error.NoError, m.status()
+    return m
+
+
+def check_solid(vertices, faces, report, arches=None):
+    """One watertight, consistently wound body by trimesh; a manifold of the same volume by
+    manifold3d; with `arches` (each (vertices, faces), closed, at their places), no overlap
+    with either by manifold3d's exact intersection."""
     m = trimesh.Trimesh(vertices, faces, process=False)
     assert m.is_watertight and m.is_winding_consistent
     assert m.volume > 0 and abs(m.volume - report["volume"]) < 1e-6 * m.volume
     assert len(m.split(only_watertight=False)) == 1
     assert report["watertight"] and report["manifold"] and report["bodies"] == 1
+    assert report["fit"], report["checks"]
+    w = manifold(vertices, faces)
+    assert abs(w.volume() - m.volume) < 1e-4 * m.volume
+    for v, f in arches or []:
+        assert (manifold(v, f) ^ w).volume() < 1e-9
     return m
 
 
@@ -43,7 +60,7 @@ def test_splint_between_generated_arches_is_one_solid_and_matches_ist(tmp_path, 
     a, b = arches()
     out = tmp_path / "py.stl"
     vertices, faces, report = innersphere.splint(a, b, voxel=0.15, out=out)
-    check_solid(vertices, faces, report)
+    check_solid(vertices, faces, report, arches=[a, b])
     assert report["min_distance_a"] >= 0.1 - 0.02 and report["min_distance_b"] >= 0.1 - 0.02
     assert report["a_vertices_inside"] == 0 and report["b_vertices_inside"] == 0
     # Balls bulge below their equators, which the wafer blocks out (it must come off); the
@@ -96,3 +113,26 @@ def test_intermediate_splint_on_the_jaw_is_one_solid(tmp_path):
     assert report["opened"] == 3.0
     assert report["coverage_a"] >= 0.85 and report["coverage_b"] >= 0.85
     assert report["min_distance_a"] >= 0.08 and report["min_distance_b"] >= 0.08
+
+
+def test_an_unfit_wafer_raises_unless_kept(tmp_path):
+    """At a pose where the arches touch, no plate fits between the cusps: the wafer fails its
+    coverage, raises, and is not written; keep_unfit returns it with fit false."""
+    a, b = arches()
+    touching = [0.0, 0.0, 2.2, 1.0, 0.0, 0.0, 0.0]
+    out = tmp_path / "unfit.stl"
+    with pytest.raises(ValueError, match="not fit to print"):
+        innersphere.splint(a, b, touching, voxel=0.3, out=out)
+    assert not out.exists()
+    _, _, report = innersphere.splint(a, b, touching, voxel=0.3, out=out, keep_unfit=True)
+    assert not report["fit"] and out.exists()
+    assert any(not c["ok"] for c in report["checks"])
+
+
+def test_arches_in_metres_need_their_unit():
+    a, b = arches()
+    m = lambda x: (x[0] * 1e-3, x[1])
+    with pytest.raises(ValueError, match="--unit m"):
+        innersphere.splint(m(a), m(b), voxel=0.3)
+    _, _, report = innersphere.splint(m(a), m(b), voxel=0.3, unit="m")
+    assert report["fit"]

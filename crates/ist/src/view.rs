@@ -161,6 +161,9 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 .with_context(|| format!("--pose-b \"{t}\""))
         })
         .transpose()?;
+    for w in scene.check_teeth()? {
+        eprintln!("warning: {w}");
+    }
     let opts = ServeOptions {
         port: args.port,
         stiffness: args.stiffness,

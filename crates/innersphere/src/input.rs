@@ -121,7 +121,10 @@ pub fn read_text_from(
     kind: TextInput,
     size_hint: u64,
 ) -> Result<String> {
-    let mut out: Vec<u8> = Vec::with_capacity(size_hint.min(kind.max_bytes) as usize);
+    // The whole expected length is reserved once the first chunk has shown text: a sparse
+    // file of zeros costs one chunk, not its length.
+    let mut reserve = size_hint.min(kind.max_bytes) as usize;
+    let mut out: Vec<u8> = Vec::new();
     let mut chunk = vec![0u8; CHUNK];
     // Bytes known to be whole UTF-8 characters (a character may straddle two chunks).
     let mut valid = 0usize;
@@ -153,6 +156,10 @@ pub fn read_text_from(
                     size(kind.max_bytes)
                 ),
             ));
+        }
+        if reserve > 0 && !out.is_empty() {
+            out.reserve_exact(reserve.saturating_sub(out.len()));
+            reserve = 0;
         }
         out.extend_from_slice(&chunk[..n]);
         match std::str::from_utf8(&out[valid..]) {

@@ -149,7 +149,10 @@ fn the_opposing_arch_is_where_the_pose_puts_it() {
         opposing: None,
         jaw: Some(Jaw::Lower),
     }));
-    assert!(e.contains("holds upper (teeth 1–16) teeth"), "{e}");
+    assert!(
+        e.contains("holds upper teeth (1–16), but the arch it is given for is the lower one"),
+        "{e}"
+    );
 }
 
 fn real() -> (Mesh, Mesh, Teeth, Teeth) {

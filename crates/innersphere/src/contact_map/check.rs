@@ -229,9 +229,9 @@ impl Teeth {
         let jaw = self.jaw()?;
         if let Some(want) = ctx.jaw.filter(|&w| w != jaw) {
             return Err(self.refusal(format!(
-                "holds {} teeth, but the arch it is given for is the {} one: this looks like the other arch's teeth file",
+                "holds {}, but the arch it is given for is the {} one: this looks like the other arch's teeth file",
                 jaw.describe(),
-                want.describe()
+                want.name()
             )));
         }
         let arch = ctx.arch;
@@ -373,7 +373,7 @@ pub fn check_pair(
     if let (Some(ta), Some(tb), Some(ja), Some(jb)) = (teeth_a, teeth_b, jaw_a, jaw_b) {
         if ja == jb {
             return Err(tb.refusal(format!(
-                "holds {} teeth, as does {}: the two arches of a pair need one upper and one lower teeth file (one of the two is the other arch's, or both are the same file)",
+                "holds {}, as does {}: the two arches of a pair need one upper and one lower teeth file (one of the two is the other arch's, or both are the same file)",
                 jb.describe(),
                 ta.source.display()
             )));
@@ -452,7 +452,10 @@ mod tests {
             opposing: None,
             jaw: Some(Jaw::Upper),
         }));
-        assert!(m.contains("holds lower (teeth 17–32) teeth"), "{m}");
+        assert!(
+            m.contains("holds lower teeth (17–32), but the arch it is given for is the upper one"),
+            "{m}"
+        );
         // The arches apart (B 40 mm down): the centres are outside B's box, within A's.
         let apart = Pose::from_translation(DVec3::new(0.0, 0.0, -40.0));
         let far = Teeth {

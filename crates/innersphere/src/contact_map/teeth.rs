@@ -53,11 +53,19 @@ impl Jaw {
         }
     }
 
-    /// "upper (teeth 1–16)" or "lower (teeth 17–32)", for messages.
+    /// "upper" or "lower".
+    pub fn name(self) -> &'static str {
+        match self {
+            Jaw::Upper => "upper",
+            Jaw::Lower => "lower",
+        }
+    }
+
+    /// "upper teeth (1–16)" or "lower teeth (17–32)", for messages.
     pub fn describe(self) -> &'static str {
         match self {
-            Jaw::Upper => "upper (teeth 1–16)",
-            Jaw::Lower => "lower (teeth 17–32)",
+            Jaw::Upper => "upper teeth (1–16)",
+            Jaw::Lower => "lower teeth (17–32)",
         }
     }
 }

@@ -48,7 +48,7 @@ const CHUNK: usize = 64 << 10;
 /// The bytes as a message writes a size: `1 MiB`, `64 KiB`, `1 GiB`, or bytes.
 fn human(bytes: u64) -> String {
     for (unit, name) in [(1u64 << 30, "GiB"), (1 << 20, "MiB"), (1 << 10, "KiB")] {
-        if bytes >= unit && bytes % unit == 0 {
+        if bytes >= unit && bytes.is_multiple_of(unit) {
             return format!("{} {name}", bytes / unit);
         }
     }

@@ -7,6 +7,7 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 
 use glam::{DQuat, DVec3};
+use innersphere::contact_map::Teeth;
 use innersphere::mesh::io::{to_obj_bytes, to_stl_bytes};
 use innersphere::shapes;
 use innersphere::tree::{file, SphereTree, TreeMeta, NO_PARENT};
@@ -317,7 +318,7 @@ fn pose_variants() -> Vec<Vec<u8>> {
 /// end points as the real files give them), and near misses (a key twice, both arches, in
 /// metres, keys that are no tooth numbers, a tooth twice under two spellings).
 fn teeth_variants() -> Vec<Vec<u8>> {
-    let (upper, lower) = shapes::arch_pair_teeth(6);
+    let (upper, lower) = Teeth::of_arch_pair(6);
     let full: String = {
         let entries: Vec<String> = lower
             .teeth

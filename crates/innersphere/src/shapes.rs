@@ -222,41 +222,30 @@ fn arch_places(teeth: usize) -> Vec<(DVec3, f64)> {
     places
 }
 
-/// The teeth of [`arch_pair`]`(_, teeth)` as a teeth-axes file gives them, (upper, lower):
-/// each tooth's crown centre (on its axis, 1.05 mm into the crown from the crown's base,
-/// inside it), numbered in the Universal Numbering System as a patient's teeth, as many on
-/// each side of the midline (the arch's +y is anterior, +z occlusal for the lower arch, so
-/// the patient's left is −x: upper 1 is the +x end, lower 17 the −x end). `teeth` is
-/// clamped to 2..=16.
-pub fn arch_pair_teeth(teeth: usize) -> (crate::contact_map::Teeth, crate::contact_map::Teeth) {
-    use crate::contact_map::{Teeth, Tooth};
+/// Tooth numbers (Universal Numbering System) with their crown centres.
+pub type NumberedCentres = Vec<(u32, DVec3)>;
+
+/// The crown centres of [`arch_pair`]`(_, teeth)`'s teeth, numbered as a teeth-axes file
+/// numbers them, (upper, lower): each on its tooth's axis, 1.05 mm into the crown from the
+/// crown's base (inside it), numbered as a patient's teeth, as many on each side of the
+/// midline (the arch's +y is anterior, +z occlusal for the lower arch, so the patient's left
+/// is −x: upper 1 is the +x end, lower 17 the −x end), sorted by number. `teeth` is clamped
+/// to 2..=16. `contact_map::Teeth::of_arch_pair` makes teeth files of them.
+pub fn arch_pair_crowns(teeth: usize) -> (NumberedCentres, NumberedCentres) {
     let n = teeth.clamp(2, 16);
     let skip = ((16 - n) / 2) as u32;
     let crown = 1.5 * ARCH_SCALE;
     let (mut upper, mut lower) = (Vec::with_capacity(n), Vec::with_capacity(n));
     for (k, &(at, _)) in arch_places(n).iter().enumerate() {
         let k = k as u32;
-        upper.push(Tooth {
-            number: 16 - skip - k,
-            centre: DVec3::new(at.x, at.y, 8.1 * ARCH_SCALE - crown),
-        });
-        lower.push(Tooth {
-            number: 17 + skip + k,
-            centre: DVec3::new(at.x, at.y, crown),
-        });
+        upper.push((
+            16 - skip - k,
+            DVec3::new(at.x, at.y, 8.1 * ARCH_SCALE - crown),
+        ));
+        lower.push((17 + skip + k, DVec3::new(at.x, at.y, crown)));
     }
-    upper.sort_by_key(|t| t.number);
-    let name = |s: &str| std::path::PathBuf::from(format!("generated {s} arch teeth"));
-    (
-        Teeth {
-            teeth: upper,
-            source: name("upper"),
-        },
-        Teeth {
-            teeth: lower,
-            source: name("lower"),
-        },
-    )
+    upper.sort_by_key(|t| t.0);
+    (upper, lower)
 }
 
 /// A generated dental arch pair for tests and examples (millimetres): `teeth` molar-like

@@ -1,6 +1,6 @@
 //! Teeth-axes files against the arches they label (`contact_map::Teeth`,
 //! `docs/OCCLUSION.md`): the generated arch pair with teeth files made from its tooth
-//! placement (`shapes::arch_pair_teeth`), written to files and read back through the one
+//! placement (`Teeth::of_arch_pair`), written to files and read back through the one
 //! reader; and the real jaw pair's own files (`#[ignore]`d: CI's `--ignored` pass).
 
 use innersphere::contact_map::{check_pair, ArchContext, Jaw, Teeth};
@@ -32,7 +32,7 @@ fn refusal<T: std::fmt::Debug>(r: innersphere::Result<T>) -> String {
 #[test]
 fn generated_arches_and_their_files() {
     let (upper, lower) = shapes::arch_pair(1, 12);
-    let (tu, tl) = shapes::arch_pair_teeth(12);
+    let (tu, tl) = Teeth::of_arch_pair(12);
     assert_eq!(tu.teeth.first().unwrap().number, 3);
     assert_eq!(tl.teeth.last().unwrap().number, 30);
     let (tu, tl) = (
@@ -113,7 +113,7 @@ fn generated_arches_and_their_files() {
 #[test]
 fn the_opposing_arch_is_where_the_pose_puts_it() {
     let (upper, lower) = shapes::arch_pair(1, 10);
-    let (tu, tl) = shapes::arch_pair_teeth(10);
+    let (tu, tl) = Teeth::of_arch_pair(10);
     let pose = Pose::new(
         DVec3::new(3.0, -40.0, 20.0),
         innersphere::glam::DQuat::from_rotation_z(0.7),

@@ -7,6 +7,7 @@
 mod support;
 use support::{code, ist, s, stderr, stdout, TempDir};
 
+use innersphere::contact_map::Teeth;
 use innersphere::shapes;
 use std::path::{Path, PathBuf};
 
@@ -21,7 +22,7 @@ struct Arches {
 fn arches(name: &str) -> Arches {
     let dir = TempDir::new("ist-teeth", name);
     let (upper, lower) = shapes::arch_pair(1, 10);
-    let (tu, tl) = shapes::arch_pair_teeth(10);
+    let (tu, tl) = Teeth::of_arch_pair(10);
     let a = Arches {
         upper: dir.path("upper.stl"),
         lower: dir.path("lower.stl"),
@@ -134,7 +135,7 @@ fn occlusion_map_reads_teeth_bounded_and_refuses_what_does_not_fit() {
     assert!(e.contains("mixes upper teeth (1–16: 4, 5"), "{e}");
 
     // In metres for meshes in millimetres.
-    let (_, tl) = shapes::arch_pair_teeth(10);
+    let (_, tl) = Teeth::of_arch_pair(10);
     let metres = w.dir.path("metres.json");
     std::fs::write(&metres, tl.scaled(0.001).unwrap().to_json()).unwrap();
     let e = run(map(&w.teeth_upper, &metres));

@@ -415,7 +415,7 @@ mod tests {
     #[test]
     fn the_generated_arches_own_teeth_fit() {
         let (upper, lower) = shapes::arch_pair(1, 10);
-        let (tu, tl) = shapes::arch_pair_teeth(10);
+        let (tu, tl) = Teeth::of_arch_pair(10);
         let (fu, fl) = check_pair(&upper, Some(&tu), &lower, Some(&tl), &Pose::IDENTITY).unwrap();
         let (fu, fl) = (fu.unwrap(), fl.unwrap());
         assert_eq!((fu.jaw, fl.jaw), (Jaw::Upper, Jaw::Lower));
@@ -429,7 +429,7 @@ mod tests {
     #[test]
     fn the_other_arch_s_file_is_refused() {
         let (upper, lower) = shapes::arch_pair(1, 10);
-        let (tu, tl) = shapes::arch_pair_teeth(10);
+        let (tu, tl) = Teeth::of_arch_pair(10);
         // Given for the other arch, in a bite: the centres are inside the opposing arch.
         let m = message(check_pair(&upper, None, &lower, Some(&tu), &Pose::IDENTITY));
         assert!(
@@ -483,7 +483,7 @@ mod tests {
     #[test]
     fn a_file_in_metres_for_a_mesh_in_mm_is_refused_naming_the_unit() {
         let (upper, lower) = shapes::arch_pair(1, 10);
-        let (tu, _) = shapes::arch_pair_teeth(10);
+        let (tu, _) = Teeth::of_arch_pair(10);
         for (factor, unit) in [
             (0.001, "in metres"),
             (0.1, "in centimetres"),
@@ -543,7 +543,7 @@ mod tests {
     #[test]
     fn a_tooth_that_labels_nothing_is_a_warning_and_a_file_that_labels_nothing_an_error() {
         let (upper, _) = shapes::arch_pair(1, 10);
-        let (tu, _) = shapes::arch_pair_teeth(10);
+        let (tu, _) = Teeth::of_arch_pair(10);
         // One tooth in the hollow of the horseshoe: inside the box, 12 mm from every tooth.
         let mut extra = tu.clone();
         extra.teeth[0].centre = DVec3::new(0.0, 18.0, 2.0);

@@ -191,6 +191,22 @@ impl Teeth {
         })
     }
 
+    /// The teeth files of the generated arch pair [`shapes::arch_pair`](crate::shapes::arch_pair)
+    /// `(_, teeth)`, (upper, lower), from its crown centres
+    /// ([`shapes::arch_pair_crowns`](crate::shapes::arch_pair_crowns)): for tests and examples
+    /// of the teeth checks.
+    pub fn of_arch_pair(teeth: usize) -> (Teeth, Teeth) {
+        let (upper, lower) = crate::shapes::arch_pair_crowns(teeth);
+        let make = |centres: Vec<(u32, DVec3)>, name: &str| Teeth {
+            teeth: centres
+                .into_iter()
+                .map(|(number, centre)| Tooth { number, centre })
+                .collect(),
+            source: PathBuf::from(format!("generated {name} arch teeth")),
+        };
+        (make(upper, "upper"), make(lower, "lower"))
+    }
+
     /// The teeth as a teeth-axes JSON, crown centres only (`{"18": {"c": [x, y, z]}, …}`),
     /// which [`from_json`](Self::from_json) reads back to the same teeth.
     pub fn to_json(&self) -> String {

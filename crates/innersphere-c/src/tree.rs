@@ -34,9 +34,11 @@ fn unit(u: c_int) -> Result<innersphere::mesh::Unit, Fail> {
         crate::types::IST_UNIT_CM => Unit::Cm,
         crate::types::IST_UNIT_M => Unit::M,
         crate::types::IST_UNIT_IN => Unit::In,
-        _ => return Err(Fail::arg(format!(
+        _ => {
+            return Err(Fail::arg(format!(
             "unit {u} is none of IST_UNIT_MM (0), IST_UNIT_CM (1), IST_UNIT_M (2), IST_UNIT_IN (3)"
-        ))),
+        )))
+        }
     })
 }
 

@@ -4,12 +4,13 @@
 
 use crate::histogram::Histogram;
 use crate::motion::Motion;
+use innersphere::contact_map::{ArchContext, Teeth};
 use innersphere::error::num;
 use innersphere::glam::DVec3;
 use innersphere::haptic::{
     CollisionOptions, CollisionStats, HapticLoop, HapticOptions, MultirateLoop, Tick,
 };
-use innersphere::{Error, Pair, Pose, Result};
+use innersphere::{Error, Mesh, Pair, Pose, Result, SphereTree};
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
@@ -338,39 +339,45 @@ pub fn trace_csv(run: &HapticRun) -> String {
     s
 }
 
-/// The crown centres of a teeth-axes JSON (`{"18": {"c": [x, y, z], …}, …}`, as in the
-/// Open-Full-Jaw dataset), named `tooth N`.
-pub fn crown_centres(path: &std::path::Path) -> Result<Vec<(String, DVec3)>> {
-    let bad = |m: String| Error::Parse {
-        path: path.to_path_buf(),
-        format: "teeth axes JSON",
-        message: m,
-    };
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-        path: path.to_path_buf(),
-        source: e,
-    })?;
-    let v: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| bad(format!("not JSON: {e}")))?;
-    let obj = v
-        .as_object()
-        .ok_or_else(|| bad("expected an object of teeth".into()))?;
-    let mut out = Vec::with_capacity(obj.len());
-    for (tooth, axes) in obj {
-        let c: Option<Vec<f64>> = axes
-            .get("c")
-            .and_then(|c| c.as_array())
-            .map(|c| c.iter().filter_map(|x| x.as_f64()).collect());
-        match c {
-            Some(c) if c.len() == 3 && c.iter().all(|x| x.is_finite()) => {
-                out.push((format!("tooth {tooth}"), DVec3::new(c[0], c[1], c[2])))
-            }
-            _ => {
-                return Err(bad(format!(
-                    "tooth {tooth} has no crown centre \"c\": [x, y, z]"
-                )))
-            }
+/// The landmarks of `ist occlude --landmarks`: the crown centres of a teeth-axes file (read
+/// by the library's one reader, [`Teeth::load`]), named `tooth N`, in tooth order.
+pub fn crown_centres(teeth: &Teeth) -> Vec<(String, DVec3)> {
+    teeth
+        .teeth
+        .iter()
+        .map(|t| (format!("tooth {}", t.number), t.centre))
+        .collect()
+}
+
+/// Checks landmarks of body B against B as `ist occlusion-map` checks a teeth file
+/// ([`Teeth::check_against`]), with A opposing where it is with B at `reference` (B's pose
+/// in A's frame: the scanned bite). Each body is its mesh when given, else the mesh its tree
+/// was built from while that file still holds it, else its tree's leaf centres (which get
+/// the box and reach checks only). The warnings, or an error when the file does not fit B.
+pub fn check_landmarks(
+    teeth: &Teeth,
+    b: (&SphereTree, Option<&Mesh>),
+    a: (&SphereTree, Option<&Mesh>),
+    reference: &Pose,
+) -> Result<Vec<String>> {
+    use std::borrow::Cow;
+    fn body<'m>((tree, mesh): (&SphereTree, Option<&'m Mesh>)) -> Cow<'m, Mesh> {
+        if let Some(m) = mesh {
+            return Cow::Borrowed(m);
         }
+        if let Some(m) = tree.meta.source.as_ref().and_then(|s| s.load().ok()) {
+            return Cow::Owned(m);
+        }
+        Cow::Owned(Mesh {
+            vertices: tree.leaves().map(|n| tree.sphere(n).0.as_dvec3()).collect(),
+            triangles: Vec::new(),
+        })
     }
-    Ok(out)
+    let (arch, opposing) = (body(b), body(a));
+    let fit = teeth.check_against(&ArchContext {
+        arch: &arch,
+        opposing: Some((&opposing, reference.inverse())),
+        jaw: None,
+    })?;
+    Ok(fit.warnings)
 }

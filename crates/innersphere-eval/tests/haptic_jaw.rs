@@ -8,6 +8,7 @@
 
 use innersphere_testkit::data as common;
 
+use innersphere::contact_map::Teeth;
 use innersphere::glam::DQuat;
 use innersphere::haptic::{
     occlude, occlude_free, CollisionOptions, DeviceClass, FreeOcclusionOptions, HapticOptions,
@@ -194,8 +195,7 @@ fn occlusion_finds_the_scanned_bite_from_open_starts() {
     let (up, left, ant) = (j.frame.up, j.frame.left, j.frame.anterior);
     let mut landmarks = vec![j.frame.incisal];
     landmarks.extend(
-        crown_centres(&common::data("jaw/ofj_p26_teeth_axes_mandible.json"))
-            .unwrap()
+        crown_centres(&Teeth::load(&common::data("jaw/ofj_p26_teeth_axes_mandible.json")).unwrap())
             .into_iter()
             .map(|(_, c)| c),
     );
@@ -269,11 +269,11 @@ fn free_occlusion_finds_the_scanned_bite_from_random_open_starts() {
     let _serial = serial();
     let j = jaw();
     let (up, left, ant) = (j.frame.up, j.frame.left, j.frame.anterior);
-    let crowns: Vec<_> = crown_centres(&common::data("jaw/ofj_p26_teeth_axes_mandible.json"))
-        .unwrap()
-        .into_iter()
-        .map(|(_, c)| c)
-        .collect();
+    let crowns: Vec<_> =
+        crown_centres(&Teeth::load(&common::data("jaw/ofj_p26_teeth_axes_mandible.json")).unwrap())
+            .into_iter()
+            .map(|(_, c)| c)
+            .collect();
     let centre = crowns.iter().sum::<innersphere::glam::DVec3>() / crowns.len() as f64;
     // xorshift64: the starts are drawn, not picked.
     let mut state = 0x5eed_0005_u64;

@@ -3,8 +3,10 @@
 //! `cargo fuzz run <target>` starts from them:
 //!
 //! ```sh
-//! cargo run -p innersphere-fuzz --example write_seeds
+//! cargo run -p innersphere-fuzz --example write_seeds [TARGET ...]
 //! ```
+//!
+//! With names, only those targets' seeds are written.
 
 use std::path::Path;
 
@@ -12,7 +14,11 @@ fn main() -> std::io::Result<()> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("fuzz")
         .join("corpus");
+    let only: Vec<String> = std::env::args().skip(1).collect();
     for (name, _) in innersphere_fuzz::TARGETS {
+        if !only.is_empty() && !only.iter().any(|o| o == name) {
+            continue;
+        }
         let dir = root.join(name);
         std::fs::create_dir_all(&dir)?;
         let seeds = innersphere_fuzz::seeds::seeds(name);

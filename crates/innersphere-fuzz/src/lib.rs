@@ -1,6 +1,6 @@
 //! Fuzz targets for every input innersphere reads from a user: mesh files (STL binary and
-//! ASCII, OBJ, PLY ASCII and binary, OFF, gzip-wrapped), tree files, motion CSV and pose
-//! text.
+//! ASCII, OBJ, PLY ASCII and binary, OFF, gzip-wrapped), tree files, motion CSV, pose text,
+//! and the planning commands' teeth-axes JSON, landmarks and option strings ([`teeth`]).
 //!
 //! Each target is a plain `fn(&[u8])` that feeds the bytes to the library and asserts what
 //! must hold for *any* input: no panic, and for an input that is accepted, the properties the
@@ -28,6 +28,9 @@ use innersphere::{MatrixOrder, MultipointOptions, Pair, Pose, SphereTree};
 use innersphere_motion::Motion;
 
 pub mod seeds;
+pub mod teeth;
+
+pub use teeth::{landmarks, option_text, teeth_json};
 
 /// A fuzz target: feeds bytes to the library, panics when a property is violated.
 pub type Target = fn(&[u8]);
@@ -44,6 +47,9 @@ pub const TARGETS: &[(&str, Target)] = &[
     ("tree_file", tree_file),
     ("motion_csv", motion_csv),
     ("pose_text", pose_text),
+    ("teeth_json", teeth_json),
+    ("landmarks", landmarks),
+    ("option_text", option_text),
 ];
 
 /// The target named `name`.

@@ -7,6 +7,7 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 
 use glam::{DQuat, DVec3};
+use innersphere::contact_map::Teeth;
 use innersphere::mesh::io::{to_obj_bytes, to_stl_bytes};
 use innersphere::shapes;
 use innersphere::tree::{file, SphereTree, TreeMeta, NO_PARENT};
@@ -313,6 +314,96 @@ fn pose_variants() -> Vec<Vec<u8>> {
     ]
 }
 
+/// Teeth-axes files: the generated arches' own (crown centres only, and with the axes'
+/// end points as the real files give them), and near misses (a key twice, both arches, in
+/// metres, keys that are no tooth numbers, a tooth twice under two spellings).
+fn teeth_variants() -> Vec<Vec<u8>> {
+    let (upper, lower) = Teeth::of_arch_pair(6);
+    let full: String = {
+        let entries: Vec<String> = lower
+            .teeth
+            .iter()
+            .map(|t| {
+                let c = t.centre;
+                format!(
+                    "\"{}\": {{\"c\": [{}, {}, {}], \"x\": [{}, {}, {}], \"y\": [{}, {}, {}], \"z\": [{}, {}, {}]}}",
+                    t.number,
+                    c.x, c.y, c.z,
+                    c.x + 1.0, c.y, c.z,
+                    c.x, c.y + 1.0, c.z,
+                    c.x, c.y, c.z + 1.0
+                )
+            })
+            .collect();
+        format!("{{\n    {}\n}}\n", entries.join(",\n    "))
+    };
+    let lower_json = lower.to_json();
+    vec![
+        upper.to_json().into_bytes(),
+        lower_json.clone().into_bytes(),
+        full.into_bytes(),
+        lower_json
+            .replacen('{', r#"{"22": {"c": [0, 0, 0]}, "#, 1)
+            .into_bytes(),
+        format!(
+            "{},{}",
+            &upper.to_json()[..upper.to_json().len() - 1],
+            &lower_json[1..]
+        )
+        .into_bytes(),
+        lower
+            .scaled(0.001)
+            .expect("a positive factor")
+            .to_json()
+            .into_bytes(),
+        br#"{"18": {"c": [1, 2, 3]}, " 018 ": {"c": [1, 2, 3]}}"#.to_vec(),
+        br#"{"incisal": {"c": [0, 40, 1]}, "UL6": {"c": [1, 2, 3]}}"#.to_vec(),
+        br#"{"3": {"c": [1, 2, 3], "c": [4, 5, 6]}}"#.to_vec(),
+        br#"{"3": {"c": [1e308, 2, -1e-300]}, "4": {"c": [0, 0]}}"#.to_vec(),
+    ]
+}
+
+/// Landmarks: a read step, then a teeth file; and files the bounded reader must refuse (a
+/// NUL, a character cut by the end, more than the target's 2048-byte limit).
+fn landmark_variants() -> Vec<Vec<u8>> {
+    let mut v: Vec<Vec<u8>> = teeth_variants()
+        .into_iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let mut b = vec![i as u8];
+            b.extend(t);
+            b
+        })
+        .collect();
+    v.push(b"\x03{\"18\": {\"c\": [1, 2, 3]}}\x00".to_vec());
+    v.push("\x01{\"18\": {\"c\": [1, 2, 3], \"n\": \"é\"}}".as_bytes()[..31].to_vec());
+    let mut long = b"\x07".to_vec();
+    long.extend(std::iter::repeat_n(b' ', 2049));
+    v.push(long);
+    v
+}
+
+/// Option strings: `p` + a pose, `r` + a preset, `s` + a scenario, `d` + a device class.
+fn option_variants() -> Vec<Vec<u8>> {
+    [
+        "p0 0 -3 1 0 0 0",
+        "p1e17 0 0 1 0 0 0",
+        "p0,0,0, 0.7071,0,0.7071,0",
+        "rjaw",
+        "rfast",
+        "rfine",
+        "schew",
+        "sopen_close",
+        " sRANDOM-CONTACT",
+        "dtouch",
+        "d Omega ",
+        "x",
+    ]
+    .iter()
+    .map(|s| s.as_bytes().to_vec())
+    .collect()
+}
+
 /// The seeds of a target (empty for an unknown name).
 pub fn seeds(target: &str) -> Vec<Vec<u8>> {
     match target {
@@ -341,6 +432,9 @@ pub fn seeds(target: &str) -> Vec<Vec<u8>> {
         "tree_file" => tree_variants(),
         "motion_csv" => motion_variants(),
         "pose_text" => pose_variants(),
+        "teeth_json" => teeth_variants(),
+        "landmarks" => landmark_variants(),
+        "option_text" => option_variants(),
         _ => Vec::new(),
     }
 }

@@ -82,4 +82,30 @@ fn other_seeds_load() {
         let text = std::str::from_utf8(&s).expect("UTF-8");
         text.parse::<innersphere::Pose>().expect("a valid pose");
     }
+    // The teeth seeds: the generated arches' own files fit them (the fuzzer starts from
+    // accepted files, so that it reaches the checks), the near misses are refused.
+    use innersphere::contact_map::{check_pair, Teeth};
+    let (upper, lower) = innersphere::shapes::arch_pair(0, 6);
+    let teeth = seeds("teeth_json");
+    let parsed: Vec<_> = teeth
+        .iter()
+        .map(|s| Teeth::from_json(std::str::from_utf8(s).unwrap(), "seed".as_ref()))
+        .collect();
+    let (tu, tl, full) = (
+        parsed[0].as_ref().unwrap(),
+        parsed[1].as_ref().unwrap(),
+        parsed[2].as_ref().unwrap(),
+    );
+    assert_eq!(tl, full, "the axes' end points change nothing");
+    let pose = innersphere::Pose::IDENTITY;
+    check_pair(&upper, Some(tu), &lower, Some(tl), &pose).expect("the arches' own teeth fit");
+    for (i, r) in parsed.iter().enumerate().skip(3) {
+        let fits = r
+            .as_ref()
+            .is_ok_and(|t| check_pair(&upper, None, &lower, Some(t), &pose).is_ok());
+        assert!(
+            !fits,
+            "teeth seed {i} is a near miss, yet it fits the lower arch"
+        );
+    }
 }

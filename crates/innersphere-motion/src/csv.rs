@@ -5,7 +5,6 @@
 use glam::{DQuat, DVec3};
 use innersphere::Pose;
 use innersphere::{Error, Result};
-use std::io::Read;
 use std::path::Path;
 
 /// The header line of a motion file.
@@ -15,8 +14,18 @@ const COLUMNS: [&str; 8] = ["t", "tx", "ty", "tz", "qw", "qx", "qy", "qz"];
 /// A quaternion whose norm differs from 1 by more than this is rejected; within it, it is
 /// normalized (files written with a few decimals are never exactly unit).
 pub const QUAT_NORM_TOLERANCE: f64 = 1e-3;
-/// The largest motion file accepted (decompressed), 1 GiB.
+/// The largest motion file accepted (decompressed), 1 GiB: at 1 kHz, 1.9 hours of frames as
+/// [`Motion::to_csv`] writes them (every number in full, about 155 bytes a frame) and 3.5
+/// hours at the recorded files' 6 to 9 decimals (84 bytes a frame); a longer recording is
+/// split into files. Loading the largest file holds its text and its frames (64 bytes each)
+/// at once, at most about 1.9 GB.
 pub const MAX_FILE_BYTES: u64 = 1 << 30;
+
+/// A motion file for [`innersphere::input::read_text`].
+pub const MOTION_FILE: innersphere::input::TextInput = innersphere::input::TextInput {
+    what: "motion file",
+    max_bytes: MAX_FILE_BYTES,
+};
 
 /// One frame of a motion: a time and the pose of body B in body A's frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -286,31 +295,10 @@ impl Motion {
 }
 
 /// The text of a motion file, decompressed when the path ends in `.gz`, at most
-/// [`MAX_FILE_BYTES`].
+/// [`MAX_FILE_BYTES`], through the library's bounded reader ([`innersphere::input`]: a
+/// device or binary data is refused at its first NUL byte).
 fn read_text(path: &Path) -> Result<String> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut bytes = Vec::new();
-    let read = if innersphere::mesh::io::is_gzip(path) {
-        flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file))
-            .take(MAX_FILE_BYTES + 1)
-            .read_to_end(&mut bytes)
-    } else {
-        file.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes)
-    };
-    read.map_err(|e| Error::io(path, e))?;
-    if bytes.len() as u64 > MAX_FILE_BYTES {
-        return Err(motion_error(
-            path,
-            1,
-            format!("file larger than {MAX_FILE_BYTES} bytes; refusing it"),
-        ));
-    }
-    String::from_utf8(bytes).map_err(|e| {
-        let bytes = e.as_bytes();
-        let valid = e.utf8_error().valid_up_to();
-        let line = 1 + bytes[..valid].iter().filter(|&&b| b == b'\n').count();
-        motion_error(path, line, "not UTF-8 text")
-    })
+    innersphere::input::read_text(path, MOTION_FILE)
 }
 
 /// True when a quaternion norm is within [`QUAT_NORM_TOLERANCE`] of 1 (false for NaN).

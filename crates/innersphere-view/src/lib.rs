@@ -80,6 +80,32 @@ impl Scene {
         Ok(scene.refining_with_meshes().0)
     }
 
+    /// Checks the teeth files against the drawn meshes as `ist occlusion-map` does
+    /// ([`innersphere::contact_map::check_pair`], B at its start pose, else at the identity:
+    /// the frame the arches were scanned in): an error when a file does not fit its arch,
+    /// else the warnings (a tooth that labels no vertex). Teeth without both meshes are an
+    /// error: the per-tooth list is made on the meshes.
+    pub fn check_teeth(&self) -> innersphere::Result<Vec<String>> {
+        if self.teeth_a.is_none() && self.teeth_b.is_none() {
+            return Ok(Vec::new());
+        }
+        let (Some(a), Some(b)) = (&self.mesh_a, &self.mesh_b) else {
+            return Err(innersphere::Error::InvalidOption(
+                "teeth files need both meshes: the per-tooth list is made on the drawn meshes"
+                    .into(),
+            ));
+        };
+        let pose = self.start.unwrap_or(innersphere::Pose::IDENTITY);
+        let (fa, fb) = innersphere::contact_map::check_pair(
+            a,
+            self.teeth_a.as_ref(),
+            b,
+            self.teeth_b.as_ref(),
+            &pose,
+        )?;
+        Ok(fa.into_iter().chain(fb).flat_map(|f| f.warnings).collect())
+    }
+
     /// The scene whose trees carry the drawn meshes when both are the trees' own, so that
     /// the distance shown is the refined distance between the meshes
     /// ([`innersphere::Pair::refined_distance`]); else unchanged, with a sentence that says

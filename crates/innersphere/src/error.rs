@@ -41,6 +41,16 @@ pub enum Error {
     /// Numbers that are no rigid pose (see [`PoseError`](crate::PoseError)).
     #[error("invalid pose: {0}")]
     Pose(#[from] crate::pose::PoseError),
+    /// A text input that cannot be used: a teeth-axes JSON (or landmarks) file that is too
+    /// large, not text, malformed, or does not fit the arch it labels
+    /// ([`input`](crate::input), [`contact_map::Teeth`](crate::contact_map::Teeth)).
+    #[error("{path}: {message}")]
+    Input {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the limit or the check that failed.
+        message: String,
+    },
     /// A motion file that cannot be used.
     #[error("{path}:{line}: {message}")]
     Motion {

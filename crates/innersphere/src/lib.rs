@@ -43,6 +43,7 @@
 //! splint/     the occlusal splint (surgical wafer) between two arches at a pose
 //! haptic/     6-DOF haptic rendering: the contact model, the servo, the single-thread and
 //!             multi-rate loops, occlusion
+//! input.rs    reading the small text inputs (teeth files, motions) within a size limit
 //! output.rs   writing outputs: never onto an input, through a temporary file renamed
 //!             into place
 //! ```
@@ -60,6 +61,7 @@ pub mod exact;
 pub mod field;
 pub mod haptic;
 pub mod hierarchy;
+pub mod input;
 pub mod mesh;
 pub mod output;
 pub mod packing;

@@ -192,15 +192,13 @@ pub fn tooth_pair(subdivisions: u32) -> (Mesh, Mesh) {
     (upper, molar(subdivisions, 0.0))
 }
 
-/// A generated dental arch pair for tests and examples (millimetres): `teeth` molar-like
-/// teeth per arch, 0.7 × the size of [`molar`], standing along a parabolic horseshoe
-/// (narrow at the front, +y), the lower arch cusps up and the upper one cusps down, turned
-/// so that their cusps interdigitate with a small overlap at the identity pose, like a
-/// bite. Each tooth is its own closed shell, as in segmented scans.
-pub fn arch_pair(subdivisions: u32, teeth: usize) -> (Mesh, Mesh) {
-    let scale = 0.7;
+/// The size of [`arch_pair`]'s teeth relative to [`molar`].
+const ARCH_SCALE: f64 = 0.7;
+
+/// Where [`arch_pair`]'s `teeth` (at least 2) stand: equal arc steps along y = 40 − x²/18
+/// (a 48 mm wide, 40 mm deep arch) from x = −24 to 24, with the curve's direction angle.
+fn arch_places(teeth: usize) -> Vec<(DVec3, f64)> {
     let n = teeth.max(2);
-    // Teeth at equal arc steps along y = 40 − x²/18 (a 48 mm wide, 40 mm deep arch).
     let curve = |x: f64| DVec3::new(x, 40.0 - x * x / 18.0, 0.0);
     let mut pts = vec![curve(-24.0)];
     let mut x = -24.0;
@@ -221,6 +219,43 @@ pub fn arch_pair(subdivisions: u32, teeth: usize) -> (Mesh, Mesh) {
         }
         walked += step;
     }
+    places
+}
+
+/// Tooth numbers (Universal Numbering System) with their crown centres.
+pub type NumberedCentres = Vec<(u32, DVec3)>;
+
+/// The crown centres of [`arch_pair`]`(_, teeth)`'s teeth, numbered as a teeth-axes file
+/// numbers them, (upper, lower): each on its tooth's axis, 1.05 mm into the crown from the
+/// crown's base (inside it), numbered as a patient's teeth, as many on each side of the
+/// midline (the arch's +y is anterior, +z occlusal for the lower arch, so the patient's left
+/// is −x: upper 1 is the +x end, lower 17 the −x end), sorted by number. `teeth` is clamped
+/// to 2..=16. `contact_map::Teeth::of_arch_pair` makes teeth files of them.
+pub fn arch_pair_crowns(teeth: usize) -> (NumberedCentres, NumberedCentres) {
+    let n = teeth.clamp(2, 16);
+    let skip = ((16 - n) / 2) as u32;
+    let crown = 1.5 * ARCH_SCALE;
+    let (mut upper, mut lower) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    for (k, &(at, _)) in arch_places(n).iter().enumerate() {
+        let k = k as u32;
+        upper.push((
+            16 - skip - k,
+            DVec3::new(at.x, at.y, 8.1 * ARCH_SCALE - crown),
+        ));
+        lower.push((17 + skip + k, DVec3::new(at.x, at.y, crown)));
+    }
+    upper.sort_by_key(|t| t.0);
+    (upper, lower)
+}
+
+/// A generated dental arch pair for tests and examples (millimetres): `teeth` molar-like
+/// teeth per arch, 0.7 × the size of [`molar`], standing along a parabolic horseshoe
+/// (narrow at the front, +y), the lower arch cusps up and the upper one cusps down, turned
+/// so that their cusps interdigitate with a small overlap at the identity pose, like a
+/// bite. Each tooth is its own closed shell, as in segmented scans.
+pub fn arch_pair(subdivisions: u32, teeth: usize) -> (Mesh, Mesh) {
+    let scale = ARCH_SCALE;
+    let places = arch_places(teeth);
     let arch = |upper: bool| -> Mesh {
         let mut all = Mesh::default();
         for (k, &(at, angle)) in places.iter().enumerate() {

@@ -1,5 +1,5 @@
 //! The library's modules import one way, down a ladder: pose ← error ← output, progress ←
-//! mesh ← shapes, anatomy ← tree ← field ← packing ← hierarchy ← build, exact ← query,
+//! mesh ← shapes, anatomy, input ← tree ← field ← packing ← hierarchy ← build, exact ← query,
 //! contact_map, splint ← haptic
 //! (`tree` is the finished tree's type and file, below the pipeline stages that make it). Reads
 //! every `crate::…` path in the sources (outside their `#[cfg(test)]` modules, which may
@@ -15,7 +15,7 @@ fn layer(module: &str) -> Option<u32> {
         "error" => 1,
         "output" | "progress" => 2,
         "mesh" => 3,
-        "shapes" | "anatomy" => 4,
+        "shapes" | "anatomy" | "input" => 4,
         "tree" => 5,
         "field" => 6,
         "packing" => 7,

@@ -75,13 +75,13 @@ fn tmp(name: &str) -> PathBuf {
         .join(format!("limits_memory_{}_{name}", std::process::id()))
 }
 
-/// Writes `zeros` zero bytes gzip-compressed (level 1, like `gzip -1`), streaming.
-fn write_gzip_of_zeros(path: &Path, zeros: usize) {
+/// Writes `bytes` bytes of `fill` gzip-compressed (level 1, like `gzip -1`), streaming.
+fn write_gzip_of(path: &Path, fill: u8, bytes: usize) {
     let file = std::fs::File::create(path).unwrap();
     let mut enc =
         flate2::write::GzEncoder::new(std::io::BufWriter::new(file), flate2::Compression::fast());
-    let block = vec![0u8; MIB];
-    for _ in 0..zeros / MIB {
+    let block = vec![fill; MIB];
+    for _ in 0..bytes / MIB {
         enc.write_all(&block).unwrap();
     }
     enc.finish().unwrap().flush().unwrap();
@@ -98,14 +98,16 @@ fn parse_message(r: innersphere::Result<Mesh>) -> String {
 fn a_gzip_bomb_is_refused_fast_in_little_memory() {
     let _alone = alone();
     // 300 MB of zeros, 1.3 MB compressed: as STL, its header declares 0 triangles, so reading
-    // stops after the first 64 KiB; as OBJ (no header to go by), the ratio limit stops it
-    // at 64 MiB of output.
-    for (name, needle, most) in [
-        ("bomb.stl.gz", "0 triangles", 4 * MIB),
-        ("bomb.obj.gz", "gzip bomb", 100 * MIB),
+    // stops after the first 64 KiB; as OBJ, its first NUL byte stops it there too. 300 MB of
+    // spaces as OBJ is text with no header to go by: the ratio limit stops it at 64 MiB of
+    // output.
+    for (name, fill, needle, most) in [
+        ("bomb.stl.gz", 0, "0 triangles", 4 * MIB),
+        ("bomb.obj.gz", 0, "byte 0 is a NUL byte", 4 * MIB),
+        ("spaces.obj.gz", b' ', "gzip bomb", 100 * MIB),
     ] {
         let path = tmp(name);
-        write_gzip_of_zeros(&path, 300 * MIB);
+        write_gzip_of(&path, fill, 300 * MIB);
         let (r, peak, time) = measured(|| Mesh::load(&path));
         std::fs::remove_file(&path).ok();
         let m = parse_message(r);
@@ -231,4 +233,117 @@ fn a_pipe_is_read_only_as_far_as_the_tree_header_declares() {
         "{} MiB at the peak",
         peak as f64 / MIB as f64
     );
+}
+
+/// A FIFO at `path` fed by a thread with `block` repeated until `total` bytes or the reader
+/// goes; `None` where there is no mkfifo.
+fn fifo(path: &Path, block: &'static [u8], total: usize) -> Option<std::thread::JoinHandle<()>> {
+    let made = std::process::Command::new("mkfifo").arg(path).status();
+    if !made.is_ok_and(|s| s.success()) {
+        return None;
+    }
+    let path = path.to_path_buf();
+    Some(std::thread::spawn(move || {
+        let Ok(mut f) = std::fs::OpenOptions::new().write(true).open(&path) else {
+            return;
+        };
+        let mut sent = 0;
+        while sent < total && f.write_all(block).is_ok() {
+            sent += block.len();
+        }
+    }))
+}
+
+/// Teeth-axes files (`ist occlusion-map --teeth-a/-b`, `ist view`, `ist occlude
+/// --landmarks`): devices, a sparse 100 MB file and a FIFO of endless JSON-like text are
+/// refused after at most the 1 MiB limit (plus a 64 KiB chunk), naming the limit.
+#[test]
+fn teeth_files_are_read_within_their_limit() {
+    use innersphere::contact_map::Teeth;
+    let _alone = alone();
+    let sparse = tmp("sparse.json");
+    std::fs::File::create(&sparse)
+        .unwrap()
+        .set_len(100 * MIB as u64)
+        .unwrap();
+    let mut cases: Vec<(PathBuf, usize)> = vec![(sparse.clone(), MIB / 4)];
+    for dev in ["/dev/zero", "/dev/urandom"] {
+        if Path::new(dev).exists() {
+            cases.push((PathBuf::from(dev), MIB / 4));
+        }
+    }
+    for (path, most) in cases {
+        let (r, peak, time) = measured(|| Teeth::load(&path));
+        let e = r.unwrap_err().to_string();
+        assert!(e.contains("1048576"), "{}: {e}", path.display());
+        assert!(peak < most, "{}: {peak} bytes at the peak", path.display());
+        assert!(
+            time < Duration::from_secs(1),
+            "{}: {time:?}",
+            path.display()
+        );
+    }
+    std::fs::remove_file(&sparse).ok();
+    // A pipe of text that never ends: read up to the limit, not beyond.
+    let pipe = tmp("pipe.json");
+    if let Some(writer) = fifo(&pipe, b"{\"1\": {\"c\": [1, 2, 3]}, ", 300 * MIB) {
+        let (r, peak, _) = measured(|| Teeth::load(&pipe));
+        writer.join().unwrap();
+        std::fs::remove_file(&pipe).ok();
+        let e = r.unwrap_err().to_string();
+        assert!(
+            e.contains("larger than the 1048576-byte (1 MiB) limit"),
+            "{e}"
+        );
+        assert!(
+            peak < 4 * MIB,
+            "{} MiB at the peak",
+            peak as f64 / MIB as f64
+        );
+    }
+}
+
+/// `/dev/zero` and random bytes given as a text-format mesh (OBJ, OFF, PLY: no header that
+/// bounds the length) are refused at their first NUL byte or missing PLY header, not read to
+/// the 4 GiB limit; a pipe of zeros behind a valid OBJ head too.
+#[test]
+fn devices_as_text_meshes_are_refused_after_the_first_chunk() {
+    let _alone = alone();
+    for dev in ["/dev/zero", "/dev/urandom"] {
+        if !Path::new(dev).exists() {
+            continue;
+        }
+        for (ext, needle) in [
+            ("obj", "NUL byte"),
+            ("off", "NUL byte"),
+            ("ply", "no PLY header within the first 65536 bytes"),
+        ] {
+            let link = tmp(&format!("dev.{ext}"));
+            std::os::unix::fs::symlink(dev, &link).unwrap();
+            let (e, peak, time) = measured(|| Mesh::load(&link).map(drop).unwrap_err());
+            std::fs::remove_file(&link).ok();
+            let e = e.to_string();
+            assert!(e.contains(needle), "{dev} as .{ext}: {e}");
+            assert!(peak < MIB, "{dev} as .{ext}: {peak} bytes at the peak");
+            assert!(time < Duration::from_secs(1), "{dev} as .{ext}: {time:?}");
+        }
+    }
+    let pipe = tmp("pipe.obj");
+    static HEAD_THEN_ZEROS: [u8; 4096] = {
+        let mut b = [0u8; 4096];
+        let v = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+        let mut i = 0;
+        while i < v.len() {
+            b[i] = v[i];
+            i += 1;
+        }
+        b
+    };
+    if let Some(writer) = fifo(&pipe, &HEAD_THEN_ZEROS, 300 * MIB) {
+        let (e, peak, _) = measured(|| Mesh::load(&pipe).map(drop).unwrap_err());
+        writer.join().unwrap();
+        std::fs::remove_file(&pipe).ok();
+        assert!(e.to_string().contains("byte 32 is a NUL byte"), "{e}");
+        assert!(peak < MIB, "{peak} bytes at the peak");
+    }
 }

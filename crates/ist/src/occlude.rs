@@ -2,10 +2,11 @@
 //! library's automatic occlusion), and say how far the bite found is from a reference.
 
 use anyhow::Context;
+use innersphere::contact_map::Teeth;
 use innersphere::glam::DVec3;
 use innersphere::haptic::{bite, BiteOptions, OcclusionStatus};
 use innersphere::{Pose, SharedTree};
-use innersphere_eval::haptic::crown_centres;
+use innersphere_eval::haptic::{check_landmarks, crown_centres};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -61,7 +62,8 @@ pub struct Args {
     #[arg(long, default_value = "0 0 0 1 0 0 0", allow_hyphen_values = true)]
     reference: String,
     /// Landmarks of B to compare: a teeth-axes JSON (`{"18": {"c": [x, y, z], …}, …}`,
-    /// B's frame); each tooth's crown centre `c` is one landmark, and so is the incisal
+    /// B's frame and unit, at most 1 MiB), read and checked against B as `ist occlusion-map`
+    /// reads teeth; each tooth's crown centre `c` is one landmark, and so is the incisal
     /// point of the pair's frame.
     #[arg(long)]
     landmarks: Option<PathBuf>,
@@ -101,8 +103,28 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         .reference
         .parse()
         .with_context(|| format!("--reference \"{}\"", args.reference))?;
-    let a = SharedTree::new(crate::bodies::load(&args.a, &args.body)?);
-    let b = SharedTree::new(crate::bodies::load(&args.b, &args.body)?);
+    // Read before the bodies are built, so that a bad file fails at once; checked against B
+    // once it is loaded.
+    let teeth = args
+        .landmarks
+        .as_deref()
+        .map(|p| Teeth::load_in(p, args.body.unit.unit))
+        .transpose()?;
+    let (a, mesh_a) = crate::bodies::load_body(&args.a, &args.body)?;
+    let (b, mesh_b) = crate::bodies::load_body(&args.b, &args.body)?;
+    let teeth = match &teeth {
+        Some(t) => {
+            let warnings =
+                check_landmarks(t, (&b, mesh_b.as_ref()), (&a, mesh_a.as_ref()), &reference)?;
+            for w in warnings {
+                eprintln!("warning: {w}");
+            }
+            crown_centres(t)
+        }
+        None => vec![],
+    };
+    drop((mesh_a, mesh_b));
+    let (a, b) = (SharedTree::new(a), SharedTree::new(b));
     let opts = BiteOptions {
         axis: args.axis.as_ref().map(|v| DVec3::new(v[0], v[1], v[2])),
         force: args.force,
@@ -114,11 +136,6 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         starts: args.starts,
         spread: args.spread,
         seed: args.seed,
-    };
-    // Read before the closing, so that a bad file fails at once.
-    let teeth = match &args.landmarks {
-        Some(path) => crown_centres(path)?,
-        None => vec![],
     };
     let t0 = std::time::Instant::now();
     let found = bite(&a, &b, &from, &opts)?;

@@ -3,7 +3,7 @@
 
 use anyhow::Context;
 use innersphere::contact_map::{
-    save_ply, summarise, ContactMap, Teeth, LEGEND, MAP_FILE, SPOT_GAP,
+    check_pair, save_ply, summarise, ContactMap, Teeth, TeethFit, LEGEND, MAP_FILE, SPOT_GAP,
 };
 use innersphere::exact::ExactMesh;
 use innersphere::Pose;
@@ -38,8 +38,10 @@ pub struct Args {
     /// Output PLY of B, written at the pose (in A's frame), with its `gap` and colour.
     #[arg(long)]
     out_b: Option<PathBuf>,
-    /// Teeth of A: a teeth-axes JSON (`{"3": {"c": [x, y, z], ...}, ...}`, A's frame); each
-    /// vertex belongs to the nearest crown centre within 10 mm.
+    /// Teeth of A: a teeth-axes JSON (`{"3": {"c": [x, y, z], ...}, ...}`, A's frame and
+    /// unit, at most 1 MiB); each vertex belongs to the nearest crown centre within 10 mm. A
+    /// file that does not fit its arch (the other arch's, another unit, both arches mixed,
+    /// a key twice) is refused: docs/OCCLUSION.md.
     #[arg(long)]
     teeth_a: Option<PathBuf>,
     /// Teeth of B (B's own frame, before the pose).
@@ -69,13 +71,30 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             .map(|p| p.as_path()),
     );
     crate::files::check_outputs(&outputs, &inputs)?;
-    let teeth_a = args.teeth_a.as_deref().map(Teeth::load).transpose()?;
-    let teeth_b = args.teeth_b.as_deref().map(Teeth::load).transpose()?;
+    let unit = args.unit.unit;
+    let teeth_a = args
+        .teeth_a
+        .as_deref()
+        .map(|p| Teeth::load_in(p, unit))
+        .transpose()?;
+    let teeth_b = args
+        .teeth_b
+        .as_deref()
+        .map(|p| Teeth::load_in(p, unit))
+        .transpose()?;
     let t0 = Instant::now();
-    let a = ExactMesh::new(&crate::files::load_mesh(&args.a, args.unit.unit)?)
-        .with_context(|| format!("{}", args.a.display()))?;
-    let b = ExactMesh::new(&crate::files::load_mesh(&args.b, args.unit.unit)?)
-        .with_context(|| format!("{}", args.b.display()))?;
+    let (mesh_a, mesh_b) = (
+        crate::files::load_mesh(&args.a, args.unit.unit)?,
+        crate::files::load_mesh(&args.b, args.unit.unit)?,
+    );
+    // Before the map: a teeth file that does not fit its arch is refused at once.
+    let (fit_a, fit_b) = check_pair(&mesh_a, teeth_a.as_ref(), &mesh_b, teeth_b.as_ref(), &pose)?;
+    for w in fit_a.iter().chain(&fit_b).flat_map(|f| &f.warnings) {
+        eprintln!("warning: {w}");
+    }
+    let a = ExactMesh::new(&mesh_a).with_context(|| format!("{}", args.a.display()))?;
+    let b = ExactMesh::new(&mesh_b).with_context(|| format!("{}", args.b.display()))?;
+    drop((mesh_a, mesh_b));
     let prepared = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let map = ContactMap::new(&a, &Pose::IDENTITY, &b, &pose, f64::INFINITY)?;
@@ -88,14 +107,18 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             save_ply(p, mesh.mesh(), &at, gaps)?;
         }
     }
-    let side = |name: &str, mesh: &ExactMesh, gaps: &[f64], teeth: &Option<Teeth>| {
+    let side = |name: &str,
+                mesh: &ExactMesh,
+                gaps: &[f64],
+                teeth: &Option<Teeth>,
+                fit: &Option<TeethFit>| {
         let min = gaps.iter().copied().fold(f64::INFINITY, f64::min);
         let inside = gaps.iter().filter(|&&g| g < 0.0).count();
         let within = |t: f64| gaps.iter().filter(|&&g| g <= t).count();
-        let teeth = teeth.as_ref().map(|t| {
-            let region = t.regions(&mesh.mesh().vertices);
-            summarise(mesh.mesh(), gaps, t, &region)
-        });
+        let teeth = teeth
+            .as_ref()
+            .zip(fit.as_ref())
+            .map(|(t, f)| summarise(mesh.mesh(), gaps, t, &f.regions));
         // Infinite gaps (no vertex, or none within reach) are written as null.
         json!({
             "mesh": name,
@@ -112,8 +135,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                  pose.rotation.w, pose.rotation.x, pose.rotation.y, pose.rotation.z],
         "units": "gaps in the meshes' units (mm for the jaw scans); negative: inside the other mesh",
         "spot_gap": SPOT_GAP,
-        "a": side(&args.a.display().to_string(), &a, &map.gaps_a, &teeth_a),
-        "b": side(&args.b.display().to_string(), &b, &map.gaps_b, &teeth_b),
+        "a": side(&args.a.display().to_string(), &a, &map.gaps_a, &teeth_a, &fit_a),
+        "b": side(&args.b.display().to_string(), &b, &map.gaps_b, &teeth_b, &fit_b),
         "legend": LEGEND.iter().map(|(hi, name, rgb)| json!({"below": hi, "name": name, "rgb": rgb})).collect::<Vec<_>>(),
         "seconds_prepare": prepared,
         "seconds_map": mapped,

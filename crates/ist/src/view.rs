@@ -65,7 +65,9 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<i32> {
     let teeth = |p: &Option<PathBuf>, flag: &str| -> anyhow::Result<Option<Teeth>> {
         p.as_deref()
-            .map(|p| Teeth::load(p).with_context(|| format!("loading {flag}")))
+            .map(|p| {
+                Teeth::load_in(p, args.body.unit.unit).with_context(|| format!("loading {flag}"))
+            })
             .transpose()
     };
     let (teeth_a, teeth_b) = (
@@ -164,6 +166,9 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 .with_context(|| format!("--pose-b \"{t}\""))
         })
         .transpose()?;
+    for w in scene.check_teeth()? {
+        eprintln!("warning: {w}");
+    }
     let opts = ServeOptions {
         port: args.port,
         stiffness: args.stiffness,

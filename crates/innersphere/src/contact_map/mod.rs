@@ -4,18 +4,21 @@
 //!
 //! The gaps are exact: every vertex's f64 distance to the other mesh's nearest triangle,
 //! negative inside it ([`vertex_gaps`]). The files: `teeth` (regions from a teeth-axes
-//! JSON), `summary` (per-region minimum gap, contact areas, spots), `colour` (the colour
-//! scale), `ply` (the coloured mesh as a PLY file).
+//! JSON, its one parser), `check` (whether a teeth file fits the arch it labels), `summary`
+//! (per-region minimum gap, contact areas, spots), `colour` (the colour scale), `ply` (the
+//! coloured mesh as a PLY file).
 
+mod check;
 mod colour;
 mod ply;
 mod summary;
 mod teeth;
 
+pub use check::{check_pair, ArchContext, TeethFit, TEETH_BOX_MARGIN};
 pub use colour::{gap_colour, LEGEND};
 pub use ply::{save_ply, write_ply, MAP_FILE};
 pub use summary::{summarise, RegionSummary, SPOT_GAP};
-pub use teeth::{Teeth, Tooth, MAX_TOOTH_REACH};
+pub use teeth::{Jaw, Teeth, Tooth, MAX_TOOTH_REACH};
 
 use crate::error::{Error, Result};
 use crate::exact::{vertex_gaps, ExactMesh};

@@ -131,8 +131,14 @@ pub fn load(path: &Path) -> Result<Mesh> {
 }
 
 /// Parses the (uncompressed) bytes of a mesh file in the given format; `name` is only used
-/// in error messages. Returns a welded, validated mesh; never panics.
+/// in error messages. Returns a welded, validated mesh; never panics. A NUL byte in a text
+/// format (OBJ, OFF, an ASCII PLY) is refused: text never holds one.
 pub fn load_bytes(bytes: &[u8], format: Format, name: &Path) -> Result<Mesh> {
+    if matches!(is_text(format, bytes), Ok(true)) {
+        if let Err(ReadFail::Limit(m)) = refuse_nul(format, bytes, 0) {
+            return Err(parse_error(name, format, m));
+        }
+    }
     let parsed = match format {
         Format::Stl => stl::parse_stl(bytes),
         Format::Obj => obj::parse_obj(bytes),
@@ -288,6 +294,10 @@ fn read_capped(
         }
         None => (MAX_DECOMPRESSED_BYTES, "the limit on mesh data".to_string()),
     };
+    let text = is_text(format, &out)?;
+    if text {
+        refuse_nul(format, &out, 0)?;
+    }
     if out.len() as u64 <= limit {
         let reserve = size_hint.min(limit).saturating_sub(out.len() as u64) as usize;
         if out.try_reserve_exact(reserve).is_err() {
@@ -296,8 +306,23 @@ fn read_capped(
             )));
         }
         // One byte beyond the limit, to tell "exactly the limit" from "more".
-        src.take(limit + 1 - out.len() as u64)
-            .read_to_end(&mut out)?;
+        let mut rest = src.take(limit + 1 - out.len() as u64);
+        if text {
+            // In chunks, so that binary data behind a text head stops at its first NUL.
+            let mut chunk = vec![0u8; HEAD_BYTES as usize];
+            loop {
+                let n = match rest.read(&mut chunk) {
+                    Ok(0) => break,
+                    Ok(n) => n,
+                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                    Err(e) => return Err(e.into()),
+                };
+                refuse_nul(format, &chunk[..n], out.len())?;
+                out.extend_from_slice(&chunk[..n]);
+            }
+        } else {
+            rest.read_to_end(&mut out)?;
+        }
     }
     if out.len() as u64 > limit {
         return Err(ReadFail::Limit(format!(
@@ -305,6 +330,43 @@ fn read_capped(
         )));
     }
     Ok(out)
+}
+
+/// Whether a file of this format with these first bytes is text to its end, where a NUL
+/// byte is never valid: OBJ, OFF and an ASCII PLY (after its header). STL is not: a binary
+/// STL may start with `solid`, and its length decides. A PLY whose header is not within
+/// the first [`HEAD_BYTES`] is refused here, before reading on.
+fn is_text(format: Format, head: &[u8]) -> std::result::Result<bool, ReadFail> {
+    match format {
+        Format::Obj | Format::Off => Ok(true),
+        Format::Stl => Ok(false),
+        Format::Ply => match ply::is_ascii(head) {
+            Ok(ascii) => Ok(ascii),
+            Err(_) if (head.len() as u64) < HEAD_BYTES => Ok(false),
+            Err(e) => Err(ReadFail::Limit(format!(
+                "no PLY header within the first {HEAD_BYTES} bytes ({e}); refusing to read on"
+            ))),
+        },
+    }
+}
+
+/// An error at the first NUL byte of `bytes` (which start at byte `at` of the file): text
+/// formats never hold one, so a device such as `/dev/zero` or binary data under a text
+/// format's extension is refused at its first chunk instead of being read to the 4 GiB
+/// limit ([`load_bytes`] refuses the same bytes).
+fn refuse_nul(format: Format, bytes: &[u8], at: usize) -> std::result::Result<(), ReadFail> {
+    match bytes.iter().position(|&b| b == 0) {
+        None => Ok(()),
+        Some(i) => Err(ReadFail::Limit(format!(
+            "byte {} is a NUL byte, and {} is text: binary data, a device such as /dev/zero, or another format under this extension?",
+            at + i,
+            match format {
+                Format::Obj => "an OBJ file",
+                Format::Off => "an OFF file",
+                _ => "an ASCII PLY file",
+            }
+        ))),
+    }
 }
 
 /// The most bytes a file of this format can have given its first bytes, and why; `None`
@@ -400,8 +462,9 @@ mod tests {
     }
 
     #[test]
-    fn gzip_of_zeros_stops_at_the_ratio_limit() {
-        let gz = gzip(&vec![0u8; (GZIP_FREE_BYTES + (8 << 20)) as usize], 1);
+    fn gzip_of_spaces_stops_at_the_ratio_limit() {
+        // Spaces: text, so only the ratio stops them (zeros stop at their first NUL).
+        let gz = gzip(&vec![b' '; (GZIP_FREE_BYTES + (8 << 20)) as usize], 1);
         let mut g = guard(&gz);
         let message = limit_message(read_capped(&mut g, Format::Obj, 0));
         let tripped = g.tripped.expect("the ratio guard tripped");
@@ -410,6 +473,40 @@ mod tests {
             "{message}"
         );
         assert!(g.produced < GZIP_FREE_BYTES + (1 << 20), "{}", g.produced);
+    }
+
+    #[test]
+    fn text_formats_stop_at_their_first_nul() {
+        let mut bytes = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n".to_vec();
+        bytes.resize(3 << 20, 0);
+        for format in [Format::Obj, Format::Off] {
+            let mut src: &[u8] = &bytes;
+            let message = limit_message(read_capped(&mut src, format, 0));
+            assert!(message.contains("byte 32 is a NUL byte"), "{message}");
+            // Refused at the head: nothing read beyond it.
+            assert_eq!(src.len(), bytes.len() - HEAD_BYTES as usize);
+        }
+        // The same bytes parsed directly are refused alike.
+        let e = load_bytes(&bytes, Format::Obj, Path::new("x.obj")).unwrap_err();
+        assert!(e.to_string().contains("byte 32 is a NUL byte"), "{e}");
+        // A text head, then NULs after the first chunk: refused there.
+        let mut late = b"v 0 0 0\n".repeat(20_000);
+        let n = late.len();
+        late.resize(n + 4096, 0);
+        let mut src: &[u8] = &late;
+        let message = limit_message(read_capped(&mut src, Format::Obj, 0));
+        assert!(
+            message.contains(&format!("byte {n} is a NUL byte")),
+            "{message}"
+        );
+        // "solid" with a NUL in the head: binary STL, bounded by its declared count.
+        let mut solid = b"solid binary header".to_vec();
+        solid.resize(80, 0);
+        solid.extend_from_slice(&0u32.to_le_bytes());
+        solid.resize(1 << 20, b' ');
+        let mut src: &[u8] = &solid;
+        let message = limit_message(read_capped(&mut src, Format::Stl, 0));
+        assert!(message.contains("declares 0 triangles"), "{message}");
     }
 
     #[test]

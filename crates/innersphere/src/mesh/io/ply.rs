@@ -237,6 +237,12 @@ impl PlySource for PlyAscii<'_> {
     }
 }
 
+/// Whether the header at the start of `head` is an ASCII PLY's (its body is text); the
+/// header's error when it cannot be read from `head`.
+pub(super) fn is_ascii(head: &[u8]) -> std::result::Result<bool, String> {
+    ply_header(head).map(|h| h.encoding == PlyEncoding::Ascii)
+}
+
 /// The most bytes a binary PLY file can have, from its header in `head`: the header plus,
 /// per element, its count times the largest record its properties allow (a list's length is
 /// bounded by its count type: 255 items for `uchar`, 65535 for `ushort`). `None` for ASCII,

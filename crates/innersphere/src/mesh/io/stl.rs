@@ -57,11 +57,13 @@ fn says_solid(b: &[u8]) -> bool {
 }
 
 /// The exact length `84 + 50 · count` of a file that must be binary STL (it does not start
-/// with `solid`), and the `count` its header declares, from its first 84 bytes or more;
-/// `None` when the file may be ASCII or `head` is shorter than the header.
+/// with `solid`, or its first bytes hold a NUL, which ASCII STL never does), and the `count`
+/// its header declares, from its first 84 bytes or more; `None` when the file may be ASCII
+/// or `head` is shorter than the header.
 pub(super) fn declared_len(head: &[u8]) -> Option<(u64, u32)> {
     let count_bytes: [u8; 4] = head.get(80..84)?.try_into().ok()?;
-    if says_solid(head) {
+    // ASCII STL is text: a head that says `solid` but holds a NUL byte can only be binary.
+    if says_solid(head) && !head.contains(&0) {
         return None;
     }
     let count = u32::from_le_bytes(count_bytes);

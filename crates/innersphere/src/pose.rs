@@ -246,41 +246,6 @@ impl Pose {
         }
     }
 
-    /// An error unless the pose is finite and keeps the box `lo..=hi` (a mesh's bounding box)
-    /// within ±[`MAX_COORDINATE`](crate::mesh::MAX_COORDINATE), the range every mesh is held
-    /// to: the exact planning tools (contact map, splint, bite) work in f64 on the placed
-    /// vertices, and far beyond it their searches lose their precision (the contact map at
-    /// 1e17 ran for hours, at 1e300 it wrote infinite coordinates). `what` names the body.
-    pub fn ensure_places_within_range(
-        &self,
-        lo: DVec3,
-        hi: DVec3,
-        what: &str,
-    ) -> crate::error::Result<()> {
-        if !(self.translation.is_finite() && self.rotation.is_finite()) {
-            return Err(crate::error::Error::InvalidOption(format!(
-                "the pose of {what} is not finite: {self}"
-            )));
-        }
-        let limit = crate::mesh::MAX_COORDINATE;
-        let far = (0..8)
-            .map(|k| {
-                let c = DVec3::new(
-                    if k & 1 == 0 { lo.x } else { hi.x },
-                    if k & 2 == 0 { lo.y } else { hi.y },
-                    if k & 4 == 0 { lo.z } else { hi.z },
-                );
-                self.transform_point(c).abs().max_element()
-            })
-            .fold(0.0, f64::max);
-        if far.is_finite() && far <= limit {
-            return Ok(());
-        }
-        Err(crate::error::Error::InvalidOption(format!(
-            "the pose of {what} places it {far:.3e} model units from the origin, beyond the supported ±{limit:e} (1000 km in mm): check the pose's translation and its unit"
-        )))
-    }
-
     /// Applies the pose to a point.
     #[inline]
     pub fn transform_point(&self, p: DVec3) -> DVec3 {

@@ -38,7 +38,7 @@ impl ContactMap {
     /// The gaps of `a` at `pose_a` and `b` at `pose_b` (world poses), capped at `cap` (see
     /// [`vertex_gaps`]; `f64::INFINITY` for none). Errors on a pose that is not finite or
     /// places its mesh beyond the supported coordinates
-    /// ([`Pose::ensure_places_within_range`]), or a NaN or negative cap.
+    /// ([`Mesh::ensure_placed_within_range`](crate::mesh::Mesh::ensure_placed_within_range)), or a NaN or negative cap.
     pub fn new(
         a: &ExactMesh,
         pose_a: &Pose,
@@ -47,8 +47,7 @@ impl ContactMap {
         cap: f64,
     ) -> Result<ContactMap> {
         for (p, m, what) in [(pose_a, a, "A"), (pose_b, b, "B")] {
-            let (lo, hi) = m.mesh().bbox();
-            p.ensure_places_within_range(lo, hi, what)?;
+            m.mesh().ensure_placed_within_range(p, what)?;
         }
         if cap.is_nan() || cap < 0.0 {
             return Err(Error::InvalidOption(format!(

@@ -104,6 +104,40 @@ impl Mesh {
         Ok(mesh)
     }
 
+    /// An error unless `pose` is finite and places this mesh within
+    /// ±[`MAX_COORDINATE`], the range every mesh is held to: the exact planning tools
+    /// (contact map, splint) work in f64 on the placed vertices, and far beyond it their
+    /// searches lose their precision (the contact map at 1e17 ran for hours, at 1e300 it
+    /// wrote infinite coordinates). `what` names the body.
+    pub fn ensure_placed_within_range(
+        &self,
+        pose: &crate::pose::Pose,
+        what: &str,
+    ) -> crate::error::Result<()> {
+        if !(pose.translation.is_finite() && pose.rotation.is_finite()) {
+            return Err(crate::error::Error::InvalidOption(format!(
+                "the pose of {what} is not finite: {pose}"
+            )));
+        }
+        let (lo, hi) = self.bbox();
+        let far = (0..8)
+            .map(|k| {
+                let c = DVec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x },
+                    if k & 2 == 0 { lo.y } else { hi.y },
+                    if k & 4 == 0 { lo.z } else { hi.z },
+                );
+                pose.transform_point(c).abs().max_element()
+            })
+            .fold(0.0, f64::max);
+        if far.is_finite() && far <= MAX_COORDINATE {
+            return Ok(());
+        }
+        Err(crate::error::Error::InvalidOption(format!(
+            "the pose of {what} places it {far:.3e} model units from the origin, beyond the supported ±{MAX_COORDINATE:e} (1000 km in mm): check the pose's translation and its unit"
+        )))
+    }
+
     /// Multiplies every coordinate by `factor` (a change of unit).
     pub fn scale(&mut self, factor: f64) {
         if factor != 1.0 {

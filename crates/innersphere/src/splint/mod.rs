@@ -117,8 +117,7 @@ pub fn make(a: &Mesh, b: &Mesh, pose: &Pose, opts: &SplintOptions) -> Result<Spl
     opts.validate()?;
     a.validate()?;
     b.validate()?;
-    let (lo, hi) = b.bbox();
-    pose.ensure_places_within_range(lo, hi, "B")?;
+    b.ensure_placed_within_range(pose, "B")?;
     let (bvh_a, bvh_b) = rayon::join(|| TriangleBvh::new(a), || TriangleBvh::new(b));
     let t_shape = Instant::now();
     let s = shape::shape(a, b, pose, opts)?;

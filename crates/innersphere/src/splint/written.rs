@@ -60,14 +60,16 @@ mod tests {
     fn coinciding_vertices_stay_apart_in_the_file() {
         // Two tetrahedra sharing no vertex, but with one corner each at the same point
         // (within f32): as read back they must stay two bodies of 4 vertices each.
+        // At 50 mm from the origin f32 steps are 4e-6: 1e-9 apart is one f32 point.
+        let q = DVec3::new(50.0, 0.0, 0.0);
         let p = [
             DVec3::new(0.0, 0.0, 0.0),
             DVec3::new(1.0, 0.0, 0.0),
             DVec3::new(0.0, 1.0, 0.0),
             DVec3::new(0.0, 0.0, 1.0),
         ];
-        let mut vertices: Vec<DVec3> = p.to_vec();
-        vertices.extend(p.iter().map(|v| DVec3::new(1e-12, 0.0, 0.0) - *v));
+        let mut vertices: Vec<DVec3> = p.iter().map(|v| q + *v).collect();
+        vertices.extend(p.iter().map(|v| q + DVec3::new(1e-9, 0.0, 0.0) - *v));
         let tet = [[0u32, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         let mut triangles: Vec<[u32; 3]> = tet.to_vec();
         triangles.extend(tet.iter().map(|t| [t[0] + 4, t[2] + 4, t[1] + 4]));

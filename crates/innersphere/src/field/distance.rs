@@ -7,7 +7,8 @@
 //! The pruning is exactly conservative, so the result is bit-identical to brute force and
 //! independent of threads and seeds.
 
-use super::inside::classify;
+use super::inside::{classify, classify_where};
+use super::thick::ThickSet;
 use super::{DistanceField, VoxelGrid};
 use crate::mesh::bvh::{Near, TriangleBvh};
 use crate::mesh::Mesh;
@@ -117,6 +118,19 @@ pub struct DistanceBounds {
     pub slot: Vec<u32>,
     /// How inside/outside was decided.
     pub method: super::InsideMethod,
+    /// The coarse voxels of thick parts and their minimum radius ([`super::thick`]), when the
+    /// body has such parts and the build was asked to treat them so.
+    pub coarse: Option<CoarseVoxels>,
+}
+
+/// Which inside voxels are coarse ones (lattice nodes of a thick part, [`ThickSet`]) and the
+/// smallest sphere the packing may place at them.
+#[derive(Debug, Clone)]
+pub struct CoarseVoxels {
+    /// One flag per inside voxel (same order).
+    pub flags: Vec<bool>,
+    /// No sphere below this radius at a coarse voxel.
+    pub min_radius: f64,
 }
 
 /// Voxels apart of the lattice whose near triangles give the bounds.
@@ -144,7 +158,20 @@ pub fn bounds(
     grid: VoxelGrid,
     progress: &dyn Progress,
 ) -> crate::error::Result<DistanceBounds> {
-    let (inside, method) = classify(mesh, &grid, progress)?;
+    bounds_where(mesh, bvh, grid, None, progress)
+}
+
+/// [`bounds`] of the voxels a [`ThickSet`] keeps (in its thick parts only its lattice's
+/// nodes; all inside voxels without one).
+pub fn bounds_where(
+    mesh: &Mesh,
+    bvh: &TriangleBvh,
+    grid: VoxelGrid,
+    thick: Option<&ThickSet>,
+    progress: &dyn Progress,
+) -> crate::error::Result<DistanceBounds> {
+    let keep = |i, j, k| thick.is_none_or(|t| t.keeps(i, j, k));
+    let (inside, method) = classify_where(mesh, &grid, thick.map(|_| &keep as _), progress)?;
     let s = BOUND_STRIDE;
     let cd = grid.dims.map(|d| (d + s) / s + 1);
     let node_of = |[i, j, k]: [u32; 3]| -> usize {
@@ -226,12 +253,23 @@ pub fn bounds(
             progress.advance(chunk.len() as u64);
         });
     progress.finish();
+    let coarse = thick.map(|t| CoarseVoxels {
+        flags: inside
+            .par_iter()
+            .map(|&c| {
+                let [i, j, k] = grid.coords(c as usize);
+                t.is_coarse(i, j, k)
+            })
+            .collect(),
+        min_radius: t.min_radius(),
+    });
     Ok(DistanceBounds {
         grid,
         inside,
         bound,
         slot,
         method,
+        coarse,
     })
 }
 

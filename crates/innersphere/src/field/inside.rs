@@ -43,8 +43,10 @@ pub fn classify(
     classify_where(mesh, grid, None, progress)
 }
 
-/// Which inside cells `(i, j, k)` a classification keeps ([`classify_where`]).
-pub type Keep<'a> = &'a (dyn Fn(u32, u32, u32) -> bool + Sync);
+/// Which inside cells a classification keeps ([`classify_where`]): given `(i, j, k)`, the
+/// first `k' ≥ k` whose cell `(i, j, k')` it may keep (`k` itself when it keeps that cell;
+/// every cell between is dropped).
+pub type Keep<'a> = &'a (dyn Fn(u32, u32, u32) -> u32 + Sync);
 
 /// [`classify`], keeping only the inside cells for which `keep` holds (all without it): the
 /// others are dropped row by row, so that the full list is never held.
@@ -441,7 +443,8 @@ fn sweep_row(
         };
         let mut w = total;
         let mut next = 0;
-        for k in k0..nz {
+        let mut k = k0;
+        while k < nz {
             let z = oz + k as f64 * h;
             while next < col.len() && col[next].1 <= z {
                 w -= col[next].2;
@@ -450,9 +453,17 @@ fn sweep_row(
             if next == col.len() {
                 break; // above every crossing: winding number 0
             }
-            if w != 0 && keep.is_none_or(|keep| keep(i, j, k)) {
-                out.push(grid.index(i, j, k) as u32);
+            if w != 0 {
+                match keep.map(|keep| keep(i, j, k)) {
+                    Some(skip) if skip > k => {
+                        // Dropped up to `skip` (crossings in between are taken there).
+                        k = skip;
+                        continue;
+                    }
+                    _ => out.push(grid.index(i, j, k) as u32),
+                }
             }
+            k += 1;
         }
     }
 }
@@ -495,7 +506,8 @@ fn winding_inside(
                 let mut kept = first;
                 for n in first..out.len() {
                     let c = out[n];
-                    if keep(c % nx, j, c / (nx * ny)) {
+                    let k = c / (nx * ny);
+                    if keep(c % nx, j, k) == k {
                         out[kept] = c;
                         kept += 1;
                     }

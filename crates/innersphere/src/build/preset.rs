@@ -45,7 +45,10 @@ pub enum Preset {
     /// 0.09 mm; refined to the meshes ([`Pair::refined_distance`](crate::Pair::refined_distance))
     /// p95 0.00003–0.0008 mm on six motions, no missed contact deeper than 0.025 mm;
     /// about 150k spheres, 2.3–2.6 s and 0.38 GB per arch on 2 cores (1.6–1.8× FCL's OBBRSS build
-    /// of an arch), about 1 s on 16; a molar in 0.3 s (14k spheres).
+    /// of an arch), about 1 s on 16; a molar in 0.3 s (14k spheres). Thick parts (where a
+    /// 12 mm ball fits: bone, [`JAW_THICK_RADIUS_MM`]) are packed from a 0.4 mm lattice with
+    /// spheres of at least 0.2 mm, so an arch modelled with its bone builds at about twice
+    /// its teeth's cost instead of its volume's (`BENCHMARKS.md`, "An arch with its bone").
     Jaw,
     /// Jaw scans in **millimetres**, the query benchmark's trees (`BENCHMARKS.md`): 0.15 mm
     /// voxels, 0.05 mm minimum radius, 8 refinement steps. About 110k spheres, 1.6 s and

@@ -237,7 +237,7 @@ impl ToothPlace {
     }
 
     /// A point of the molar's frame ([`molar`], unscaled) in the arch's.
-    fn to_arch(&self, p: DVec3, upper: bool) -> DVec3 {
+    fn to_arch(self, p: DVec3, upper: bool) -> DVec3 {
         let p = p * ARCH_TOOTH_SCALE;
         let p = if upper {
             DVec3::new(p.x, p.y, -p.z + ARCH_UPPER_LIFT * ARCH_TOOTH_SCALE)
@@ -253,7 +253,7 @@ impl ToothPlace {
     }
 
     /// A point of the arch's frame in the molar's (the inverse of [`Self::to_arch`]).
-    fn to_molar(&self, p: DVec3, upper: bool) -> DVec3 {
+    fn to_molar(self, p: DVec3, upper: bool) -> DVec3 {
         let (s, c) = self.angle.sin_cos();
         let (x, y) = (p.x - self.at.x, p.y - self.at.y);
         let z = if upper {

@@ -350,7 +350,7 @@ mod tests {
                 let (nx, ny) = (dims[0] as i64, dims[1] as i64);
                 (c % nx, (c / nx) % ny, c / (nx * ny))
             };
-            for m in 0..n {
+            for (m, &got) in f.iter().enumerate() {
                 let (x, y, z) = xyz(m);
                 let want = (0..n)
                     .filter(|&p| given[p].is_finite())
@@ -359,7 +359,12 @@ mod tests {
                         (((x - a).pow(2) + (y - b).pow(2) + (z - c).pow(2)) as f64) + given[p]
                     })
                     .fold(f64::INFINITY, f64::min);
-                prop_assert!((f[m] - want).abs() < 1e-9 || (f[m].is_infinite() && want.is_infinite()), "{} {}", f[m], want);
+                prop_assert!(
+                    (got - want).abs() < 1e-9 || (got.is_infinite() && want.is_infinite()),
+                    "{} {}",
+                    got,
+                    want
+                );
             }
         }
     }

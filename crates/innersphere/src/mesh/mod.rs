@@ -9,6 +9,7 @@ pub mod mass;
 pub mod ray;
 pub mod report;
 pub mod union_find;
+pub(crate) mod untangle;
 pub mod winding;
 
 pub use io::{load, load_bytes, save_obj, save_stl, Format};

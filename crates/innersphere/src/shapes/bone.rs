@@ -382,7 +382,7 @@ fn extract(solid: &Solid<'_>) -> Mesh {
                 }
             }
         });
-    crate::splint::extract::untangle(&mut sdf, [nx, ny, nz]);
+    crate::mesh::untangle::untangle(&mut sdf, [nx, ny, nz]);
     // Untangling marks the corners it opens with the smallest positive value, which puts
     // the crossings on those corners and the vertices of neighbouring cells on top of each
     // other (zero-area triangles); a quarter cell outside keeps them apart.

@@ -21,6 +21,7 @@ use super::shape::Shape;
 use crate::error::{Error, Result};
 use crate::field::grid::MAX_CELLS;
 use crate::mesh::union_find::UnionFind;
+use crate::mesh::untangle::untangle;
 use crate::mesh::Mesh;
 
 /// Field values are clamped to ± this many cells: only values near zero place vertices.
@@ -84,7 +85,7 @@ pub fn extract(s: &Shape) -> Result<(Mesh, usize)> {
                 }
             }
         });
-    crate::mesh::untangle::untangle(&mut sdf, [nx, ny, nz]);
+    untangle(&mut sdf, [nx, ny, nz]);
     let shape = RuntimeShape::<u32, 3>::new([nx as u32, ny as u32, nz as u32]);
     debug_assert_eq!(shape.size() as usize, sdf.len());
     let mut buf = SurfaceNetsBuffer::default();

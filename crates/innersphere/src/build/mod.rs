@@ -17,12 +17,14 @@ mod pipeline;
 mod preset;
 mod verdict;
 
+pub use crate::field::thick::ThickParts;
 pub use cache::{BuildCache, CacheOutcome};
 pub use options::{validate_options, BuildOptions, Resolution};
 pub use pipeline::{build_tree, BuildReport, StageSeconds, MIN_EXTENT};
 pub use preset::{
     Preset, CALIBRATED_MIN_RADIUS_PER_VOXEL, CALIBRATED_REFINE_STEPS, FAST_CELLS, FINE_CELLS,
-    JAW_PRESET_SIZE_MM,
+    JAW_PRESET_SIZE_MM, JAW_THICK_LATTICE_MM, JAW_THICK_MARGIN_MM, JAW_THICK_MIN_RADIUS_MM,
+    JAW_THICK_RADIUS_MM,
 };
 pub use verdict::MeshVerdict;
 

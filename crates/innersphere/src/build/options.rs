@@ -2,6 +2,7 @@
 //! settings) and [`validate_options`], which checks them before any work starts.
 
 use crate::error::{Error, Result};
+use crate::field::thick::ThickParts;
 use crate::hierarchy::{self, HierarchyOptions};
 use crate::packing::PackingOptions;
 
@@ -23,6 +24,10 @@ pub struct BuildOptions {
     pub packing: PackingOptions,
     /// Fan-out and BNG settings.
     pub hierarchy: HierarchyOptions,
+    /// Parts thicker than this rule's balls packed from a coarse lattice with a larger
+    /// minimum radius ([`crate::field::thick`]); `None`: every part alike. The jaw presets set
+    /// it (bone is thicker than any tooth); the unit-free presets do not.
+    pub thick: Option<ThickParts>,
 }
 
 impl Default for BuildOptions {
@@ -31,6 +36,7 @@ impl Default for BuildOptions {
             resolution: Resolution::Cells(128),
             packing: PackingOptions::default(),
             hierarchy: HierarchyOptions::default(),
+            thick: None,
         }
     }
 }
@@ -60,6 +66,32 @@ pub fn validate_options(opts: &BuildOptions) -> Result<()> {
         return Err(Error::InvalidOption(
             "maximum sphere count must be at least 1".into(),
         ));
+    }
+    if let Some(t) = &opts.thick {
+        if !(t.radius.is_finite() && t.radius > 0.0) {
+            return Err(Error::InvalidOption(format!(
+                "the thick-part radius must be a positive number, got {}",
+                t.radius
+            )));
+        }
+        if !(t.margin.is_finite() && t.margin >= 0.0) {
+            return Err(Error::InvalidOption(format!(
+                "the thick-part margin must be a non-negative number, got {}",
+                t.margin
+            )));
+        }
+        if !(2..=64).contains(&t.stride) {
+            return Err(Error::InvalidOption(format!(
+                "the thick-part stride must be between 2 and 64 voxels, got {}",
+                t.stride
+            )));
+        }
+        if !(t.min_radius.is_finite() && t.min_radius >= 0.0) {
+            return Err(Error::InvalidOption(format!(
+                "the thick-part minimum radius must be a non-negative number, got {}",
+                t.min_radius
+            )));
+        }
     }
     let f = opts.hierarchy.fanout;
     if !(2..=hierarchy::bng::MAX_PROTOTYPES as u32).contains(&f) {

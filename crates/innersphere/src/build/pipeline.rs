@@ -116,8 +116,13 @@ pub struct BuildReport {
     pub nodes: usize,
     /// Largest leaf depth (root = 0).
     pub depth: u16,
-    /// Voxels whose centre is inside the mesh.
+    /// Voxels whose centre is inside the mesh and that the packing used (in thick parts only
+    /// the coarse lattice's).
     pub voxels_inside: usize,
+    /// Of those, the coarse ones: lattice nodes of thick parts (0 without thick parts).
+    pub voxels_coarse: usize,
+    /// The volume the thick parts cover (0 without them).
+    pub thick_volume: f64,
     /// Grid cells along x, y, z.
     pub grid_dims: [u32; 3],
     /// Voxel edge length (model units).
@@ -228,8 +233,13 @@ pub fn build_tree(
             (bvh, 0.0)
         }
     };
+    // Thick parts (bone under teeth) keep a coarse lattice of voxels only.
+    let thick = match &opts.thick {
+        Some(parts) => field::thick::ThickSet::find(&mesh, &bvh, &grid, parts, progress)?,
+        None => None,
+    };
     // Upper bounds of the voxels' distances; the packing makes exact only those it needs.
-    let field = field::distance::bounds(&mesh, &bvh, grid, progress)?;
+    let field = field::distance::bounds_where(&mesh, &bvh, grid, thick.as_ref(), progress)?;
     let t_field = t_bvh + t1.elapsed().as_secs_f64();
     if field.inside.is_empty() {
         return Err(Error::InvalidMesh(format!(
@@ -275,11 +285,22 @@ pub fn build_tree(
         ));
     }
 
+    let voxels_coarse = field
+        .coarse
+        .as_ref()
+        .map_or(0, |c| c.flags.iter().filter(|&&f| f).count());
     let t3 = Instant::now();
     let sphere_volume = packing::total_volume(&spheres);
     let closed = field.method == InsideMethod::ClosedExact;
     let mesh_volume = mesh.signed_volume().abs();
-    let inside_volume = field.inside.len() as f64 * grid.h.powi(3);
+    // In thick parts each coarse voxel stands for the stride³ voxels around it.
+    let inside_volume = match &thick {
+        Some(t) => {
+            (field.inside.len() - voxels_coarse) as f64 * grid.h.powi(3)
+                + voxels_coarse as f64 * (f64::from(t.stride()) * grid.h).powi(3)
+        }
+        None => field.inside.len() as f64 * grid.h.powi(3),
+    };
     let (coverage_basis, basis) = if closed {
         ("mesh_volume", mesh_volume)
     } else {
@@ -322,6 +343,8 @@ pub fn build_tree(
         nodes: tree.len(),
         depth: tree.max_depth(),
         voxels_inside: field.inside.len(),
+        voxels_coarse,
+        thick_volume: thick.as_ref().map_or(0.0, |t| t.voxels() * grid.h.powi(3)),
         grid_dims: grid.dims,
         voxel_size: grid.h,
         coverage,

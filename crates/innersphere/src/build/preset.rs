@@ -4,6 +4,7 @@
 
 use super::options::{BuildOptions, Resolution};
 use crate::error::{Error, Result};
+use crate::field::thick::ThickParts;
 use crate::hierarchy::HierarchyOptions;
 use crate::mesh::Mesh;
 use crate::packing::PackingOptions;
@@ -44,7 +45,10 @@ pub enum Preset {
     /// 0.09 mm; refined to the meshes ([`Pair::refined_distance`](crate::Pair::refined_distance))
     /// p95 0.00003–0.0008 mm on six motions, no missed contact deeper than 0.025 mm;
     /// about 150k spheres, 2.3–2.6 s and 0.38 GB per arch on 2 cores (1.6–1.8× FCL's OBBRSS build
-    /// of an arch), about 1 s on 16; a molar in 0.3 s (14k spheres).
+    /// of an arch), about 1 s on 16; a molar in 0.3 s (14k spheres). Thick parts (where a
+    /// 12 mm ball fits: bone, [`JAW_THICK_RADIUS_MM`]) are packed from a 0.4 mm lattice with
+    /// spheres of at least 0.2 mm, so an arch modelled with its bone builds at about twice
+    /// its teeth's cost instead of its volume's (`BENCHMARKS.md`, "An arch with its bone").
     Jaw,
     /// Jaw scans in **millimetres**, the query benchmark's trees (`BENCHMARKS.md`): 0.15 mm
     /// voxels, 0.05 mm minimum radius, 8 refinement steps. About 110k spheres, 1.6 s and
@@ -116,6 +120,24 @@ pub const CALIBRATED_MIN_RADIUS_PER_VOXEL: f64 = 0.5;
 /// Off-grid refinement steps of the calibrated packing (`docs/RESULTS.md`: 16 steps gain
 /// little over 8 for twice the packing time).
 pub const CALIBRATED_REFINE_STEPS: u32 = 8;
+/// The jaw presets' thick parts (millimetres): where a body holds a ball of this radius it is
+/// bone, not tooth (the widest human molar crown is about 11.5 mm across, so no tooth holds a
+/// 12 mm ball), and never within reach of the other arch's teeth: packed from a coarse lattice
+/// ([`JAW_THICK_LATTICE_MM`], [`JAW_THICK_MIN_RADIUS_MM`]) so that an arch modelled with its
+/// bone builds at the cost of its teeth and its surface, not of its volume.
+pub const JAW_THICK_RADIUS_MM: f64 = 6.0;
+/// How far (mm) the jaw presets' thick parts reach beyond their balls: into the bone's edges
+/// and the creases too narrow for a 6 mm ball, and up to 2 mm onto the teeth standing in it.
+/// What stays fine is every part thinner than 12 mm that stands more than 2 mm out of the
+/// bone: the crowns, whose occlusal surfaces (the only ones within reach of the other arch)
+/// stand 5–9 mm above the bone in a human jaw.
+pub const JAW_THICK_MARGIN_MM: f64 = 2.0;
+/// The spacing (mm) of the coarse lattice of voxels in thick parts, rounded to a whole number
+/// of voxels: 4 voxels at the jaw preset's 0.1 mm (a 64th of the voxels).
+pub const JAW_THICK_LATTICE_MM: f64 = 0.4;
+/// The smallest sphere (mm) in thick parts: half the lattice spacing, the calibrated ratio of
+/// minimum radius to voxel ([`CALIBRATED_MIN_RADIUS_PER_VOXEL`]).
+pub const JAW_THICK_MIN_RADIUS_MM: f64 = 0.2;
 /// Longest bounding-box sides (mm) the jaw presets accept: a single tooth crown to a skull.
 /// Outside it the mesh is almost certainly not in millimetres.
 pub const JAW_PRESET_SIZE_MM: std::ops::RangeInclusive<f64> = 1.0..=500.0;
@@ -150,10 +172,19 @@ impl BuildOptions {
                 ..PackingOptions::default()
             },
             hierarchy: HierarchyOptions::default(),
+            thick: None,
         };
         let jaw = |voxel_mm: f64, min_radius_mm: f64| {
             if JAW_PRESET_SIZE_MM.contains(&longest) {
-                Ok(calibrated(voxel_mm, min_radius_mm))
+                Ok(BuildOptions {
+                    thick: Some(ThickParts {
+                        radius: JAW_THICK_RADIUS_MM,
+                        margin: JAW_THICK_MARGIN_MM,
+                        stride: ((JAW_THICK_LATTICE_MM / voxel_mm).round() as u32).max(2),
+                        min_radius: JAW_THICK_MIN_RADIUS_MM,
+                    }),
+                    ..calibrated(voxel_mm, min_radius_mm)
+                })
             } else {
                 Err(Error::InvalidOption(format!(
                     "preset {preset} is in millimetres, for dental scans {}–{} mm across; this mesh is {longest:.4} model units across (is the file in another unit? give it: --unit m, cm or in converts to mm; or use the unit-free presets fast, default or fine)",

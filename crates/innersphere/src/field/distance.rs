@@ -7,7 +7,8 @@
 //! The pruning is exactly conservative, so the result is bit-identical to brute force and
 //! independent of threads and seeds.
 
-use super::inside::classify;
+use super::inside::{classify, classify_where};
+use super::thick::ThickSet;
 use super::{DistanceField, VoxelGrid};
 use crate::mesh::bvh::{Near, TriangleBvh};
 use crate::mesh::Mesh;
@@ -117,6 +118,19 @@ pub struct DistanceBounds {
     pub slot: Vec<u32>,
     /// How inside/outside was decided.
     pub method: super::InsideMethod,
+    /// The coarse voxels of thick parts and their minimum radius ([`super::thick`]), when the
+    /// body has such parts and the build was asked to treat them so.
+    pub coarse: Option<CoarseVoxels>,
+}
+
+/// Which inside voxels are coarse ones (lattice nodes of a thick part, [`ThickSet`]) and the
+/// smallest sphere the packing may place at them.
+#[derive(Debug, Clone)]
+pub struct CoarseVoxels {
+    /// One flag per inside voxel (same order).
+    pub flags: Vec<bool>,
+    /// No sphere below this radius at a coarse voxel.
+    pub min_radius: f64,
 }
 
 /// Voxels apart of the lattice whose near triangles give the bounds.
@@ -144,15 +158,46 @@ pub fn bounds(
     grid: VoxelGrid,
     progress: &dyn Progress,
 ) -> crate::error::Result<DistanceBounds> {
-    let (inside, method) = classify(mesh, &grid, progress)?;
+    bounds_where(mesh, bvh, grid, None, progress)
+}
+
+/// [`bounds`] of the voxels a [`ThickSet`] keeps (in its thick parts only its lattice's
+/// nodes; all inside voxels without one).
+pub fn bounds_where(
+    mesh: &Mesh,
+    bvh: &TriangleBvh,
+    grid: VoxelGrid,
+    thick: Option<&ThickSet>,
+    progress: &dyn Progress,
+) -> crate::error::Result<DistanceBounds> {
+    let keep = |i, j, k| thick.map_or(k, |t| t.next_kept(i, j, k));
+    let (inside, method) = classify_where(mesh, &grid, thick.map(|_| &keep as _), progress)?;
     let s = BOUND_STRIDE;
     let cd = grid.dims.map(|d| (d + s) / s + 1);
-    let node_of = |[i, j, k]: [u32; 3]| -> usize {
+    // The coarse voxels of thick parts take their bounds from a lattice as much coarser (deep
+    // voxels, whose nearest triangles are the most costly to find, a node each otherwise);
+    // its nodes are numbered after the first lattice's.
+    let s2 = thick.map_or(s, |t| s * t.stride());
+    let cd2 = grid.dims.map(|d| (d + s2) / s2 + 1);
+    let first = cd.iter().map(|&d| d as usize).product::<usize>();
+    let second = if thick.is_some() {
+        cd2.iter().map(|&d| d as usize).product::<usize>()
+    } else {
+        0
+    };
+    let lattice = |[i, j, k]: [u32; 3], s: u32, cd: [u32; 3]| -> usize {
         let [a, b, cc] = [i, j, k].map(|x| (x + s / 2) / s);
         a as usize + cd[0] as usize * (b as usize + cd[1] as usize * cc as usize)
     };
+    let node_of = |[i, j, k]: [u32; 3]| -> usize {
+        if thick.is_some_and(|t| t.is_coarse(i, j, k)) {
+            first + lattice([i, j, k], s2, cd2)
+        } else {
+            lattice([i, j, k], s, cd)
+        }
+    };
     // The lattice nodes next to an inside voxel, ascending (marked on all threads).
-    let cells = cd.iter().map(|&d| d as usize).product();
+    let cells = first + second;
     let marked: Vec<AtomicBool> = (0..cells).map(|_| AtomicBool::new(false)).collect();
     inside.par_chunks(POINTS_PER_TASK * 16).for_each(|chunk| {
         for (_, ijk) in with_coords(&grid, chunk) {
@@ -171,7 +216,10 @@ pub fn bounds(
         rel: NEAR_REL,
     };
     let node_point = |n: u32| -> DVec3 {
-        let n = n as usize;
+        let (n, cd, s) = match (n as usize).checked_sub(first) {
+            Some(m) => (m, cd2, s2),
+            None => (n as usize, cd, s),
+        };
         let (cx, cy) = (cd[0] as usize, cd[1] as usize);
         let (i, j, k) = (n % cx, (n / cx) % cy, n / (cx * cy));
         grid.origin + DVec3::new(i as f64, j as f64, k as f64) * (grid.h * s as f64)
@@ -200,7 +248,7 @@ pub fn bounds(
         })
         .collect();
     // The triangle slot of every lattice node, dense (a 27th of the grid's cells at stride
-    // 3, 4 bytes each).
+    // 3, 4 bytes each; the second lattice's far fewer).
     let mut node_slot = vec![UNSET; cells];
     for (&n, &slot) in nodes.iter().zip(&slots) {
         node_slot[n as usize] = slot;
@@ -226,12 +274,23 @@ pub fn bounds(
             progress.advance(chunk.len() as u64);
         });
     progress.finish();
+    let coarse = thick.map(|t| CoarseVoxels {
+        flags: inside
+            .par_iter()
+            .map(|&c| {
+                let [i, j, k] = grid.coords(c as usize);
+                t.is_coarse(i, j, k)
+            })
+            .collect(),
+        min_radius: t.min_radius(),
+    });
     Ok(DistanceBounds {
         grid,
         inside,
         bound,
         slot,
         method,
+        coarse,
     })
 }
 

@@ -40,6 +40,22 @@ pub fn classify(
     grid: &VoxelGrid,
     progress: &dyn Progress,
 ) -> crate::error::Result<(Vec<u32>, InsideMethod)> {
+    classify_where(mesh, grid, None, progress)
+}
+
+/// Which inside cells a classification keeps ([`classify_where`]): given `(i, j, k)`, the
+/// first `k' ≥ k` whose cell `(i, j, k')` it may keep (`k` itself when it keeps that cell;
+/// every cell between is dropped).
+pub type Keep<'a> = &'a (dyn Fn(u32, u32, u32) -> u32 + Sync);
+
+/// [`classify`], keeping only the inside cells for which `keep` holds (all without it): the
+/// others are dropped row by row, so that the full list is never held.
+pub fn classify_where(
+    mesh: &Mesh,
+    grid: &VoxelGrid,
+    keep: Option<Keep<'_>>,
+    progress: &dyn Progress,
+) -> crate::error::Result<(Vec<u32>, InsideMethod)> {
     mesh.validate()?;
     if grid.len() > u32::MAX as usize {
         return Err(crate::error::Error::InvalidOption(format!(
@@ -50,13 +66,13 @@ pub fn classify(
     let edges = EdgeSummary::of(mesh);
     if edges.is_oriented_closed() {
         Ok((
-            inside_by_rays(mesh, grid, progress),
+            rays_inside(mesh, grid, keep, progress),
             InsideMethod::ClosedExact,
         ))
     } else if edges.is_soup() {
         Ok((Vec::new(), InsideMethod::WindingNumber))
     } else {
-        let cells = winding_inside(mesh, grid, &edges, progress);
+        let cells = winding_inside(mesh, grid, &edges, keep, progress);
         Ok((cells, InsideMethod::WindingNumber))
     }
 }
@@ -124,13 +140,22 @@ pub fn is_oriented_closed(mesh: &Mesh) -> bool {
 /// otherwise the result is the signed crossing count of whatever is there). Indices must be
 /// valid.
 pub fn inside_by_rays(mesh: &Mesh, grid: &VoxelGrid, progress: &dyn Progress) -> Vec<u32> {
+    rays_inside(mesh, grid, None, progress)
+}
+
+fn rays_inside(
+    mesh: &Mesh,
+    grid: &VoxelGrid,
+    keep: Option<Keep<'_>>,
+    progress: &dyn Progress,
+) -> Vec<u32> {
     let nz = grid.dims[2];
     for_each_row(
         mesh,
         grid,
         progress,
         "inside test (exact rays)",
-        |j, hits, out| sweep_row(hits, grid, j, nz, out),
+        |j, hits, out| sweep_row(hits, grid, j, nz, keep, out),
     )
 }
 
@@ -395,7 +420,14 @@ fn crossing_height(t: [DVec3; 3], p: Coord<f64>) -> f64 {
 
 /// Turns the crossings of one row into inside cells: the winding number of a cell centre is
 /// the signed count of crossings above it; nonzero means inside.
-fn sweep_row(hits: &[(u32, f64, i32)], grid: &VoxelGrid, j: u32, nz: u32, out: &mut Vec<u32>) {
+fn sweep_row(
+    hits: &[(u32, f64, i32)],
+    grid: &VoxelGrid,
+    j: u32,
+    nz: u32,
+    keep: Option<Keep<'_>>,
+    out: &mut Vec<u32>,
+) {
     let (oz, h) = (grid.origin.z, grid.h);
     for col in hits.chunk_by(|a, b| a.0 == b.0) {
         let i = col[0].0;
@@ -411,7 +443,8 @@ fn sweep_row(hits: &[(u32, f64, i32)], grid: &VoxelGrid, j: u32, nz: u32, out: &
         };
         let mut w = total;
         let mut next = 0;
-        for k in k0..nz {
+        let mut k = k0;
+        while k < nz {
             let z = oz + k as f64 * h;
             while next < col.len() && col[next].1 <= z {
                 w -= col[next].2;
@@ -421,8 +454,16 @@ fn sweep_row(hits: &[(u32, f64, i32)], grid: &VoxelGrid, j: u32, nz: u32, out: &
                 break; // above every crossing: winding number 0
             }
             if w != 0 {
-                out.push(grid.index(i, j, k) as u32);
+                match keep.map(|keep| keep(i, j, k)) {
+                    Some(skip) if skip > k => {
+                        // Dropped up to `skip` (crossings in between are taken there).
+                        k = skip;
+                        continue;
+                    }
+                    _ => out.push(grid.index(i, j, k) as u32),
+                }
             }
+            k += 1;
         }
     }
 }
@@ -430,13 +471,14 @@ fn sweep_row(hits: &[(u32, f64, i32)], grid: &VoxelGrid, j: u32, nz: u32, out: &
 /// Inside test by the generalized winding number: cells with |w| ≥ 0.5. Works on any mesh;
 /// a soup that encloses nothing gives (almost) no cells.
 pub fn inside_by_winding(mesh: &Mesh, grid: &VoxelGrid, progress: &dyn Progress) -> Vec<u32> {
-    winding_inside(mesh, grid, &EdgeSummary::of(mesh), progress)
+    winding_inside(mesh, grid, &EdgeSummary::of(mesh), None, progress)
 }
 
 fn winding_inside(
     mesh: &Mesh,
     grid: &VoxelGrid,
     edges: &EdgeSummary,
+    keep: Option<Keep<'_>>,
     progress: &dyn Progress,
 ) -> Vec<u32> {
     if grid.is_empty() || mesh.triangles.is_empty() {
@@ -456,7 +498,23 @@ fn winding_inside(
         grid,
         progress,
         "inside test (winding number)",
-        |j, hits, out| runs.row(j, hits, out),
+        |j, hits, out| {
+            let first = out.len();
+            runs.row(j, hits, out);
+            if let Some(keep) = keep {
+                let [nx, ny, _] = grid.dims;
+                let mut kept = first;
+                for n in first..out.len() {
+                    let c = out[n];
+                    let k = c / (nx * ny);
+                    if keep(c % nx, j, k) == k {
+                        out[kept] = c;
+                        kept += 1;
+                    }
+                }
+                out.truncate(kept);
+            }
+        },
     )
 }
 

@@ -1,11 +1,12 @@
 //! The voxel distance field: a cubic grid over the mesh ([`grid`]), the robust inside test
 //! ([`inside`]) and the exact unsigned distance of every inside voxel to the surface
-//! ([`distance`]).
+//! ([`distance`]); in the thick parts of a body only a coarse lattice of voxels ([`thick`]).
 
 pub mod columns;
 pub mod distance;
 pub mod grid;
 pub mod inside;
+pub mod thick;
 
 pub use grid::VoxelGrid;
 

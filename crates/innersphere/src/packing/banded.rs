@@ -19,7 +19,7 @@
 use super::cells::{cover, Remaining, Rows, Voxels};
 use super::queue::Entry;
 use super::refine::Refiner;
-use super::{exact_distance, floor, PackingOptions, Sphere};
+use super::{exact_distance, Floors, PackingOptions, Sphere};
 use crate::mesh::bvh::TriangleBvh;
 use rayon::prelude::*;
 use std::collections::BinaryHeap;
@@ -36,6 +36,7 @@ pub(super) fn pack(
     bounds: &[f64],
     bvh: &TriangleBvh,
     slots: &[u32],
+    floors: Floors<'_>,
     opts: &PackingOptions,
     progress: &dyn crate::progress::Progress,
 ) -> Vec<Sphere> {
@@ -47,7 +48,7 @@ pub(super) fn pack(
         .map(|_| AtomicBool::new(false))
         .collect();
     let rows = Rows::of(field);
-    let floor = floor(opts, grid);
+    let floor = floors.floor;
     let mut refiner = (opts.refine_steps > 0).then(|| Refiner::new(grid, bvh, opts.refine_steps));
     let pad = i64::from(refiner.is_some());
     // Refinement moves a centre at most half a voxel a step, and a sphere grows at most as
@@ -58,6 +59,8 @@ pub(super) fn pack(
         0.0
     };
     let live = |v: f64| v > 0.0 && v >= floor;
+    // A voxel stays in the bands while it may still give a sphere.
+    let live_at = |p: u32, v: f64| v > 0.0 && !floors.below(p, v);
     // The bands' ends are `floor / RATIO^n`: the same for any upper bounds, so the spheres do
     // not depend on how tight the bounds are (a voxel whose bound lies in a higher band is
     // made exact there and waits for its own band).
@@ -84,7 +87,7 @@ pub(super) fn pack(
         |i| i as u32,
         |p| {
             let v = bounds[p as usize];
-            live(v).then(|| band_of(v))
+            live_at(p, v).then(|| band_of(v))
         },
     );
     progress.start("packing spheres", field.inside.len() as u64);
@@ -130,6 +133,7 @@ pub(super) fn pack(
                 bvh,
                 slots,
                 refiner: refiner.as_ref(),
+                floors,
                 low,
                 top,
                 cap,
@@ -160,7 +164,7 @@ pub(super) fn pack(
             |i| held[i],
             |p| {
                 let v = remaining.get(p as usize);
-                live(v).then(|| band_of(v))
+                live_at(p, v).then(|| band_of(v))
             },
         );
     }
@@ -266,6 +270,7 @@ struct Band<'a> {
     bvh: &'a TriangleBvh,
     slots: &'a [u32],
     refiner: Option<&'a Refiner<'a>>,
+    floors: Floors<'a>,
     /// The band is `[low, top)`.
     low: f64,
     top: f64,
@@ -375,6 +380,9 @@ impl Band<'_> {
                     }
                 }
                 continue;
+            }
+            if self.floors.below(cell, value) {
+                continue; // a coarse voxel below its own floor: never a sphere
             }
             let (center, radius) = match self.refiner {
                 Some(r) => r.refine(voxel, value, spheres, &local, self.cap),

@@ -67,7 +67,11 @@ pub fn pack(
         grid: &field.grid,
         inside: &field.inside,
     };
-    pack_voxels(voxels, &field.dist, None, opts, surface, progress)
+    let floors = Floors {
+        floor: floor(opts, &field.grid),
+        coarse: None,
+    };
+    pack_voxels(voxels, &field.dist, None, floors, opts, surface, progress)
 }
 
 /// [`pack`] from upper bounds of the voxels' distances ([`DistanceBounds`]): a voxel's
@@ -91,6 +95,7 @@ pub fn pack_bounded(
         voxels,
         &field.bound,
         Some((bvh, &field.slot)),
+        Floors::of(field, opts),
         opts,
         surface,
         progress,
@@ -117,7 +122,16 @@ pub fn pack_parallel(
         grid: &field.grid,
         inside: &field.inside,
     };
-    banded::pack(voxels, &field.bound, bvh, &field.slot, opts, progress)
+    let floors = Floors::of(field, opts);
+    banded::pack(
+        voxels,
+        &field.bound,
+        bvh,
+        &field.slot,
+        floors,
+        opts,
+        progress,
+    )
 }
 
 /// The packing over voxels with distances `dist` (exact, or upper bounds with `lazy`: the
@@ -126,6 +140,7 @@ fn pack_voxels(
     field: Voxels<'_>,
     dist: &[f64],
     lazy: Option<(&TriangleBvh, &[u32])>,
+    floors: Floors<'_>,
     opts: &PackingOptions,
     surface: Option<&TriangleBvh>,
     progress: &dyn crate::progress::Progress,
@@ -136,7 +151,7 @@ fn pack_voxels(
     // With bounds: whether the voxel's distance to the surface is exact yet.
     let mut exact = vec![false; if lazy.is_some() { dist.len() } else { 0 }];
     let rows = Rows::of(field);
-    let floor = floor(opts, grid);
+    let floor = floors.floor;
     let mut heap = MaxQueue::with(|emit| {
         for (pos, &d) in dist.iter().enumerate() {
             if d > 0.0 && d >= floor {
@@ -189,6 +204,9 @@ fn pack_voxels(
                 }
             }
         }
+        if floors.below(cell, value) {
+            continue;
+        }
         let (center, radius) = match refiner.as_ref() {
             Some(r) => r.refine(voxel, value, &spheres, &[], f64::INFINITY),
             None => (voxel, value),
@@ -210,6 +228,36 @@ fn pack_voxels(
     progress.advance(covered_since_report);
     progress.finish();
     spheres
+}
+
+/// The smallest radius placed at each voxel: [`floor`], and at the coarse voxels of thick
+/// parts their own minimum radius when larger.
+#[derive(Clone, Copy)]
+struct Floors<'a> {
+    floor: f64,
+    coarse: Option<(&'a [bool], f64)>,
+}
+
+impl<'a> Floors<'a> {
+    fn of(field: &'a DistanceBounds, opts: &PackingOptions) -> Floors<'a> {
+        let floor = floor(opts, &field.grid);
+        Floors {
+            floor,
+            coarse: field
+                .coarse
+                .as_ref()
+                .map(|c| (&c.flags[..], c.min_radius.max(floor))),
+        }
+    }
+
+    /// Whether `value` at voxel `pos` (a position in the inside list) is below its floor.
+    #[inline]
+    fn below(&self, pos: u32, value: f64) -> bool {
+        value < self.floor
+            || self
+                .coarse
+                .is_some_and(|(flags, f)| value < f && flags[pos as usize])
+    }
 }
 
 /// The smallest radius placed: the larger of the option and 1e-4 voxel (smaller spheres are

@@ -20,6 +20,7 @@ use rayon::prelude::*;
 use super::shape::Shape;
 use crate::error::{Error, Result};
 use crate::mesh::union_find::UnionFind;
+use crate::mesh::untangle::untangle;
 use crate::mesh::Mesh;
 
 /// Field values are clamped to ± this many cells: only values near zero place vertices.
@@ -113,7 +114,9 @@ pub fn extract(s: &Shape) -> Result<(Mesh, usize)> {
                 }
             }
         });
-    untangle(&mut sdf, [nx, ny, nz]);
+    // The opened corners a quarter cell outside (material removed, never added), so that no
+    // vertices stack on them.
+    untangle(&mut sdf, [nx, ny, nz], 0.25 * h as f32);
     let shape = RuntimeShape::<u32, 3>::new([nx as u32, ny as u32, nz as u32]);
     debug_assert_eq!(shape.size() as usize, sdf.len());
     let mut buf = SurfaceNetsBuffer::default();
@@ -208,48 +211,4 @@ fn largest_body(m: Mesh) -> (Mesh, usize) {
         },
         parts - 1,
     )
-}
-
-/// Moves outside the inside corners of every grid face whose inside corners lie on one
-/// diagonal only, until no such face is left (each pass only removes, so it ends).
-fn untangle(sdf: &mut [f32], [nx, ny, nz]: [usize; 3]) {
-    let outside = f32::MIN_POSITIVE;
-    let idx = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
-    loop {
-        let mut flips = Vec::new();
-        for k in 0..nz - 1 {
-            for j in 0..ny - 1 {
-                for i in 0..nx - 1 {
-                    let p = idx(i, j, k);
-                    if sdf[p] >= 0.0
-                        && sdf[idx(i + 1, j, k)] >= 0.0
-                        && sdf[idx(i, j + 1, k)] >= 0.0
-                        && sdf[idx(i, j, k + 1)] >= 0.0
-                    {
-                        continue; // the common case: outside around this node
-                    }
-                    // The three faces with this node as their lowest corner.
-                    for (u, v) in [
-                        (idx(i + 1, j, k), idx(i, j + 1, k)),
-                        (idx(i + 1, j, k), idx(i, j, k + 1)),
-                        (idx(i, j + 1, k), idx(i, j, k + 1)),
-                    ] {
-                        let w = u + v - p; // the corner across from p
-                        let c = [sdf[p] < 0.0, sdf[u] < 0.0, sdf[v] < 0.0, sdf[w] < 0.0];
-                        if c[0] && c[3] && !c[1] && !c[2] {
-                            flips.extend([p, w]);
-                        } else if c[1] && c[2] && !c[0] && !c[3] {
-                            flips.extend([u, v]);
-                        }
-                    }
-                }
-            }
-        }
-        if flips.is_empty() {
-            break;
-        }
-        for f in flips {
-            sdf[f] = outside;
-        }
-    }
 }

@@ -4,8 +4,23 @@
 use crate::mesh::Mesh;
 use glam::DVec3;
 
+mod bone;
+pub use bone::{arch_pair_teeth_extracted, arch_pair_with_bone};
+
 /// A unit icosphere with `subdivisions` loop subdivisions (20·4^s triangles), outward facing.
 pub fn icosphere(subdivisions: u32) -> Mesh {
+    let (vertices, mut levels) = icosphere_levels(subdivisions);
+    Mesh {
+        vertices,
+        triangles: levels.pop().unwrap_or_default(),
+    }
+}
+
+/// The unit icosphere's vertices and the triangles of every level `0..=subdivisions`: the
+/// children of triangle `t` of one level are triangles `4t..4t + 4` of the next, and their
+/// cones from the centre tile the parent's (the midpoints are pushed out to the sphere along
+/// the parent's edge planes), which is what [`bone`]'s radial inside test walks down.
+fn icosphere_levels(subdivisions: u32) -> (Vec<DVec3>, Vec<Vec<[u32; 3]>>) {
     let t = (1.0 + 5f64.sqrt()) / 2.0;
     let mut vertices: Vec<DVec3> = [
         (-1.0, t, 0.0),
@@ -24,7 +39,7 @@ pub fn icosphere(subdivisions: u32) -> Mesh {
     .iter()
     .map(|&(x, y, z)| DVec3::new(x, y, z).normalize())
     .collect();
-    let mut triangles: Vec<[u32; 3]> = vec![
+    let mut levels: Vec<Vec<[u32; 3]>> = vec![vec![
         [0, 11, 5],
         [0, 5, 1],
         [0, 1, 7],
@@ -45,7 +60,7 @@ pub fn icosphere(subdivisions: u32) -> Mesh {
         [6, 2, 10],
         [8, 6, 7],
         [9, 8, 1],
-    ];
+    ]];
     for _ in 0..subdivisions {
         let mut mid = std::collections::HashMap::new();
         let mut midpoint = |a: u32, b: u32, vertices: &mut Vec<DVec3>| -> u32 {
@@ -56,19 +71,17 @@ pub fn icosphere(subdivisions: u32) -> Mesh {
                 (vertices.len() - 1) as u32
             })
         };
+        let triangles = levels.last().map_or(&[][..], |l| &l[..]);
         let mut next = Vec::with_capacity(triangles.len() * 4);
-        for &[a, b, c] in &triangles {
+        for &[a, b, c] in triangles {
             let ab = midpoint(a, b, &mut vertices);
             let bc = midpoint(b, c, &mut vertices);
             let ca = midpoint(c, a, &mut vertices);
             next.extend_from_slice(&[[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
         }
-        triangles = next;
+        levels.push(next);
     }
-    Mesh {
-        vertices,
-        triangles,
-    }
+    (vertices, levels)
 }
 
 /// A star-shaped closed mesh: the icosphere with each vertex `v` moved to `f(v)·v`.
@@ -152,28 +165,31 @@ pub fn torus(major: f64, minor: f64, segments: u32, sides: u32) -> Mesh {
 /// cusps on top (+z) and a tapering root below, star-shaped and closed.
 /// `phase` turns the cusp pattern, so that an upper and a lower tooth can interlock.
 pub fn molar(subdivisions: u32, phase: f64) -> Mesh {
-    radial(subdivisions, |v| {
-        let (x, y, z) = (v.x, v.y, v.z);
-        let az = y.atan2(x) + phase;
-        // Crown: wide on top, with four cusps; root: narrower towards -z.
-        let width = if z > 0.0 { 5.0 } else { 5.0 * (1.0 + 0.45 * z) };
-        let height = if z > 0.0 { 4.0 } else { 12.0 };
-        // The cusps fade towards the crown's pole, where the azimuth turns ever faster (else
-        // the top would be a pinched point no packing of spheres could follow).
-        let rho2 = x * x + y * y;
-        let cusps = if z > 0.2 {
-            1.0 + 0.22
-                * (z - 0.2)
-                * (2.0 * az).cos().powi(2)
-                * (1.0 - (2.0 * az).sin().abs() * 0.3)
-                * (rho2 / (rho2 + 0.05))
-        } else {
-            1.0
-        };
-        // Radius of the ellipsoid-like base along direction v, times the cusp factor.
-        let base = 1.0 / ((x * x + y * y) / (width * width) + z * z / (height * height)).sqrt();
-        base * cusps
-    })
+    radial(subdivisions, |v| molar_radius(v, phase))
+}
+
+/// The molar's distance from its centre along the unit direction `v` ([`molar`]).
+fn molar_radius(v: DVec3, phase: f64) -> f64 {
+    let (x, y, z) = (v.x, v.y, v.z);
+    let az = y.atan2(x) + phase;
+    // Crown: wide on top, with four cusps; root: narrower towards -z.
+    let width = if z > 0.0 { 5.0 } else { 5.0 * (1.0 + 0.45 * z) };
+    let height = if z > 0.0 { 4.0 } else { 12.0 };
+    // The cusps fade towards the crown's pole, where the azimuth turns ever faster (else
+    // the top would be a pinched point no packing of spheres could follow).
+    let rho2 = x * x + y * y;
+    let cusps = if z > 0.2 {
+        1.0 + 0.22
+            * (z - 0.2)
+            * (2.0 * az).cos().powi(2)
+            * (1.0 - (2.0 * az).sin().abs() * 0.3)
+            * (rho2 / (rho2 + 0.05))
+    } else {
+        1.0
+    };
+    // Radius of the ellipsoid-like base along direction v, times the cusp factor.
+    let base = 1.0 / ((x * x + y * y) / (width * width) + z * z / (height * height)).sqrt();
+    base * cusps
 }
 
 /// Two interlocking tooth-like bodies for the demo: a lower molar (cusps up) and an upper
@@ -192,19 +208,78 @@ pub fn tooth_pair(subdivisions: u32) -> (Mesh, Mesh) {
     (upper, molar(subdivisions, 0.0))
 }
 
-/// The size of [`arch_pair`]'s teeth relative to [`molar`].
-const ARCH_SCALE: f64 = 0.7;
+/// Where one tooth of [`arch_pair`] stands: its molar's frame in the arch.
+#[derive(Debug, Clone, Copy)]
+struct ToothPlace {
+    /// The molar's centre on the arch curve (z = 0).
+    at: DVec3,
+    /// The curve's direction there (radians from +x).
+    angle: f64,
+    /// Its position along the arch, 0 at the first tooth (turns the cusps).
+    index: usize,
+}
 
-/// Where [`arch_pair`]'s `teeth` (at least 2) stand: equal arc steps along y = 40 − x²/18
-/// (a 48 mm wide, 40 mm deep arch) from x = −24 to 24, with the curve's direction angle.
-fn arch_places(teeth: usize) -> Vec<(DVec3, f64)> {
+/// The teeth of [`arch_pair`] are [`molar`]s scaled by this.
+const ARCH_TOOTH_SCALE: f64 = 0.7;
+/// The upper arch's molars are mirrored in z and lifted by this (millimetres, the molar's
+/// units: 8.1 mm lets the cusps interdigitate with a small overlap).
+const ARCH_UPPER_LIFT: f64 = 8.1;
+
+impl ToothPlace {
+    /// The cusp pattern's turn of this tooth in the upper or lower arch.
+    fn phase(&self, upper: bool) -> f64 {
+        let base = if upper {
+            std::f64::consts::FRAC_PI_4
+        } else {
+            0.0
+        };
+        base + 0.3 * self.index as f64
+    }
+
+    /// A point of the molar's frame ([`molar`], unscaled) in the arch's.
+    fn to_arch(self, p: DVec3, upper: bool) -> DVec3 {
+        let p = p * ARCH_TOOTH_SCALE;
+        let p = if upper {
+            DVec3::new(p.x, p.y, -p.z + ARCH_UPPER_LIFT * ARCH_TOOTH_SCALE)
+        } else {
+            p
+        };
+        let (s, c) = self.angle.sin_cos();
+        DVec3::new(
+            c * p.x - s * p.y + self.at.x,
+            s * p.x + c * p.y + self.at.y,
+            p.z,
+        )
+    }
+
+    /// A point of the arch's frame in the molar's (the inverse of [`Self::to_arch`]).
+    fn to_molar(self, p: DVec3, upper: bool) -> DVec3 {
+        let (s, c) = self.angle.sin_cos();
+        let (x, y) = (p.x - self.at.x, p.y - self.at.y);
+        let z = if upper {
+            ARCH_UPPER_LIFT * ARCH_TOOTH_SCALE - p.z
+        } else {
+            p.z
+        };
+        DVec3::new(c * x + s * y, -s * x + c * y, z) / ARCH_TOOTH_SCALE
+    }
+}
+
+/// The arch curve of [`arch_pair`]: y = 40 − x²/18 (a 48 mm wide, 40 mm deep arch between
+/// x = ±24).
+fn arch_curve(x: f64) -> DVec3 {
+    DVec3::new(x, 40.0 - x * x / 18.0, 0.0)
+}
+
+/// Where the `teeth` (at least 2) teeth of [`arch_pair`] stand: at equal arc steps along
+/// [`arch_curve`] between x = ±24.
+fn arch_places(teeth: usize) -> Vec<ToothPlace> {
     let n = teeth.max(2);
-    let curve = |x: f64| DVec3::new(x, 40.0 - x * x / 18.0, 0.0);
-    let mut pts = vec![curve(-24.0)];
+    let mut pts = vec![arch_curve(-24.0)];
     let mut x = -24.0;
     while x < 24.0 {
         x += 0.01;
-        pts.push(curve(x));
+        pts.push(arch_curve(x));
     }
     let length: f64 = pts.windows(2).map(|w| (w[1] - w[0]).length()).sum();
     let mut places = Vec::with_capacity(n);
@@ -214,7 +289,11 @@ fn arch_places(teeth: usize) -> Vec<(DVec3, f64)> {
         let step = (w[1] - w[0]).length();
         if walked + step >= target && next < n {
             let dir = (w[1] - w[0]).normalize();
-            places.push((w[0], dir.y.atan2(dir.x)));
+            places.push(ToothPlace {
+                at: w[0],
+                angle: dir.y.atan2(dir.x),
+                index: next,
+            });
             next += 1;
         }
         walked += step;
@@ -234,13 +313,13 @@ pub type NumberedCentres = Vec<(u32, DVec3)>;
 pub fn arch_pair_crowns(teeth: usize) -> (NumberedCentres, NumberedCentres) {
     let n = teeth.clamp(2, 16);
     let skip = ((16 - n) / 2) as u32;
-    let crown = 1.5 * ARCH_SCALE;
+    let crown = 1.5 * ARCH_TOOTH_SCALE;
     let (mut upper, mut lower) = (Vec::with_capacity(n), Vec::with_capacity(n));
-    for (k, &(at, _)) in arch_places(n).iter().enumerate() {
-        let k = k as u32;
+    for (k, place) in arch_places(n).iter().enumerate() {
+        let (k, at) = (k as u32, place.at);
         upper.push((
             16 - skip - k,
-            DVec3::new(at.x, at.y, 8.1 * ARCH_SCALE - crown),
+            DVec3::new(at.x, at.y, ARCH_UPPER_LIFT * ARCH_TOOTH_SCALE - crown),
         ));
         lower.push((17 + skip + k, DVec3::new(at.x, at.y, crown)));
     }
@@ -252,28 +331,16 @@ pub fn arch_pair_crowns(teeth: usize) -> (NumberedCentres, NumberedCentres) {
 /// teeth per arch, 0.7 × the size of [`molar`], standing along a parabolic horseshoe
 /// (narrow at the front, +y), the lower arch cusps up and the upper one cusps down, turned
 /// so that their cusps interdigitate with a small overlap at the identity pose, like a
-/// bite. Each tooth is its own closed shell, as in segmented scans.
+/// bite. Each tooth is its own closed shell, as in segmented scans. Returns (upper, lower).
+/// [`arch_pair_with_bone`] stands the same teeth in solid bone.
 pub fn arch_pair(subdivisions: u32, teeth: usize) -> (Mesh, Mesh) {
-    let scale = ARCH_SCALE;
     let places = arch_places(teeth);
     let arch = |upper: bool| -> Mesh {
         let mut all = Mesh::default();
-        for (k, &(at, angle)) in places.iter().enumerate() {
-            let phase = if upper {
-                std::f64::consts::FRAC_PI_4
-            } else {
-                0.0
-            };
-            let mut m = molar(subdivisions, phase + 0.3 * k as f64);
-            let (s, c) = angle.sin_cos();
+        for place in &places {
+            let mut m = molar(subdivisions, place.phase(upper));
             for v in &mut m.vertices {
-                let p = *v * scale;
-                let p = if upper {
-                    DVec3::new(p.x, p.y, -p.z + 8.1 * scale)
-                } else {
-                    p
-                };
-                *v = DVec3::new(c * p.x - s * p.y + at.x, s * p.x + c * p.y + at.y, p.z);
+                *v = place.to_arch(*v, upper);
             }
             if upper {
                 m.flip();

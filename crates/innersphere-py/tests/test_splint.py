@@ -136,3 +136,19 @@ def test_arches_in_metres_need_their_unit():
         innersphere.splint(m(a), m(b), voxel=0.3)
     _, _, report = innersphere.splint(m(a), m(b), voxel=0.3, unit="m")
     assert report["fit"]
+
+
+def test_the_wafer_between_arches_with_bone_is_one_manifold_solid_that_covers_them():
+    """Generated arches with their bone (each one closed surface of teeth and bone), opened
+    3 mm: the wafer is fit, one watertight body by trimesh, a manifold by manifold3d that
+    overlaps neither arch (exact intersection), and carries at least 85 % of each arch's
+    occlusal surface."""
+    a, b = innersphere.arch_pair(bone=True)
+    vertices, faces, report = innersphere.splint(a, b, open=3.0, voxel=0.2)
+    pose = report["pose"]
+    q = np.array(pose[3:])
+    R = trimesh.transformations.quaternion_matrix(q)[:3, :3]
+    b_at = (np.asarray(b[0]) @ R.T + np.array(pose[:3]), b[1])
+    check_solid(vertices, faces, report, arches=[a, b_at])
+    assert report["a_vertices_inside"] == 0 and report["b_vertices_inside"] == 0
+    assert report["coverage_a"] >= 0.85 and report["coverage_b"] >= 0.85

@@ -101,7 +101,7 @@ pub fn assert_seats(a: &Mesh, b: &Mesh, pose: &Pose, opts: &SplintOptions, s: &s
 /// (its triangle tree `bvh_o`, at `pose_o`), looking along `dir` (world frame, from `m`
 /// towards the other arch): a vertex whose ray along `dir` leaves `m` without meeting it
 /// again and then meets the other arch, and that lies at most `coverage` behind the
-/// foremost such vertex within 3 mm around it along `dir` (the band of the crowns beyond
+/// foremost such vertex within 15 mm around it along `dir` (the band of the crowns beyond
 /// their cusp tips that a wafer climbs, whatever the gap between the arches).
 pub fn occlusal(
     m: &Mesh,
@@ -140,7 +140,7 @@ pub fn occlusal(
             }
         })
         .collect();
-    // The foremost per 3 mm cell across the axis.
+    // The foremost per 5 mm cell across the axis (a cell and two rings of neighbours: 10–25 mm).
     let (e1, e2) = {
         let t = if dir.x.abs() < 0.9 {
             DVec3::X
@@ -153,8 +153,8 @@ pub fn occlusal(
     let cell = |v: DVec3| {
         let w = pose_m.transform_point(v);
         (
-            (w.dot(e1) / 3.0).floor() as i64,
-            (w.dot(e2) / 3.0).floor() as i64,
+            (w.dot(e1) / 5.0).floor() as i64,
+            (w.dot(e2) / 5.0).floor() as i64,
         )
     };
     let mut least: HashMap<(i64, i64), f64> = HashMap::new();
@@ -170,8 +170,8 @@ pub fn occlusal(
         .map(|(v, r)| {
             let Some(r) = r else { return false };
             let (i, j) = cell(*v);
-            let near = (-1..=1)
-                .flat_map(|di| (-1..=1).map(move |dj| (i + di, j + dj)))
+            let near = (-2..=2)
+                .flat_map(|di| (-2..=2).map(move |dj| (i + di, j + dj)))
                 .filter_map(|k| least.get(&k))
                 .fold(f64::INFINITY, |x, y| x.min(*y));
             *r <= near + coverage

@@ -24,6 +24,10 @@ use glam::DVec3;
 pub const HINGE_BEHIND: f64 = 95.0;
 /// Height of the opening hinge above the lower incisal tip, in millimetres at scale 1.
 pub const HINGE_ABOVE: f64 = 20.0;
+/// Two principal spreads within this ratio are alike ([`AnatomicalFrame::from_points`]): a
+/// dental arch, crowns only, is several times wider than tall, but two arches with their bone
+/// stacked spread about as much along up as front to back.
+const ALIKE_SPREADS: f64 = 1.5;
 /// The height of B along up that has scale 1: the lower dental arch (crowns and roots) of
 /// the project's jaw pair, 24.5 mm.
 pub const REFERENCE_HEIGHT: f64 = 24.5;
@@ -75,7 +79,7 @@ impl AnatomicalFrame {
                 }
             }
         }
-        let (_, axes) = symmetric_eigen(cov);
+        let (values, axes) = symmetric_eigen(cov);
         let dc = ca - cb;
         let size = bbox_diagonal(a).max(bbox_diagonal(b));
         if !(size.is_finite() && size > 0.0) {
@@ -86,10 +90,25 @@ impl AnatomicalFrame {
         // Eigenvalues ascending: axes[0] is the smallest.
         let mut up = if dc.length() > 1e-9 * size {
             let d = dc.normalize();
-            *axes
-                .iter()
-                .max_by(|p, q| p.dot(d).abs().total_cmp(&q.dot(d).abs()))
-                .unwrap_or(&axes[0])
+            let k = (0..3)
+                .max_by(|&p, &q| axes[p].dot(d).abs().total_cmp(&axes[q].dot(d).abs()))
+                .unwrap_or(0);
+            // Axes whose spreads are alike are no particular directions (their eigenvectors
+            // turn freely in their plane): arches with their bone, stacked, spread as much
+            // along up as across it. Then up is the centroids' line within their span.
+            let alike = |i: usize| {
+                let (x, y) = (values[i].max(0.0), values[k].max(0.0));
+                x.max(y) <= ALIKE_SPREADS * x.min(y)
+            };
+            let span: DVec3 = (0..3)
+                .filter(|&i| alike(i))
+                .map(|i| axes[i] * axes[i].dot(d))
+                .sum();
+            if (0..3).filter(|&i| alike(i)).count() > 1 && span.length() > 1e-9 {
+                span.normalize()
+            } else {
+                axes[k]
+            }
         } else {
             axes[0]
         };

@@ -240,3 +240,18 @@ fn a_splints_report_is_the_same_bits_on_any_number_of_threads() {
         assert_eq!(format!("{r:?}"), format!("{one:?}"), "{threads} threads");
     }
 }
+
+/// Arches with their bone (each one closed surface of teeth and bone): the intermediate and
+/// the final wafer seat and carry both occlusal surfaces (`--ignored`: the arches have half a
+/// million triangles each).
+#[test]
+#[ignore]
+fn wafers_between_arches_with_bone_seat_on_both() {
+    let (a, b) = shapes::arch_pair_with_bone(3, 12);
+    let opts = options();
+    for opening in [splint::Opening::By(3.0), splint::Opening::Auto] {
+        let s = splint::make_opened(&a, &b, &Pose::IDENTITY, opening, &opts).unwrap();
+        let pose = Pose::from_array(s.report.pose).unwrap();
+        assert_seats(&a, &b, &pose, &opts, &s);
+    }
+}

@@ -456,6 +456,14 @@ def contact_map(
     mm; the gaps are in mm. Raises OSError for unreadable files, ValueError for bad meshes or
     poses."""
 
+def arch_pair(
+    teeth: int = 12, bone: bool = False
+) -> Tuple[Tuple[_FloatArray, npt.NDArray[np.uint32]], Tuple[_FloatArray, npt.NDArray[np.uint32]]]:
+    """A generated arch pair in mm, (upper, lower), each (vertices, faces): ``teeth``
+    molar-like teeth per arch (2..16) with roots, interlocking at the identity like a bite;
+    with ``bone``, the same teeth standing in a solid horseshoe of bone, each arch one closed
+    surface (about 0.5 M triangles per arch)."""
+
 def splint(
     a: _MeshLike,
     b: _MeshLike,

@@ -18,9 +18,10 @@ use rayon::prelude::*;
 /// Grid spacing of the extraction (millimetres): the surface lies within a few hundredths of
 /// a millimetre of the solid, and an arch has about 0.5 M triangles.
 const VOXEL: f64 = 0.25;
-/// The block follows [`arch_curve`] between x = ±this (mm): 5 mm behind the last molars
+/// The block follows [`arch_curve`] between x = ±this (mm): where the curve runs steeply
+/// back, 2 mm in x is about 6 mm along the arch, a few mm of bone behind the last molars
 /// (the teeth stand between ±24).
-const BLOCK_END_X: f64 = 29.0;
+const BLOCK_END_X: f64 = 26.0;
 /// Half the block's width across the arch (mm): 18 mm of bone, twice a tooth's width.
 const BLOCK_HALF_WIDTH: f64 = 9.0;
 /// The lower block's top (mm, in the lower molars' frame): 1 mm of root shows above the

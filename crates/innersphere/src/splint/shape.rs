@@ -31,6 +31,15 @@ const COLUMN_BYTES: u64 = 20 * 8;
 /// Radius (model units) of the neighbourhood within which a cusp tip is the lowest point of
 /// the imprint: about half a molar's cusp spacing.
 const CUSP_RADIUS: f64 = 1.5;
+/// Radius (mm) of the neighbourhood of a cusp tip's fellow tips: about two molars and a
+/// premolar, so that the bone behind the last molar (the retromolar pad, the tuberosity, up
+/// to 2 cm along the arch) has the molars' cusps within it.
+const CUSP_REACH: f64 = 25.0;
+/// How far (mm) a cusp tip stands back from the foremost tip within [`CUSP_REACH`] at most:
+/// the cusps of neighbouring crowns differ by a millimetre or two (canine against premolar,
+/// the curve of Spee, an arch opened a few degrees about the hinge); bone or gum beside and
+/// behind the crowns stands back further (4–10 mm).
+const CUSP_BAND: f64 = 3.0;
 /// Standard deviation (model units) of the smoothing of the occlusal surfaces through the
 /// cusp tips (under the coverage caps).
 const CAP_SIGMA: f64 = 1.5;
@@ -175,15 +184,19 @@ pub fn shape(a: &Mesh, b: &Mesh, pose: &Pose, o: &SplintOptions) -> Result<Shape
     inputs::check_facing(&a_low, &b_high, &grid, c)?;
 
     // Each arch's occlusal surface: a smooth surface through its cusp tips (the columns
-    // where the imprint is lowest within CUSP_RADIUS), carried over the columns without
-    // teeth.
+    // where the imprint is lowest within CUSP_RADIUS, and within CUSP_BAND of the lowest
+    // within CUSP_REACH: the flat bone or gum beside the crowns is a local lowest too, but
+    // it stands back from the crowns), carried over the columns without teeth.
     let r = (CUSP_RADIUS / h).round() as usize;
+    let reach = (CUSP_REACH / h).round() as usize;
     let cusps = |low: &[f64]| -> Vec<f64> {
+        let wide = raster::min_filter(low, dims, reach);
         raster::min_filter(low, dims, r)
             .iter()
             .zip(low)
-            .map(|(m, z)| {
-                if z.is_finite() && z <= m {
+            .zip(&wide)
+            .map(|((m, z), w)| {
+                if z.is_finite() && z <= m && *z <= w + CUSP_BAND {
                     *z
                 } else {
                     f64::NAN

@@ -15,6 +15,7 @@ __all__ = [
     "Tick",
     "Tree",
     "__version__",
+    "arch_pair",
     "contact_map",
     "load_motion",
     "occlude",

@@ -31,10 +31,11 @@ run() {
   [[ "$m" =~ ^[0-9]+$ ]] || m=0
   [ "$rc" = 124 ] && t=">60"
   local note; note=$(cd "$out" && OUT="$out" bash -c "$check" 2>/dev/null)
-  [ -n "$note" ] || note=$(grep -v '^Command ' "$out/stderr" | head -1 | cut -c1-150)
+  [ -n "$note" ] || note=$(grep -v '^Command ' "$out/stderr" | tail -1 | cut -c1-150)
   echo "| $label | $(basename "$(dirname "$(dirname "$bin")")") | $rc | $t | $((m / 1024)) | ${note//|/\\|} |"
 }
 json() { python3 -c "import json,sys; d=json.load(open('stdout')); print(', '.join(f'{k} {d.get(k)}' for k in sys.argv[1:]))" "$@"; }
+export -f json
 
 echo "| case | binary | exit | s | MB | what it said or wrote |"
 echo "|---|---|---|---|---|---|"

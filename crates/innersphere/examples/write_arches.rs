@@ -28,9 +28,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // Open boundaries: the root ends cut off (the upper roots reach up, the lower down).
     let cut = |m: &Mesh, keep: &dyn Fn(f64) -> bool| {
         let mut m = m.clone();
-        m.triangles.retain(|t| {
-            keep(t.iter().map(|&i| m.vertices[i as usize].z).sum::<f64>() / 3.0)
-        });
+        m.triangles
+            .retain(|t| keep(t.iter().map(|&i| m.vertices[i as usize].z).sum::<f64>() / 3.0));
         m
     };
     save(&cut(&a, &|z| z < 9.0), "upper_open.stl")?;

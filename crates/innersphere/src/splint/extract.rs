@@ -36,15 +36,21 @@ const GRID_BYTES_PER_CELL: u64 = 8;
 /// indices) for the top, the bottom and the walls.
 const SURFACE_BYTES_PER_COLUMN: u64 = 4 * 56 + 8 * 24;
 
-/// The refusal of a voxel size `h` whose splint would take `bytes`, naming the smallest voxel
-/// size that fits (memory grows with the inverse cube of the voxel size).
-pub fn too_fine(h: f64, bytes: u64) -> Error {
-    let fits = h * (bytes as f64 / MAX_SPLINT_BYTES as f64).cbrt();
+/// The refusal of a voxel size `h` whose splint would take `bytes` (`at_least`: a lower
+/// bound, estimated before the wafer's height is known), naming the smallest voxel size that
+/// fits (memory grows with the inverse cube of the voxel size).
+pub fn too_fine(h: f64, bytes: u64, at_least: bool) -> Error {
+    let fits = (h * (bytes as f64 / MAX_SPLINT_BYTES as f64).cbrt() * 1000.0).ceil() / 1000.0;
     Error::InvalidOption(format!(
-        "a voxel size of {h} would take about {:.1} GB for these arches, more than the {:.0} GB a splint may use; a voxel size of {:.3} or more fits",
+        "a voxel size of {h} would take {} {:.1} GB for these arches, more than the {:.0} GB a splint may use; {}",
+        if at_least { "at least" } else { "about" },
         bytes as f64 / 1e9,
         MAX_SPLINT_BYTES as f64 / 1e9,
-        (fits * 1000.0).ceil() / 1000.0
+        if at_least {
+            format!("a voxel size of {fits} or more is needed")
+        } else {
+            format!("a voxel size of {fits} or more fits")
+        }
     ))
 }
 
@@ -78,7 +84,7 @@ pub fn extract(s: &Shape) -> Result<(Mesh, usize)> {
     let kept = s.keep.iter().filter(|k| **k).count() as u64;
     let bytes = cells * GRID_BYTES_PER_CELL + kept * SURFACE_BYTES_PER_COLUMN;
     if bytes > MAX_SPLINT_BYTES || nx > u32::MAX as usize / 2 || nz > u32::MAX as usize / 2 {
-        return Err(too_fine(h, bytes));
+        return Err(too_fine(h, bytes, false));
     }
     let clamp = CLAMP_CELLS * h as f32;
     let snap = SNAP_CELLS * h as f32;

@@ -162,11 +162,15 @@ pub fn shape(a: &Mesh, b: &Mesh, pose: &Pose, o: &SplintOptions) -> Result<Shape
     let (lo, hi) = (lo - pad, hi + pad);
     let nx = ((hi.x - lo.x) / h).ceil() + 1.0;
     let ny = ((hi.y - lo.y) / h).ceil() + 1.0;
-    let bytes = nx * ny * COLUMN_BYTES as f64;
+    // Before the columns' work: their maps, and the least extraction grid any wafer needs (as
+    // tall as both coverages and the plate), so that a voxel far too fine is refused at once.
+    let least_cells_per_column = (2.0 * o.coverage + o.min_thickness) / h + 6.0;
+    let bytes = nx * ny * (COLUMN_BYTES as f64 + 8.0 * least_cells_per_column);
     if bytes.is_nan() || bytes > super::extract::MAX_SPLINT_BYTES as f64 {
         return Err(super::extract::too_fine(
             h,
             bytes.min(u64::MAX as f64) as u64,
+            true,
         ));
     }
     let grid = ColumnGrid {

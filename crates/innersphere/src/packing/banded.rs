@@ -41,6 +41,7 @@ pub(super) fn pack(
     progress: &dyn crate::progress::Progress,
 ) -> Vec<Sphere> {
     let grid = field.grid;
+    let open = field.open;
     let h = grid.h;
     let remaining = Remaining::new(bounds);
     let exact: Vec<AtomicBool> = (0..bounds.len())
@@ -49,7 +50,8 @@ pub(super) fn pack(
         .collect();
     let rows = Rows::of(field);
     let floor = floors.floor;
-    let mut refiner = (opts.refine_steps > 0).then(|| Refiner::new(grid, bvh, opts.refine_steps));
+    let mut refiner =
+        (opts.refine_steps > 0).then(|| Refiner::new(grid, bvh, opts.refine_steps, open));
     let pad = i64::from(refiner.is_some());
     // Refinement moves a centre at most half a voxel a step, and a sphere grows at most as
     // far as its centre moves: its radius stays below the band's top plus this.

@@ -10,6 +10,9 @@ use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 pub(super) struct Voxels<'a> {
     pub(super) grid: &'a VoxelGrid,
     pub(super) inside: &'a [u32],
+    /// Inside was decided by the generalized winding number (an open mesh): the surface's
+    /// triangles do not bound the solid everywhere, so a refined centre must keep |w| ≥ 0.5.
+    pub(super) open: bool,
 }
 
 /// The remaining distance of every inside voxel (in the order of `Voxels::inside`);
@@ -205,7 +208,7 @@ mod tests {
         ) {
             let grid = VoxelGrid { origin: DVec3::ZERO, h: 1.0, dims: [6, 5, 4] };
             let inside: Vec<u32> = cells.into_iter().collect();
-            let rows = Rows::of(Voxels { grid: &grid, inside: &inside });
+            let rows = Rows::of(Voxels { grid: &grid, inside: &inside, open: false });
             let hi = (lo + width).min(5);
             for r in 0..20usize {
                 let want: Vec<usize> = (0..inside.len())

@@ -66,6 +66,7 @@ pub fn pack(
     let voxels = Voxels {
         grid: &field.grid,
         inside: &field.inside,
+        open: field.method == crate::field::InsideMethod::WindingNumber,
     };
     let floors = Floors {
         floor: floor(opts, &field.grid),
@@ -89,6 +90,7 @@ pub fn pack_bounded(
     let voxels = Voxels {
         grid: &field.grid,
         inside: &field.inside,
+        open: field.method == crate::field::InsideMethod::WindingNumber,
     };
     let surface = (opts.refine_steps > 0).then_some(bvh);
     pack_voxels(
@@ -121,6 +123,7 @@ pub fn pack_parallel(
     let voxels = Voxels {
         grid: &field.grid,
         inside: &field.inside,
+        open: field.method == crate::field::InsideMethod::WindingNumber,
     };
     let floors = Floors::of(field, opts);
     banded::pack(
@@ -146,6 +149,7 @@ fn pack_voxels(
     progress: &dyn crate::progress::Progress,
 ) -> Vec<Sphere> {
     let grid = field.grid;
+    let open = field.open;
     // Only the inside voxels are held (on the jaw 8M of a 64M-cell grid), found row by row.
     let remaining = Remaining::new(dist);
     // With bounds: whether the voxel's distance to the surface is exact yet.
@@ -167,7 +171,7 @@ fn pack_voxels(
     let mut covered_since_report = 0u64;
     let mut refiner = match surface {
         Some(bvh) if opts.refine_steps > 0 => {
-            Some(refine::Refiner::new(grid, bvh, opts.refine_steps))
+            Some(refine::Refiner::new(grid, bvh, opts.refine_steps, open))
         }
         _ => None,
     };

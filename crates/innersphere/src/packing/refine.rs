@@ -3,11 +3,14 @@
 //! already placed sphere — while the free radius grows. Steps are at most half the current free
 //! radius, so the centre never leaves the free ball it is in (it stays inside the mesh and
 //! outside every sphere), and the popped voxel stays inside the final sphere, so the packing
-//! always makes progress.
+//! always makes progress. On an open mesh the triangles do not bound the solid everywhere (a
+//! free ball may reach through a hole), so there a moved centre must also stay inside by the
+//! generalized winding number, with a margin above ½ that no evaluation's error crosses.
 
 use super::Sphere;
 use crate::field::VoxelGrid;
 use crate::mesh::bvh::TriangleBvh;
+use crate::mesh::winding::{FastWinding, DEFAULT_BETA};
 use glam::DVec3;
 
 /// What bounds a free radius: a triangle of the surface (its slot in the tree) or a sphere.
@@ -28,10 +31,18 @@ pub(super) struct Refiner<'a> {
     h: f64,
     /// Spheres too large to bucket cheaply: always checked.
     big: Vec<u32>,
+    /// On open meshes: the winding number a moved centre must keep above [`INSIDE_W`].
+    winding: Option<FastWinding>,
 }
 
+/// The winding number a moved centre keeps on an open mesh: ½ (the inside test's threshold)
+/// plus a margin well above the fast evaluation's error (about 1e-3), so that the centre is
+/// inside by any evaluation, the check's included.
+const INSIDE_W: f64 = 0.55;
+
 impl<'a> Refiner<'a> {
-    pub(super) fn new(grid: &VoxelGrid, bvh: &'a TriangleBvh, steps: u32) -> Self {
+    /// `open`: the mesh's inside was decided by the winding number (see [`INSIDE_W`]).
+    pub(super) fn new(grid: &VoxelGrid, bvh: &'a TriangleBvh, steps: u32, open: bool) -> Self {
         let cell = 4.0 * grid.h;
         let dims = grid.dims.map(|d| (d as i64 + 3) / 4 + 1);
         let n = (dims[0] * dims[1] * dims[2]) as usize;
@@ -50,6 +61,7 @@ impl<'a> Refiner<'a> {
             steps,
             h: grid.h,
             big: Vec::new(),
+            winding: open.then(|| FastWinding::from_bvh(bvh.clone(), DEFAULT_BETA)),
         }
     }
 
@@ -262,7 +274,14 @@ impl<'a> Refiner<'a> {
             }
             // The free radius is 1-Lipschitz: at most f plus the distance moved.
             let (fc, qc, obstacle) = self.free(cand, spheres, extra, f + (cand - c).length());
-            if fc > f && fc <= cap && (cand - v).length() <= fc {
+            if fc > f
+                && fc <= cap
+                && (cand - v).length() <= fc
+                && self
+                    .winding
+                    .as_ref()
+                    .is_none_or(|w| w.winding_number(cand).abs() >= INSIDE_W)
+            {
                 c = cand;
                 f = fc;
                 q = qc;
@@ -303,11 +322,11 @@ mod tests {
             for (k, &(x, r)) in big.iter().enumerate() {
                 spheres.insert(k * 97 % spheres.len(), Sphere { center: DVec3::new(x, 0.0, 0.0), radius: r });
             }
-            let mut one = Refiner::new(&grid, &bvh, 8);
+            let mut one = Refiner::new(&grid, &bvh, 8, false);
             for (id, s) in (first..).zip(&spheres) {
                 one.insert(id, s.center, s.radius);
             }
-            let mut all = Refiner::new(&grid, &bvh, 8);
+            let mut all = Refiner::new(&grid, &bvh, 8, false);
             all.insert_all(first, &spheres, true);
             prop_assert_eq!(&all.big, &one.big);
             prop_assert!(all.buckets == one.buckets);
@@ -327,7 +346,7 @@ mod tests {
             let bvh = TriangleBvh::new(&mesh);
             let (lo, hi) = mesh.bbox();
             let grid = VoxelGrid::with_resolution(lo, hi, 40).unwrap();
-            let mut refiner = Refiner::new(&grid, &bvh, 8);
+            let mut refiner = Refiner::new(&grid, &bvh, 8, false);
             let spheres: Vec<Sphere> = balls
                 .iter()
                 .map(|&(x, y, z, r)| Sphere { center: DVec3::new(x, y, z), radius: r })

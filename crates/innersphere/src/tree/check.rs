@@ -196,6 +196,15 @@ pub fn check(tree: &SphereTree, mesh: &Mesh) -> crate::error::Result<CheckReport
     let tolerance = 1e-6 * (hi - lo).length();
     let bvh = TriangleBvh::new(mesh);
     let winding = FastWinding::new(mesh);
+    // On an open mesh the solid is where |w| ≥ ½, and across a hole w passes ½ smoothly (on
+    // a planar cut, exactly at ½ in its plane: the build's f64 voxel centre is inside, the
+    // tree's f32 copy may not be). A centre counts as outside there only beyond the winding
+    // number's accuracy; a closed mesh's w jumps at the surface and keeps the plain ½.
+    let threshold = if crate::field::inside::is_oriented_closed(mesh) {
+        0.5
+    } else {
+        0.5 - crate::field::inside::WINDING_ACCURACY
+    };
     let leaves: Vec<usize> = tree.leaves().collect();
     let sphere = |n: usize| {
         let (c, r) = tree.sphere(n);
@@ -211,7 +220,7 @@ pub fn check(tree: &SphereTree, mesh: &Mesh) -> crate::error::Result<CheckReport
                 .closest_point(c, f64::INFINITY)
                 .map(|h| h.dist_sq.sqrt())
                 .unwrap_or(0.0);
-            let inside = winding.winding_number(c).abs() >= 0.5;
+            let inside = winding.winding_number(c).abs() >= threshold;
             let signed = if inside { d } else { -d };
             ((r - signed).max(0.0), usize::from(!inside))
         })

@@ -62,18 +62,30 @@ for B in "${BINS[@]}"; do
   run "7 occlusion-map at 1e17" "" "$B" occlusion-map "$G/upper.stl" "$G/lower.stl" --pose "1e17 0 0 1 0 0 0" --out-b q.ply
   run "7 occlusion-map at 1e300" "grep -a -c inf q.ply" "$B" occlusion-map "$G/upper.stl" "$G/lower.stl" --pose "1e300 0 0 1 0 0 0" --out-b q.ply
   "$B" build "$G/upper_open.stl" -o "$W/open.ist" --preset jaw-fast -q > /dev/null 2>&1
-  run "8 check an open mesh's own tree" "" "$B" check "$W/open.ist" --mesh "$G/upper_open.stl"
+  run "8 check an open mesh's own tree" "grep -E '^(ok|FAILED)' stdout | cut -c1-90" "$B" check "$W/open.ist" --mesh "$G/upper_open.stl"
   run "9 --out-a q.ply.gz" "head -c2 q.ply.gz | od -An -tx1" "$B" occlusion-map "$G/upper.stl" "$G/lower.stl" --out-a q.ply.gz
   run "9 --out-a q.stl" "head -c3 q.stl" "$B" occlusion-map "$G/upper.stl" "$G/lower.stl" --out-a q.stl
   run "9 splint -o x.obj" "head -c12 x.obj | tr '\n' ' '" "$B" splint "$G/upper.stl" "$G/lower.stl" --open 3 --voxel 0.2 -o x.obj
   run "9 --out-a out/q.ply --out-b ./out/q.ply" "" "$B" occlusion-map "$G/upper.stl" "$G/lower.stl" --out-a "$W/out/q.ply" --out-b "$W/./out/q.ply"
   run "9 a missing output folder" "" "$B" splint "$G/upper.stl" "$G/lower.stl" --open 3 -o nowhere/w.stl
   run "11 teeth files swapped" "" "$B" occlusion-map "$G/upper.stl" "$G/lower.stl" --teeth-a "$G/lower.json" --teeth-b "$G/upper.json"
-  run "12 cache path that is a file" "" "$B" query "$G/upper.stl" "$G/lower.stl" --preset fast --cache "$G/upper.json" --pose-b "0 0 -20 1 0 0 0"
+  run "12 cache path that is a file" "grep -m1 -E 'warning|rror' stderr" "$B" query "$G/upper.stl" "$G/lower.stl" --preset fast --cache "$G/upper.json" --pose-b "0 0 -20 1 0 0 0"
   run "13 jaw preset on metres" "" "$B" build "$G/upper_m.stl" -o t.ist --preset jaw -q
   run "13 splint --unit m" "json fit volume" "$B" splint "$G/upper_m.stl" "$G/lower_m.stl" --unit m --open 3 --voxel 0.2 -o w.stl --json
   run "13 +y up, opened 3 mm" "json fit insertion_axis" "$B" splint "$G/upper_y.stl" "$G/lower_y.stl" --open 3 --voxel 0.2 -o w.stl --json
   run "14 build: teeth alone, jaw" "" "$B" build "$G/teeth_upper.stl" -o t.ist --preset jaw -q
   run "14 build: teeth in bone, jaw" "" "$B" build "$G/upper_bone.stl" -o t.ist --preset jaw -q
   run "14 splint between bone arches" "json fit coverage_a coverage_b min_thickness" "$B" splint "$G/upper_bone.stl" "$G/lower_bone.stl" --open 3 -o w.stl --json
+  # The real pair (../shared/data/jaw, or $INNERSPHERE_DATA/jaw), where it is beside the clone.
+  J="${INNERSPHERE_DATA:-$ROOT/../shared/data}/jaw"
+  if [ -f "$J/ofj_p26_maxilla_teeth.stl.gz" ]; then
+    UP="$J/ofj_p26_maxilla_teeth.stl.gz" LO="$J/ofj_p26_mandible_teeth.stl.gz"
+    run "P26 4 splint B 100 mm below" "json triangles" "$B" splint "$UP" "$LO" --pose "0 0 -100 1 0 0 0" -o w.stl --json
+    run "P26 4 splint --open -50" "json triangles" "$B" splint "$UP" "$LO" --open -50 -o w.stl --json
+    run "P26 6 occlude --force 2000" "" "$B" occlude "$UP" "$LO" --preset jaw-fast --force 2000
+    run "P26 7 occlusion-map at 1e17" "" "$B" occlusion-map "$UP" "$LO" --pose "1e17 0 0 1 0 0 0" --out-b q.ply
+    run "P26 9 --out-a q.stl" "head -c3 q.stl" "$B" occlusion-map "$UP" "$LO" --out-a q.stl
+    run "P26 11 teeth files swapped" "" "$B" occlusion-map "$UP" "$LO" --teeth-a "$J/ofj_p26_teeth_axes_mandible.json" --teeth-b "$J/ofj_p26_teeth_axes_maxilla.json"
+    run "P26 splint auto" "json fit coverage_a coverage_b min_thickness" "$B" splint "$UP" "$LO" --open auto -o w.stl --json
+  fi
 done

@@ -16,7 +16,7 @@
 
 use super::{InsideMethod, VoxelGrid};
 use crate::mesh::closest::closest_point_on_segment;
-use crate::mesh::winding::FastWinding;
+use crate::mesh::winding::{FastWinding, WINDING_ACCURACY};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use glam::DVec3;
@@ -26,8 +26,6 @@ use std::f64::consts::PI;
 
 /// Grid rows (constant y) handled together by one parallel task.
 const BAND: usize = 4;
-/// Assumed accuracy of the fast winding number (β = 2, second order: about 1e-3).
-pub(crate) const WINDING_ACCURACY: f64 = 0.02;
 /// Runs of fewer than `MIN_RUN + 1` cells are evaluated cell by cell (a gradient bound costs
 /// about as much as an evaluation).
 const MIN_RUN: u32 = 3;

@@ -17,6 +17,9 @@ use std::f64::consts::PI;
 
 /// Default accuracy parameter β: nodes farther than β·radius use their far-field expansion.
 pub const DEFAULT_BETA: f64 = 2.0;
+/// The accuracy assumed of [`FastWinding`] at [`DEFAULT_BETA`] (second order: errors of
+/// about 1e-3, with a margin): how far from ½ a value must be to decide inside or outside.
+pub const WINDING_ACCURACY: f64 = 0.02;
 
 /// Signed solid angle of the triangle `a, b, c` given relative to the viewpoint
 /// (Van Oosterom & Strackee 1983). Positive when the triangle is counter-clockwise seen from

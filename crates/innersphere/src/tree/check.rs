@@ -200,10 +200,10 @@ pub fn check(tree: &SphereTree, mesh: &Mesh) -> crate::error::Result<CheckReport
     // a planar cut, exactly at ½ in its plane: the build's f64 voxel centre is inside, the
     // tree's f32 copy may not be). A centre counts as outside there only beyond the winding
     // number's accuracy; a closed mesh's w jumps at the surface and keeps the plain ½.
-    let threshold = if crate::field::inside::is_oriented_closed(mesh) {
+    let threshold = if area_and_rim(mesh).1 == 0.0 {
         0.5
     } else {
-        0.5 - crate::field::inside::WINDING_ACCURACY
+        0.5 - crate::mesh::winding::WINDING_ACCURACY
     };
     let leaves: Vec<usize> = tree.leaves().collect();
     let sphere = |n: usize| {

@@ -82,7 +82,7 @@ for B in "${BINS[@]}"; do
     UP="$J/ofj_p26_maxilla_teeth.stl.gz" LO="$J/ofj_p26_mandible_teeth.stl.gz"
     run "P26 4 splint B 100 mm below" "json triangles" "$B" splint "$UP" "$LO" --pose "0 0 -100 1 0 0 0" -o w.stl --json
     run "P26 4 splint --open -50" "json triangles" "$B" splint "$UP" "$LO" --open -50 -o w.stl --json
-    run "P26 6 occlude --force 2000" "" "$B" occlude "$UP" "$LO" --preset jaw-fast --force 2000
+    run "P26 6 occlude --force 2000" "" "$B" occlude "$UP" "$LO" --preset jaw-fast --from "0 0 -3 1 0 0 0" --force 2000
     run "P26 7 occlusion-map at 1e17" "" "$B" occlusion-map "$UP" "$LO" --pose "1e17 0 0 1 0 0 0" --out-b q.ply
     run "P26 9 --out-a q.stl" "head -c3 q.stl" "$B" occlusion-map "$UP" "$LO" --out-a q.stl
     run "P26 11 teeth files swapped" "" "$B" occlusion-map "$UP" "$LO" --teeth-a "$J/ofj_p26_teeth_axes_mandible.json" --teeth-b "$J/ofj_p26_teeth_axes_maxilla.json"

@@ -201,16 +201,16 @@ fn a_bone_arch_builds_coarse_in_its_bone_and_as_accurate_near_its_crowns() {
     eprintln!("distance error p50 / p95: bone arches {mb:.4} / {pb:.4} mm, teeth alone {mt:.4} / {pt:.4} mm");
     // The generated cusps are polyhedral corners rounded by the 0.25 mm extraction: the teeth
     // alone miss by more than the real scans' 0.03 mm. The bone arches: the median as the
-    // teeth's; the tail worse (these crowns stand only 4 mm out of the bone, so the thick
-    // parts' 2 mm margin reaches the crowns' largest spheres; measured on 2 cores: 0.036
-    // against 0.034 mm at p50, 0.086 against 0.059 mm at p95). A bound, not the goal.
+    // teeth's, the tail a little worse (the thick parts' 2 mm margin reaches the lowest
+    // millimetre of crowns that stand only 4 mm out of the bone; BENCHMARKS.md, "An arch
+    // with its bone"). A bound, not the goal.
     assert!(pt < 0.08, "teeth alone: p95 {pt}");
     assert!(
         mb <= 1.15 * mt + 0.002,
         "bone arch p50 {mb} against the teeth's {mt}"
     );
     assert!(
-        pb <= 1.6 * pt + 0.002,
+        pb <= 1.25 * pt + 0.002,
         "bone arch p95 {pb} against the teeth's {pt}"
     );
 }

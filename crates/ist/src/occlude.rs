@@ -103,6 +103,20 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         .reference
         .parse()
         .with_context(|| format!("--reference \"{}\"", args.reference))?;
+    let opts = BiteOptions {
+        axis: args.axis.as_ref().map(|v| DVec3::new(v[0], v[1], v[2])),
+        force: args.force,
+        contact_stiffness: args.contact_stiffness,
+        max_seconds: args.max_seconds,
+        reference,
+        joint_stiffness: args.joint_stiffness,
+        free: args.free,
+        starts: args.starts,
+        spread: args.spread,
+        seed: args.seed,
+    };
+    // Refused before the bodies are built.
+    opts.validate()?;
     // Read before the bodies are built, so that a bad file fails at once; checked against B
     // once it is loaded.
     let teeth = args
@@ -125,18 +139,6 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     };
     drop((mesh_a, mesh_b));
     let (a, b) = (SharedTree::new(a), SharedTree::new(b));
-    let opts = BiteOptions {
-        axis: args.axis.as_ref().map(|v| DVec3::new(v[0], v[1], v[2])),
-        force: args.force,
-        contact_stiffness: args.contact_stiffness,
-        max_seconds: args.max_seconds,
-        reference,
-        joint_stiffness: args.joint_stiffness,
-        free: args.free,
-        starts: args.starts,
-        spread: args.spread,
-        seed: args.seed,
-    };
     let t0 = std::time::Instant::now();
     let found = bite(&a, &b, &from, &opts)?;
     let mut landmarks = vec![("incisal".to_string(), found.frame.incisal)];

@@ -91,6 +91,52 @@ pub struct Bite {
     pub closings: Option<StatusCounts>,
 }
 
+impl BiteOptions {
+    /// Refuses options outside their limits ([`occlusion_limits`](super::occlusion_limits),
+    /// [`FreeOcclusionOptions`]'s) and non-finite poses, before any body is loaded or built:
+    /// what [`bite`] checks first, without the pair's frame (its axes stand in by z and x).
+    pub fn validate(&self) -> Result<()> {
+        let (closing, fo) = self.closing(DVec3::Z, DVec3::X, None);
+        check_options(&closing)?;
+        if self.free {
+            fo.check()?;
+        }
+        Ok(())
+    }
+
+    /// The closing's options with the pair's up and left.
+    fn closing(
+        &self,
+        up: DVec3,
+        left: DVec3,
+        joints: Option<Joints>,
+    ) -> (OcclusionOptions, FreeOcclusionOptions) {
+        let closing = OcclusionOptions {
+            axis: self.axis.unwrap_or(up),
+            force: self.force,
+            contact_stiffness: self.contact_stiffness.unwrap_or(if self.free {
+                1000.0
+            } else {
+                10.0
+            }),
+            damping: self.force / CLOSING_SPEED,
+            max_seconds: self.max_seconds,
+            joints,
+            ..OcclusionOptions::default()
+        };
+        let fo = FreeOcclusionOptions {
+            closing,
+            lateral: left,
+            starts: self.starts,
+            spread: self.spread,
+            spread_angle: (2.0 * self.spread).to_radians(),
+            seed: self.seed,
+            ..FreeOcclusionOptions::default()
+        };
+        (closing, fo)
+    }
+}
+
 impl Joints {
     /// The temporomandibular joints of a lower jaw B: its condyles on the frame's hinge
     /// axis, [`CONDYLE_HALF_SPAN`] either side of the midline (times the frame's scale),
@@ -123,32 +169,13 @@ pub fn frame_of(a: &SphereTree, b: &SphereTree) -> Result<AnatomicalFrame> {
 /// found (e.g. no points).
 pub fn bite(a: &SharedTree, b: &SharedTree, from: &Pose, opts: &BiteOptions) -> Result<Bite> {
     let frame = frame_of(a, b)?;
-    let closing = OcclusionOptions {
-        axis: opts.axis.unwrap_or(frame.up),
-        force: opts.force,
-        contact_stiffness: opts
-            .contact_stiffness
-            .unwrap_or(if opts.free { 1000.0 } else { 10.0 }),
-        damping: opts.force / CLOSING_SPEED,
-        max_seconds: opts.max_seconds,
-        joints: (!opts.free)
-            .then(|| Joints::temporomandibular(&frame, &opts.reference, opts.joint_stiffness)),
-        ..OcclusionOptions::default()
-    };
-    let fo = FreeOcclusionOptions {
-        closing,
-        lateral: frame.left,
-        starts: opts.starts,
-        spread: opts.spread,
-        spread_angle: (2.0 * opts.spread).to_radians(),
-        seed: opts.seed,
-        ..FreeOcclusionOptions::default()
-    };
-    // The options first (what the user typed), then the bodies and the poses.
+    let joints = (!opts.free)
+        .then(|| Joints::temporomandibular(&frame, &opts.reference, opts.joint_stiffness));
+    let (closing, fo) = opts.closing(frame.up, frame.left, joints);
+    // The options first (what the user typed; the joints' with the pair's frame), then the
+    // bodies and the poses.
+    opts.validate()?;
     check_options(&closing)?;
-    if opts.free {
-        fo.check()?;
-    }
     for (what, pose) in [("start", from), ("reference", &opts.reference)] {
         if !pose.translation.is_finite() || !pose.rotation.is_finite() {
             return Err(Error::InvalidOption(format!(

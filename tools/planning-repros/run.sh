@@ -16,7 +16,7 @@ BINS=()
 for b in "$@"; do BINS+=("$(cd "$(dirname "$b")" && pwd)/$(basename "$b")"); done
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
-(cd "$ROOT" && cargo run --release -q -p innersphere --example write_arches -- "$W/gen" >&2)
+(cd "$ROOT" && cargo run --release -q -p innersphere-dental --example write_arches -- "$W/gen" >&2)
 G="$W/gen"
 
 # run LABEL CHECK BIN ARGS...: one row. CHECK is a shell snippet run after the command in

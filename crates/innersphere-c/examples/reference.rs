@@ -6,10 +6,10 @@
 //! pose and of the haptic loop along the trajectory, through the Rust API.
 
 use innersphere::glam::{DQuat, DVec3};
-use innersphere::haptic::{DeviceClass, HapticLoop, HapticOptions};
 use innersphere::query::TraversalOptions;
 use innersphere::{shapes, BuildOptions, MultipointOptions, Pair, Pose, Resolution, SphereTree};
 use innersphere::{PenetrationOptions, SharedTree};
+use innersphere_haptic::{DeviceClass, HapticLoop, HapticOptions};
 use std::fmt::Write as _;
 use std::path::Path;
 

@@ -4,11 +4,11 @@ use crate::error::{pointer, status, Fail};
 use crate::query::ist_pair;
 use crate::types::ist_pose;
 use crate::{mutable, reference};
-use innersphere::haptic::{
+use innersphere::Pair;
+use innersphere_haptic::{
     CollisionOptions, Coupling, DeviceClass, DeviceLimits, HapticLoop, HapticOptions,
     MultirateLoop, Tick,
 };
-use innersphere::Pair;
 use std::ffi::c_int;
 
 /// A desktop pen device (Geomagic Touch class: 3.3 N, rotations sensed only).
@@ -268,7 +268,7 @@ pub unsafe extern "C" fn ist_haptic_tick(
         let h = unsafe { mutable(haptic, "haptic") }?;
         let d = unsafe { reference(device, "device") }?.to_pose()?;
         let out = unsafe { mutable(out, "out") }?;
-        innersphere::haptic::check_step(dt)?;
+        innersphere_haptic::check_step(dt)?;
         let t: Tick = match &mut h.hl {
             Loop::Single(l) => l.tick_step(&d, dt),
             Loop::Multirate(l) => l.tick_step(&d, dt),

@@ -4,13 +4,13 @@
 
 use crate::histogram::Histogram;
 use crate::motion::Motion;
-use innersphere::contact_map::{ArchContext, Teeth};
 use innersphere::error::num;
 use innersphere::glam::DVec3;
-use innersphere::haptic::{
+use innersphere::{Error, Mesh, Pair, Pose, Result, SphereTree};
+use innersphere_dental::contact_map::{ArchContext, Teeth};
+use innersphere_haptic::{
     CollisionOptions, CollisionStats, HapticLoop, HapticOptions, MultirateLoop, Tick,
 };
-use innersphere::{Error, Mesh, Pair, Pose, Result, SphereTree};
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
@@ -174,7 +174,7 @@ pub fn run(
     // Real time: the collision thread is started at a real-time priority just below the
     // servo's (it inherits the policy), so that neither waits behind ordinary threads and
     // the collision thread never preempts the servo.
-    use innersphere::haptic::realtime::{realtime_priority, SERVO_PRIORITY};
+    use innersphere_haptic::realtime::{realtime_priority, SERVO_PRIORITY};
     let priority = session.realtime && realtime_priority(Some(SERVO_PRIORITY - 1));
     let made = match session.collision {
         None => HapticLoop::new(pair, Pose::IDENTITY, first, opts).map(Looper::Single),

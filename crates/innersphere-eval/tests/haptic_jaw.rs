@@ -8,15 +8,13 @@
 
 use innersphere_testkit::data as common;
 
-use innersphere::contact_map::Teeth;
 use innersphere::glam::DQuat;
-use innersphere::haptic::{
-    occlude, occlude_free, CollisionOptions, DeviceClass, FreeOcclusionOptions, HapticOptions,
-    Joints, OcclusionOptions,
-};
 use innersphere::{BuildOptions, Mesh, Pair, Pose, SharedTree, SphereTree};
+use innersphere_dental::contact_map::Teeth;
+use innersphere_dental::{occlude, occlude_free, FreeOcclusionOptions, Joints, OcclusionOptions};
 use innersphere_eval::haptic::{crown_centres, run, Session};
 use innersphere_eval::motion::{AnatomicalFrame, Motion};
+use innersphere_haptic::{CollisionOptions, DeviceClass, HapticOptions};
 use std::sync::OnceLock;
 
 struct Jaw {
@@ -250,11 +248,11 @@ fn the_final_splint_at_the_found_bite_seats_on_both_arches() {
     let load = |rel: &str| Mesh::load(common::data(rel)).unwrap();
     let a = load("jaw/ofj_p26_maxilla_teeth.stl.gz");
     let b = load("jaw/ofj_p26_mandible_teeth.stl.gz");
-    let s_opts = innersphere::splint::SplintOptions::default();
-    let open = innersphere::splint::least_opening(&a, &b, &bite.pose, &s_opts).unwrap();
+    let s_opts = innersphere_dental::splint::SplintOptions::default();
+    let open = innersphere_dental::splint::least_opening(&a, &b, &bite.pose, &s_opts).unwrap();
     assert!(open > 0.5 && open < 5.0, "opened {open} mm");
-    let pose = innersphere::splint::opened(&a, &b, &bite.pose, open).unwrap();
-    let s = innersphere::splint::make(&a, &b, &pose, &s_opts).unwrap();
+    let pose = innersphere_dental::splint::opened(&a, &b, &bite.pose, open).unwrap();
+    let s = innersphere_dental::splint::make(&a, &b, &pose, &s_opts).unwrap();
     eprintln!("opened {open} mm: {:#?}", s.report);
     innersphere_testkit::splint::assert_seats(&a, &b, &pose, &s_opts, &s);
 }

@@ -2,8 +2,8 @@
 //! about the hinge from the scanned bite (run with `--ignored`). The final splint, at the
 //! bite `occlude` finds, is in `haptic_jaw.rs`, which has the trees.
 
-use innersphere::splint::{self, SplintOptions};
 use innersphere::{Mesh, Pose};
+use innersphere_dental::splint::{self, SplintOptions};
 use innersphere_testkit::data as common;
 use innersphere_testkit::splint::assert_seats;
 

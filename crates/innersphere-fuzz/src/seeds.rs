@@ -7,11 +7,11 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 
 use glam::{DQuat, DVec3};
-use innersphere::contact_map::Teeth;
 use innersphere::mesh::io::{to_obj_bytes, to_stl_bytes};
 use innersphere::shapes;
 use innersphere::tree::{file, SphereTree, TreeMeta, NO_PARENT};
 use innersphere::{Mesh, Pose};
+use innersphere_dental::contact_map::Teeth;
 use innersphere_motion::{Frame, Motion};
 
 /// A tetrahedron, outward facing.

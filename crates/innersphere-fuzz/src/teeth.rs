@@ -8,10 +8,10 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use innersphere::build::Preset;
-use innersphere::contact_map::{check_pair, ArchContext, Jaw, Teeth, TeethFit};
-use innersphere::haptic::DeviceClass;
 use innersphere::input::{read_text_from, TextInput};
 use innersphere::{shapes, Error, Mesh, Pose};
+use innersphere_dental::contact_map::{check_pair, ArchContext, Jaw, Teeth, TeethFit};
+use innersphere_haptic::DeviceClass;
 use innersphere_motion::Scenario;
 
 /// The generated arch pair the teeth are checked against (6 teeth per arch, coarse), made

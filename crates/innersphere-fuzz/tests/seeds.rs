@@ -84,7 +84,7 @@ fn other_seeds_load() {
     }
     // The teeth seeds: the generated arches' own files fit them (the fuzzer starts from
     // accepted files, so that it reaches the checks), the near misses are refused.
-    use innersphere::contact_map::{check_pair, Teeth};
+    use innersphere_dental::contact_map::{check_pair, Teeth};
     let (upper, lower) = innersphere::shapes::arch_pair(0, 6);
     let teeth = seeds("teeth_json");
     let parsed: Vec<_> = teeth

@@ -16,9 +16,9 @@
 
 pub mod clearance;
 pub mod csv;
-/// The anatomical frame of a jaw pair, which lives in the library ([`innersphere::anatomy`]).
+/// The anatomical frame of a jaw pair, which lives in the library ([`innersphere_dental::anatomy`]).
 pub mod frame {
-    pub use innersphere::anatomy::*;
+    pub use innersphere_dental::anatomy::*;
 }
 pub mod generate;
 pub mod press;

@@ -2,7 +2,7 @@
 
 use crate::convert::{error, pose_or_identity};
 use crate::tree::mesh_like;
-use innersphere::contact_map::ContactMap;
+use innersphere_dental::contact_map::ContactMap;
 use innersphere::exact::ExactMesh;
 use numpy::PyArray1;
 use pyo3::prelude::*;

@@ -2,9 +2,7 @@
 
 use crate::convert::{error, pose, pose44, pose7, pose_or_identity, vec3};
 use crate::pair::Pair;
-use innersphere::haptic::{
-    CollisionOptions, DeviceClass, HapticLoop, HapticOptions, MultirateLoop,
-};
+use innersphere_haptic::{CollisionOptions, DeviceClass, HapticLoop, HapticOptions, MultirateLoop};
 use numpy::PyArray1;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -13,7 +11,7 @@ use pyo3::types::PyDict;
 /// What one haptic tick did (units: mm, N, s for the jaw scans in mm).
 #[pyclass(module = "innersphere", name = "Tick", frozen)]
 pub struct Tick {
-    t: innersphere::haptic::Tick,
+    t: innersphere_haptic::Tick,
 }
 
 #[pymethods]
@@ -211,7 +209,7 @@ impl Haptic {
     #[pyo3(signature = (device_pose, dt=0.0))]
     fn tick(&mut self, device_pose: &Bound<'_, PyAny>, dt: f64) -> PyResult<Tick> {
         let p = pose(device_pose, "device_pose")?;
-        innersphere::haptic::check_step(dt).map_err(error)?;
+        innersphere_haptic::check_step(dt).map_err(error)?;
         Ok(Tick {
             t: either!(&mut self.inner, h => h.tick_step(&p, dt)),
         })

@@ -3,7 +3,7 @@
 use crate::convert::{error, json, pose, pose_or_identity};
 use crate::tree::Tree;
 use innersphere::glam::DVec3;
-use innersphere::haptic::{bite, BiteOptions};
+use innersphere_dental::{bite, BiteOptions};
 use pyo3::prelude::*;
 
 /// B (`tree_b`: the lower jaw, or a free cut segment; built by this version, so that it

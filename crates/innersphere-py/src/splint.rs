@@ -2,7 +2,7 @@
 
 use crate::convert::{self, error, json, pose_or_identity};
 use crate::tree::mesh_like;
-use innersphere::splint::{make_opened, Opening, SplintOptions};
+use innersphere_dental::splint::{make_opened, Opening, SplintOptions};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;

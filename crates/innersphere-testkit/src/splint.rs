@@ -4,8 +4,8 @@
 use innersphere::glam::DVec3;
 use innersphere::mesh::bvh::TriangleBvh;
 use innersphere::mesh::winding::FastWinding;
-use innersphere::splint::{self, SplintOptions};
 use innersphere::{Mesh, Pose};
+use innersphere_dental::splint::{self, SplintOptions};
 use std::collections::HashMap;
 
 /// The splint `s` between `a` and `b` (B at `pose`) is a printable wafer that seats, each

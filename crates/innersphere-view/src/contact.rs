@@ -1,5 +1,5 @@
 //! The contact map: both meshes coloured by their signed gap to each other
-//! ([`innersphere::contact_map`]), recomputed as B moves, in a worker thread of its own.
+//! ([`innersphere_dental::contact_map`]), recomputed as B moves, in a worker thread of its own.
 //!
 //! The 1 kHz loop knows nothing of it. The worker reads B's drawn pose from the HTTP side's
 //! end of the loop's state buffer (the mutex the HTTP handlers take, never the loop), always
@@ -13,9 +13,9 @@
 
 use crate::encode;
 use bytes::Bytes;
-use innersphere::contact_map::{summarise, ContactMap, RegionSummary, Teeth};
 use innersphere::exact::ExactMesh;
 use innersphere::{Mesh, Pose};
+use innersphere_dental::contact_map::{summarise, ContactMap, RegionSummary, Teeth};
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock};

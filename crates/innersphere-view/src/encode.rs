@@ -5,9 +5,9 @@
 
 use crate::contact::{Snapshot, Status, CAP};
 use crate::sim::{LoopState, HISTORY};
-use innersphere::contact_map::{gap_colour, RegionSummary, LEGEND};
 use innersphere::glam::DVec3;
 use innersphere::{Mesh, Patch, Pose, SphereTree};
+use innersphere_dental::contact_map::{gap_colour, RegionSummary, LEGEND};
 use serde_json::{json, Value};
 
 fn v3(v: DVec3) -> [f64; 3] {

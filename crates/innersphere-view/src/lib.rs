@@ -4,7 +4,7 @@
 //! vendored and embedded) draws it at screen rate. In contact-map mode a worker thread of
 //! its own colours both meshes by their gap to each other as B moves. The server holds no
 //! collision logic of its own: every answer comes from [`innersphere::Pair`],
-//! [`innersphere::haptic::MultirateLoop`] and [`innersphere::contact_map`].
+//! [`innersphere_haptic::MultirateLoop`] and [`innersphere_dental::contact_map`].
 //! `docs/VIEWER.md` describes the page and the API.
 
 mod assets;
@@ -20,8 +20,8 @@ pub use http::{
 };
 pub use sim::{LoopState, Mode};
 
-use innersphere::contact_map::Teeth;
 use innersphere::{BuildOptions, Mesh, Resolution, SharedTree, SphereTree};
+use innersphere_dental::contact_map::Teeth;
 use innersphere_motion::Motion;
 
 /// What the viewer shows: two trees, optionally their meshes, optionally a motion of B.
@@ -81,7 +81,7 @@ impl Scene {
     }
 
     /// Checks the teeth files against the drawn meshes as `ist occlusion-map` does
-    /// ([`innersphere::contact_map::check_pair`], B at its start pose, else at the identity:
+    /// ([`innersphere_dental::contact_map::check_pair`], B at its start pose, else at the identity:
     /// the frame the arches were scanned in): an error when a file does not fit its arch,
     /// else the warnings (a tooth that labels no vertex). Teeth without both meshes are an
     /// error: the per-tooth list is made on the meshes.
@@ -96,7 +96,7 @@ impl Scene {
             ));
         };
         let pose = self.start.unwrap_or(innersphere::Pose::IDENTITY);
-        let (fa, fb) = innersphere::contact_map::check_pair(
+        let (fa, fb) = innersphere_dental::contact_map::check_pair(
             a,
             self.teeth_a.as_ref(),
             b,

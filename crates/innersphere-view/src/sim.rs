@@ -4,8 +4,8 @@
 //! waits for the HTTP side, and no tick allocates.
 
 use innersphere::glam::DVec3;
-use innersphere::haptic::{CollisionOptions, DeviceClass, HapticOptions, MultirateLoop};
 use innersphere::{DistanceOptions, Pair, Patch, PenetrationOptions, Pose, SharedTree};
+use innersphere_haptic::{CollisionOptions, DeviceClass, HapticOptions, MultirateLoop};
 use innersphere_motion::Motion;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -190,8 +190,8 @@ pub(crate) fn run(
     let mut last_mode = Mode::Free;
     let mut seek_id = 0u64;
     let mut rate_from = (start, 0u64, 0u64);
-    state.realtime = innersphere::haptic::realtime::realtime_priority(Some(
-        innersphere::haptic::realtime::SERVO_PRIORITY,
+    state.realtime = innersphere_haptic::realtime::realtime_priority(Some(
+        innersphere_haptic::realtime::SERVO_PRIORITY,
     ));
     while !io.stop.load(Ordering::Relaxed) {
         deadline += period;

@@ -238,15 +238,15 @@ fn bad_requests_get_a_4xx_with_a_message() {
 /// The band index the page gets for a gap: the colour scale's own (`gap_colour`), as an
 /// index into `LEGEND`, or the far band after it.
 fn band_of(gap: f64) -> u8 {
-    use innersphere::contact_map::{gap_colour, LEGEND};
+    use innersphere_dental::contact_map::{gap_colour, LEGEND};
     let c = gap_colour(gap);
     LEGEND.iter().position(|l| l.2 == c).unwrap_or(LEGEND.len()) as u8
 }
 
 #[test]
 fn the_contact_map_is_the_library_s_at_the_map_s_pose() {
-    use innersphere::contact_map::ContactMap;
     use innersphere::exact::ExactMesh;
+    use innersphere_dental::contact_map::ContactMap;
     let s = server();
     let (code, info) = json("GET", "/api/info", "");
     assert_eq!(code, 200);

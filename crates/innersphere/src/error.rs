@@ -43,7 +43,7 @@ pub enum Error {
     Pose(#[from] crate::pose::PoseError),
     /// A text input that cannot be used: a teeth-axes JSON (or landmarks) file that is too
     /// large, not text, malformed, or does not fit the arch it labels
-    /// ([`input`](crate::input), [`contact_map::Teeth`](crate::contact_map::Teeth)).
+    /// ([`input`](crate::input), the teeth files of `innersphere-dental`).
     #[error("{path}: {message}")]
     Input {
         /// The file.

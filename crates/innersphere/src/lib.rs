@@ -38,28 +38,22 @@
 //! query/      the Pair and one file per query kind, over a kernel and the fronts
 //! exact/      exact mesh-mesh distance, intersection and penetration depth (also the
 //!             accuracy reference of the sphere queries)
-//! anatomy.rs  the anatomical frame of a jaw pair (occlusal up, anterior, hinge)
-//! contact_map/ every vertex's signed gap to the other arch, per tooth
-//! splint/     the occlusal splint (surgical wafer) between two arches at a pose
-//! haptic/     6-DOF haptic rendering: the contact model, the servo, the single-thread and
-//!             multi-rate loops, occlusion
 //! input.rs    reading the small text inputs (teeth files, motions) within a size limit
 //! output.rs   writing outputs: never onto an input, through a temporary file renamed
 //!             into place
 //! ```
 //!
-//! Motion files and generated motions are the `innersphere-motion` crate; replay,
-//! benchmarks and the paper's figures the `innersphere-eval` crate.
+//! Haptic rendering on these queries is the `innersphere-haptic` crate; dental planning (the
+//! arches' frame, the bite, the contact map, the wafer) the `innersphere-dental` crate;
+//! motion files and generated motions the `innersphere-motion` crate; replay, benchmarks and
+//! the paper's figures the `innersphere-eval` crate.
 
 #![deny(missing_docs)]
 
-pub mod anatomy;
 pub mod build;
-pub mod contact_map;
 pub mod error;
 pub mod exact;
 pub mod field;
-pub mod haptic;
 pub mod hierarchy;
 pub mod input;
 pub mod mesh;
@@ -69,7 +63,6 @@ pub mod pose;
 pub mod progress;
 pub mod query;
 pub mod shapes;
-pub mod splint;
 pub mod tree;
 
 pub use build::{BuildOptions, BuildReport, Resolution};

@@ -1,12 +1,11 @@
 //! The library's modules import one way, down a ladder: pose ← error ← output, progress ←
-//! mesh ← shapes, anatomy, input ← tree ← field ← packing ← hierarchy ← build, exact ← query,
-//! contact_map, splint ← haptic
+//! mesh ← shapes, input ← tree ← field ← packing ← hierarchy ← build, exact ← query
 //! (`tree` is the finished tree's type and file, below the pipeline stages that make it). Reads
 //! every `crate::…` path in the sources (outside their `#[cfg(test)]` modules, which may
 //! build fixtures from a higher layer) and fails on an import from a layer above, or through
 //! the crate root's re-exports (`crate::Pose`), which would hide what depends on what.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The layer of a top-level module of the crate.
 fn layer(module: &str) -> Option<u32> {
@@ -15,78 +14,93 @@ fn layer(module: &str) -> Option<u32> {
         "error" => 1,
         "output" | "progress" => 2,
         "mesh" => 3,
-        "shapes" | "anatomy" | "input" => 4,
+        "shapes" | "input" => 4,
         "tree" => 5,
         "field" => 6,
         "packing" => 7,
         "hierarchy" => 8,
         "build" | "exact" => 9,
-        "contact_map" => 10,
-        "query" | "splint" => 10,
-        "haptic" => 11,
+        "query" => 10,
         _ => return None,
     })
-}
-
-fn files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for e in std::fs::read_dir(dir).unwrap() {
-        let p = e.unwrap().path();
-        if p.is_dir() {
-            files(&p, out);
-        } else if p.extension().is_some_and(|x| x == "rs") {
-            out.push(p);
-        }
-    }
 }
 
 #[test]
 fn modules_import_down_the_ladder_by_their_own_paths() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut all = vec![];
-    files(&src, &mut all);
-    let mut wrong = vec![];
-    for p in &all {
-        let rel = p
-            .strip_prefix(&src)
-            .unwrap()
-            .to_string_lossy()
-            .replace('\\', "/");
-        if rel == "lib.rs" {
-            continue;
-        }
-        let top = rel.split('/').next().unwrap().trim_end_matches(".rs");
-        let own = layer(top).unwrap_or_else(|| panic!("{rel}: module {top} has no layer"));
-        let text = std::fs::read_to_string(p).unwrap();
-        let code = text.split("#[cfg(test)]").next().unwrap();
-        for (n, line) in code.lines().enumerate() {
-            if line.trim_start().starts_with("//") {
-                continue;
-            }
-            for (i, _) in line.match_indices("crate::") {
-                let rest = &line[i + "crate::".len()..];
-                let name: String = rest
-                    .chars()
-                    .take_while(|c| c.is_alphanumeric() || *c == '_')
-                    .collect();
-                let at = format!("{rel}:{}", n + 1);
-                if name.starts_with(|c: char| c.is_ascii_uppercase()) || name.is_empty() {
-                    wrong.push(format!("{at}: crate::{name} through the crate root"));
-                    continue;
-                }
-                match layer(&name) {
-                    Some(l) if l > own => {
-                        wrong.push(format!("{at}: {top} imports {name}, a higher layer"))
-                    }
-                    None => wrong.push(format!("{at}: crate::{name} is no module with a layer")),
-                    _ => {}
-                }
-            }
-        }
-    }
+    let wrong = innersphere_testkit::layering::imports_against_the_ladder(&src, layer);
     assert!(
         wrong.is_empty(),
         "{} imports against the ladder:\n{}",
         wrong.len(),
         wrong.join("\n")
     );
+}
+
+/// The workspace's crates depend one way: the core (`innersphere`) ← `innersphere-haptic` ←
+/// `innersphere-dental` ← `innersphere-motion` ← the doors and tools (`ist`, the C ABI,
+/// Python, the viewer, eval, fuzz). Reads every crate's `Cargo.toml` (normal, build and
+/// target dependencies; dev-dependencies may reach up, as a test of a lower crate may use
+/// a test helper) and fails on a dependency on a crate of the same or a higher rung.
+#[test]
+fn crates_depend_down_the_ladder() {
+    fn rung(name: &str) -> Option<u32> {
+        Some(match name {
+            "innersphere" => 0,
+            "innersphere-haptic" => 1,
+            "innersphere-dental" => 2,
+            "innersphere-motion" => 3,
+            "innersphere-testkit" => 4,
+            "innersphere-eval" | "innersphere-view" => 5,
+            "ist" | "innersphere-c" | "innersphere-py" | "innersphere-fuzz" => 6,
+            _ => return None,
+        })
+    }
+    let crates = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut wrong = vec![];
+    let mut seen = 0;
+    for e in std::fs::read_dir(&crates).unwrap() {
+        let manifest = e.unwrap().path().join("Cargo.toml");
+        let Ok(text) = std::fs::read_to_string(&manifest) else {
+            continue;
+        };
+        let name = text
+            .lines()
+            .find_map(|l| l.strip_prefix("name = \""))
+            .map(|n| n.trim_end_matches('"').to_string())
+            .unwrap();
+        let Some(own) = rung(&name) else {
+            wrong.push(format!("{name}: a crate with no rung"));
+            continue;
+        };
+        seen += 1;
+        let mut section = String::new();
+        for line in text.lines() {
+            let line = line.trim();
+            if line.starts_with('[') {
+                section = line.to_string();
+                continue;
+            }
+            let normal = section == "[dependencies]"
+                || section == "[build-dependencies]"
+                || (section.starts_with("[target.") && section.ends_with(".dependencies]"));
+            let dep: String = line
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '-' || *c == '_')
+                .collect();
+            if let (true, Some(r)) = (normal, rung(&dep)) {
+                if r >= own && dep != name {
+                    wrong.push(format!(
+                        "{name} depends on {dep}, a rung at or above its own"
+                    ));
+                }
+            }
+        }
+    }
+    assert!(
+        seen >= 3,
+        "found only {seen} crates under {}",
+        crates.display()
+    );
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }

@@ -6,69 +6,16 @@
 //! thread's allocations: each test holds a lock from its first line to its last (its setup
 //! allocates too), so that one test's peak never includes another's.
 
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Mutex, MutexGuard};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use innersphere::{Error, Mesh, SphereTree};
 
-struct Peak;
-
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-fn grew(bytes: usize) {
-    let now = LIVE.fetch_add(bytes, Ordering::Relaxed) + bytes;
-    PEAK.fetch_max(now, Ordering::Relaxed);
-}
-
-unsafe impl GlobalAlloc for Peak {
-    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        grew(l.size());
-        unsafe { System.alloc(l) }
-    }
-    unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
-        grew(l.size());
-        unsafe { System.alloc_zeroed(l) }
-    }
-    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
-        // Counted as the new block appearing before the old one goes (what a moving
-        // realloc does).
-        grew(n);
-        LIVE.fetch_sub(l.size(), Ordering::Relaxed);
-        unsafe { System.realloc(p, l, n) }
-    }
-    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-        LIVE.fetch_sub(l.size(), Ordering::Relaxed);
-        unsafe { System.dealloc(p, l) }
-    }
-}
+use innersphere_testkit::peak::{alone, fifo, measured, Peak, MIB};
 
 #[global_allocator]
 static GLOBAL: Peak = Peak;
-
-static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
-
-const MIB: usize = 1 << 20;
-
-/// Held for the whole of each test, setup included.
-fn alone() -> MutexGuard<'static, ()> {
-    ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-/// Runs `f` and returns its result, the heap bytes it held at its peak, and its time (the
-/// caller holds [`alone`]).
-fn measured<T>(f: impl FnOnce() -> T) -> (T, usize, Duration) {
-    let base = LIVE.load(Ordering::Relaxed);
-    PEAK.store(base, Ordering::Relaxed);
-    let t = Instant::now();
-    let out = f();
-    let elapsed = t.elapsed();
-    (out, PEAK.load(Ordering::Relaxed) - base, elapsed)
-}
 
 fn tmp(name: &str) -> PathBuf {
     Path::new(env!("CARGO_TARGET_TMPDIR"))
@@ -233,74 +180,6 @@ fn a_pipe_is_read_only_as_far_as_the_tree_header_declares() {
         "{} MiB at the peak",
         peak as f64 / MIB as f64
     );
-}
-
-/// A FIFO at `path` fed by a thread with `block` repeated until `total` bytes or the reader
-/// goes; `None` where there is no mkfifo.
-fn fifo(path: &Path, block: &'static [u8], total: usize) -> Option<std::thread::JoinHandle<()>> {
-    let made = std::process::Command::new("mkfifo").arg(path).status();
-    if !made.is_ok_and(|s| s.success()) {
-        return None;
-    }
-    let path = path.to_path_buf();
-    Some(std::thread::spawn(move || {
-        let Ok(mut f) = std::fs::OpenOptions::new().write(true).open(&path) else {
-            return;
-        };
-        let mut sent = 0;
-        while sent < total && f.write_all(block).is_ok() {
-            sent += block.len();
-        }
-    }))
-}
-
-/// Teeth-axes files (`ist occlusion-map --teeth-a/-b`, `ist view`, `ist occlude
-/// --landmarks`): devices, a sparse 100 MB file and a FIFO of endless JSON-like text are
-/// refused after at most the 1 MiB limit (plus a 64 KiB chunk), naming the limit.
-#[test]
-fn teeth_files_are_read_within_their_limit() {
-    use innersphere::contact_map::Teeth;
-    let _alone = alone();
-    let sparse = tmp("sparse.json");
-    std::fs::File::create(&sparse)
-        .unwrap()
-        .set_len(100 * MIB as u64)
-        .unwrap();
-    let mut cases: Vec<(PathBuf, usize)> = vec![(sparse.clone(), MIB / 4)];
-    for dev in ["/dev/zero", "/dev/urandom"] {
-        if Path::new(dev).exists() {
-            cases.push((PathBuf::from(dev), MIB / 4));
-        }
-    }
-    for (path, most) in cases {
-        let (r, peak, time) = measured(|| Teeth::load(&path));
-        let e = r.unwrap_err().to_string();
-        assert!(e.contains("1048576"), "{}: {e}", path.display());
-        assert!(peak < most, "{}: {peak} bytes at the peak", path.display());
-        assert!(
-            time < Duration::from_secs(1),
-            "{}: {time:?}",
-            path.display()
-        );
-    }
-    std::fs::remove_file(&sparse).ok();
-    // A pipe of text that never ends: read up to the limit, not beyond.
-    let pipe = tmp("pipe.json");
-    if let Some(writer) = fifo(&pipe, b"{\"1\": {\"c\": [1, 2, 3]}, ", 300 * MIB) {
-        let (r, peak, _) = measured(|| Teeth::load(&pipe));
-        writer.join().unwrap();
-        std::fs::remove_file(&pipe).ok();
-        let e = r.unwrap_err().to_string();
-        assert!(
-            e.contains("larger than the 1048576-byte (1 MiB) limit"),
-            "{e}"
-        );
-        assert!(
-            peak < 4 * MIB,
-            "{} MiB at the peak",
-            peak as f64 / MIB as f64
-        );
-    }
 }
 
 /// `/dev/zero` and random bytes given as a text-format mesh (OBJ, OFF, PLY: no header that

@@ -1,10 +1,10 @@
 //! `ist haptic`: the library's 6-DOF haptic loop over a recorded device trajectory.
 
 use anyhow::Context;
-use innersphere::haptic::{CollisionOptions, DeviceClass, HapticOptions};
 use innersphere::Pair;
 use innersphere_eval::haptic::{run as run_session, trace_csv, Session};
 use innersphere_eval::motion::Motion;
+use innersphere_haptic::{CollisionOptions, DeviceClass, HapticOptions};
 use std::path::PathBuf;
 
 /// Arguments of `ist haptic`. Units: millimetres, newtons, seconds (torques in N·mm).
@@ -83,11 +83,11 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     opts.budget = args.budget_us.map_or(1.0 / args.rate, |us| us * 1e-6);
     if let Some(k) = args.stiffness {
         opts.coupling.stiffness = k;
-        opts.coupling.angular_stiffness = k * innersphere::haptic::device::LEVER.powi(2);
+        opts.coupling.angular_stiffness = k * innersphere_haptic::device::LEVER.powi(2);
     }
     if let Some(b) = args.damping {
         opts.coupling.damping = b;
-        opts.coupling.angular_damping = b * innersphere::haptic::device::LEVER.powi(2);
+        opts.coupling.angular_damping = b * innersphere_haptic::device::LEVER.powi(2);
     }
     if let Some(k) = args.contact_stiffness {
         opts.contact_stiffness = k;

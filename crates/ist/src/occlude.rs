@@ -2,10 +2,10 @@
 //! library's automatic occlusion), and say how far the bite found is from a reference.
 
 use anyhow::Context;
-use innersphere::contact_map::Teeth;
 use innersphere::glam::DVec3;
-use innersphere::haptic::{bite, BiteOptions, OcclusionStatus};
 use innersphere::{Pose, SharedTree};
+use innersphere_dental::contact_map::Teeth;
+use innersphere_dental::{bite, BiteOptions, OcclusionStatus};
 use innersphere_eval::haptic::{check_landmarks, crown_centres};
 use serde_json::json;
 use std::path::PathBuf;

@@ -2,11 +2,11 @@
 //! f64 from the meshes), as PLY files, with the contacts per tooth.
 
 use anyhow::Context;
-use innersphere::contact_map::{
-    check_pair, save_ply, summarise, ContactMap, Teeth, TeethFit, LEGEND, MAP_FILE, SPOT_GAP,
-};
 use innersphere::exact::ExactMesh;
 use innersphere::Pose;
+use innersphere_dental::contact_map::{
+    check_pair, save_ply, summarise, ContactMap, Teeth, TeethFit, LEGEND, MAP_FILE, SPOT_GAP,
+};
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;

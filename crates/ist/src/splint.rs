@@ -2,8 +2,8 @@
 //! as a watertight binary STL, with its measurements.
 
 use anyhow::Context;
-use innersphere::splint::{self, Opening, SplintOptions};
 use innersphere::Pose;
+use innersphere_dental::splint::{self, Opening, SplintOptions};
 use std::path::PathBuf;
 
 /// Arguments of `ist splint`. Lengths in the meshes' units (millimetres for dental scans).

@@ -1,8 +1,8 @@
 //! `ist view`: the live 3D view in the browser (the innersphere-view crate's server).
 
 use anyhow::Context;
-use innersphere::contact_map::Teeth;
 use innersphere::SharedTree;
+use innersphere_dental::contact_map::Teeth;
 use innersphere_eval::motion::Motion;
 use innersphere_view::{serve, Scene, ServeOptions};
 use std::path::PathBuf;

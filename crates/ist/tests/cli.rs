@@ -1172,7 +1172,10 @@ fn occlusion_map_writes_the_signed_gaps_of_both_meshes() {
                 assert!(g > 0.0, "{p}: {g}");
                 n_out += 1;
             }
-            assert_eq!(rgb, innersphere::contact_map::gap_colour(g as f32 as f64));
+            assert_eq!(
+                rgb,
+                innersphere_dental::contact_map::gap_colour(g as f32 as f64)
+            );
         }
         assert!(n_in > 0 && n_out > 0, "{}", ply.display());
     }

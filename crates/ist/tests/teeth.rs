@@ -7,8 +7,8 @@
 mod support;
 use support::{code, ist, s, stderr, stdout, TempDir};
 
-use innersphere::contact_map::Teeth;
 use innersphere::shapes;
+use innersphere_dental::contact_map::Teeth;
 use std::path::{Path, PathBuf};
 
 struct Arches {

@@ -2,7 +2,6 @@
 //! ([`inside`]) and the exact unsigned distance of every inside voxel to the surface
 //! ([`distance`]); in the thick parts of a body only a coarse lattice of voxels ([`thick`]).
 
-pub mod columns;
 pub mod distance;
 pub mod grid;
 pub mod inside;

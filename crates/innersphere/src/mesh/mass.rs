@@ -1,5 +1,5 @@
 //! Mass properties of the solid a closed mesh encloses: volume, centre of mass and inertia
-//! tensor, per unit density. The haptic tool ([`crate::haptic`]) is a rigid body with these.
+//! tensor, per unit density. The haptic tool (`innersphere-haptic`) is a rigid body with these.
 
 use super::Mesh;
 use glam::{DMat3, DVec3};

@@ -10,7 +10,7 @@ pub mod ray;
 pub mod report;
 pub mod union_find;
 pub mod unit;
-pub(crate) mod untangle;
+pub mod untangle;
 pub mod winding;
 
 pub use io::{load, load_bytes, save, save_obj, save_stl, Format, SAVED_MESH};

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 /// and moves the corners after. `outside` should be a fair part of a cell (the callers use a
 /// quarter): a value near zero puts the crossings on the opened corner itself, and the
 /// vertices of the cells around it on top of each other.
-pub(crate) fn untangle(sdf: &mut [f32], [nx, ny, nz]: [usize; 3], outside: f32) {
+pub fn untangle(sdf: &mut [f32], [nx, ny, nz]: [usize; 3], outside: f32) {
     let idx = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
     loop {
         let grid = &*sdf;

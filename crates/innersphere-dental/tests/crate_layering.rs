@@ -1,0 +1,28 @@
+//! The crate's modules import one way, down a ladder: anatomy, columns, occlusion_status ← contact_map ← the bite (occlusion, its limits, reach, bite, free_occlusion) ← splint. Reads every `crate::…` path in
+//! the sources (outside their `#[cfg(test)]` modules) and fails on an import from a rung above,
+//! or through the crate root's re-exports.
+
+use std::path::Path;
+
+/// The rung of a top-level module of the crate.
+fn layer(module: &str) -> Option<u32> {
+    Some(match module {
+        "anatomy" | "columns" | "occlusion_status" => 0,
+        "contact_map" => 1,
+        "occlusion" | "occlusion_limits" | "reach" | "bite" | "free_occlusion" => 2,
+        "splint" => 3,
+        _ => return None,
+    })
+}
+
+#[test]
+fn modules_import_down_the_ladder_by_their_own_paths() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let wrong = innersphere_testkit::layering::imports_against_the_ladder(&src, layer);
+    assert!(
+        wrong.is_empty(),
+        "{} imports against the ladder:\n{}",
+        wrong.len(),
+        wrong.join("\n")
+    );
+}

@@ -82,7 +82,7 @@ pub const MAX_STARTS: usize = 1000;
 /// intercuspation one tooth over, which is no longer the bite around the start.
 pub const MAX_SPREAD: f64 = 10.0;
 /// The widest spread of yaw (degrees): twice [`MAX_SPREAD`] in degrees, as
-/// [`bite`](crate::bite) spreads it (20° turns the molars of an arch ±8 mm about its centre).
+/// [`bite`](fn@crate::bite) spreads it (20° turns the molars of an arch ±8 mm about its centre).
 pub const MAX_SPREAD_DEGREES: f64 = 20.0;
 
 impl FreeOcclusionOptions {

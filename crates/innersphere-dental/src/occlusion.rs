@@ -32,7 +32,7 @@ pub struct OcclusionOptions {
     pub force: f64,
     /// Penalty force per unit of penetration volume (N/mm³), at most 1e5.
     pub contact_stiffness: f64,
-    /// Contact damping (s), as [`HapticOptions::contact_damping`](crate::HapticOptions::contact_damping).
+    /// Contact damping (s), as [`HapticOptions::contact_damping`](innersphere_haptic::HapticOptions::contact_damping).
     pub contact_damping: f64,
     /// Viscous damping of B's motion (N·s/mm); rotations get `damping × r²` N·mm·s/rad,
     /// `r` B's radius of gyration. It sets how fast B closes (`force / damping` mm/s in free

@@ -14,7 +14,7 @@
 //!   pair 0.28 mm deep; up to 20 N with it, and up to 1000 N with a stiff 500 N/mm³.
 //! - **The step**: in free flight B closes at `force / damping`; one step moves it at most
 //!   [`MAX_STEP_TRAVEL`], a tenth of the deepest overlap the force limit allows, so that no
-//!   contact is stepped over (the joints' planner, [`bite`](crate::bite), scales the damping
+//!   contact is stepped over (the joints' planner, [`bite`](fn@crate::bite), scales the damping
 //!   with the force so that every closing runs at 5 mm/s).
 //! - **The contact stiffness** at most [`MAX_CONTACT_STIFFNESS`]: at 1e5 N/mm³ the jaw pair
 //!   already rests 0.014 mm deep under 5 N, a seventh of the jaw preset's 0.1 mm voxel, on

@@ -1,4 +1,4 @@
-//! Whether B can bite A from a pose: the checks [`bite`](crate::bite) makes before any
+//! Whether B can bite A from a pose: the checks [`bite`](fn@crate::bite) makes before any
 //! closing, each refusal a sentence a surgeon understands. A closing from a pose that fails
 //! them ends far from any bite (through A, beside it, or nowhere near), so such poses are
 //! refused rather than closed.

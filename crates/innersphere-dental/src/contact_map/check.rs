@@ -217,7 +217,7 @@ impl Teeth {
         }
     }
 
-    /// Checks that the file fits the arch it labels (see the [module docs](self)): refuses a
+    /// Checks that the file fits the arch it labels (see the docs of this module, `contact_map::check`): refuses a
     /// file that mixes arches, holds the other arch's teeth where `ctx.jaw` says which arch
     /// this is, has crown centres outside the arch (saying whether another unit, the other
     /// arch or another patient or frame is the likely cause), or whose centres lie inside the

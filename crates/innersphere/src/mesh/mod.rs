@@ -90,7 +90,7 @@ impl Mesh {
     }
 
     /// [`Mesh::load`] of a file whose coordinates are in `unit`, converted to millimetres
-    /// ([`unit`]): the unit every preset and planning tool assumes. Refused when the
+    /// ([`unit`](mod@unit)): the unit every preset and planning tool assumes. Refused when the
     /// conversion carries a coordinate beyond [`MAX_COORDINATE`].
     pub fn load_in(path: impl AsRef<std::path::Path>, unit: Unit) -> crate::error::Result<Mesh> {
         let mut mesh = io::load(path.as_ref())?;

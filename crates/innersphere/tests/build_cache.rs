@@ -586,3 +586,29 @@ fn build_cache_soak() {
         .sum();
     assert!(total <= bound, "{total} bytes over the bound {bound}");
 }
+
+/// Builders that find no cache subfolder race to make it: each that saw none and then found
+/// another's freshly renamed subfolder refused it as "not made by the cache" (the racing
+/// builders' test failed now and then). Eight threads prepare one fresh folder at once, over
+/// and over: every one succeeds.
+#[test]
+fn preparing_one_folder_on_many_threads_at_once_always_succeeds() {
+    for _ in 0..300 {
+        let root = tempfile::tempdir().unwrap();
+        let start = std::sync::Barrier::new(8);
+        let results: Vec<_> = std::thread::scope(|s| {
+            let workers: Vec<_> = (0..8)
+                .map(|_| {
+                    s.spawn(|| {
+                        start.wait();
+                        BuildCache::new(root.path(), 1 << 20).prepare()
+                    })
+                })
+                .collect();
+            workers.into_iter().map(|w| w.join().unwrap()).collect()
+        });
+        for r in results {
+            r.unwrap();
+        }
+    }
+}

@@ -148,6 +148,11 @@ impl BuildCache {
             })?,
         }
         if let Ok(m) = std::fs::symlink_metadata(&sub) {
+            // Another builder may have renamed its tagged subfolder into place since the
+            // first look.
+            if is_tagged(&sub) {
+                return Ok(());
+            }
             return Err(not_ours(&sub, m.is_dir()));
         }
         // Made beside it with its tag, then renamed into place: no process ever sees the

@@ -85,14 +85,14 @@ fn every_query_of_pair_reaches_c_python_and_ist_query() {
     );
 }
 
-/// The planning tools of the library (offline: meshes in, files and measurements out) reach
+/// The planning tools of the dental crate (offline: meshes in, files and measurements out) reach
 /// `ist` and the Python module. Not the C ABI: a C or C++ program links the library for its
 /// servo loop and queries; the planning tools read and write files and take seconds, and a C
 /// program runs `ist` for them (its JSON is the interface).
 #[test]
 fn every_planning_tool_reaches_ist_and_python() {
     let stubs = read("crates/innersphere-py/python/innersphere/_innersphere.pyi");
-    let lib = read("crates/innersphere/src/lib.rs");
+    let lib = read("crates/innersphere-dental/src/lib.rs");
     let help = Command::new(env!("CARGO_BIN_EXE_ist"))
         .arg("--help")
         .output()
@@ -102,7 +102,7 @@ fn every_planning_tool_reaches_ist_and_python() {
     for (module, cmd, py) in [
         ("contact_map", "occlusion-map", "contact_map"),
         ("splint", "splint", "splint"),
-        ("haptic", "occlude", "occlude"),
+        ("bite", "occlude", "occlude"),
     ] {
         assert!(lib.contains(&format!("pub mod {module};")), "{module}");
         assert!(help.contains(&format!("  {cmd} ")), "ist {cmd} missing");

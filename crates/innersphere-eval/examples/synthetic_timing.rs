@@ -28,7 +28,7 @@ fn main() {
     let t = Instant::now();
     let meta = innersphere::tree::TreeMeta::unmeasured(4, h, [0.0; 3], [0.0; 3]);
     let (tree, stats) =
-        innersphere::hierarchy::build(&spheres, &Default::default(), meta, &Silent).unwrap();
+        innersphere::build::tree_of_spheres(&spheres, &Default::default(), meta, &Silent).unwrap();
     println!(
         "nodes {} depth {} hierarchy {:.2}s {:?}",
         tree.len(),

@@ -2,9 +2,10 @@
 //! pass each timing statistic comes from, with an injected clock.
 
 use glam::DVec3;
+use innersphere::build::tree_of_spheres;
 use innersphere::exact::ExactMesh;
 use innersphere::field::{DistanceField, VoxelGrid};
-use innersphere::hierarchy::{self, HierarchyOptions};
+use innersphere::hierarchy::HierarchyOptions;
 use innersphere::packing::{self, PackingOptions};
 use innersphere::progress::Silent;
 use innersphere::tree::TreeMeta;
@@ -33,7 +34,7 @@ fn ball_tree_of(r: f64) -> SharedTree {
         ..TreeMeta::unmeasured(4, 0.1, [-1.0; 3], [1.0; 3])
     };
     SharedTree::new(
-        hierarchy::build(&spheres, &HierarchyOptions::default(), meta, &Silent)
+        tree_of_spheres(&spheres, &HierarchyOptions::default(), meta, &Silent)
             .unwrap()
             .0,
     )

@@ -2,8 +2,9 @@
 //! they are tested independently of the mesh pipeline.
 
 use glam::DVec3;
+use innersphere::build::tree_of_spheres;
 use innersphere::field::{DistanceField, VoxelGrid};
-use innersphere::hierarchy::{self, HierarchyOptions};
+use innersphere::hierarchy::HierarchyOptions;
 use innersphere::packing::{self, PackingOptions, Sphere};
 use innersphere::progress::Silent;
 use innersphere::tree::{file, SphereTree, TreeMeta};
@@ -143,7 +144,7 @@ fn box_packing_and_tree() {
     // The first sphere is the largest possible one.
     assert!((spheres[0].radius - 0.4).abs() < 0.05);
     let (tree, stats) =
-        hierarchy::build(&spheres, &HierarchyOptions::default(), meta(), &Silent).unwrap();
+        tree_of_spheres(&spheres, &HierarchyOptions::default(), meta(), &Silent).unwrap();
     assert_tree_invariants(&tree, &spheres);
     assert!(stats.enclosing_ratio_mean < 1.0 + 1e-6, "{stats:?}");
     // Coverage of a box is substantial.
@@ -186,8 +187,8 @@ fn hierarchy_is_deterministic_and_round_trips_through_the_file_format() {
             fanout,
             ..Default::default()
         };
-        let (a, _) = hierarchy::build(&spheres, &opts, meta(), &Silent).unwrap();
-        let (b, _) = hierarchy::build(&spheres, &opts, meta(), &Silent).unwrap();
+        let (a, _) = tree_of_spheres(&spheres, &opts, meta(), &Silent).unwrap();
+        let (b, _) = tree_of_spheres(&spheres, &opts, meta(), &Silent).unwrap();
         let bytes = file::to_bytes(&a);
         assert_eq!(
             bytes,
@@ -208,7 +209,7 @@ fn corrupt_tree_files_are_errors() {
     let field = analytic_field(-half, half, 0.1, &sdf);
     let spheres = packing::pack(&field, &PackingOptions::default(), None, &Silent);
     let (tree, _) =
-        hierarchy::build(&spheres, &HierarchyOptions::default(), meta(), &Silent).unwrap();
+        tree_of_spheres(&spheres, &HierarchyOptions::default(), meta(), &Silent).unwrap();
     let bytes = file::to_bytes(&tree);
     // Every truncation.
     for len in (0..bytes.len()).step_by(7) {
@@ -255,7 +256,7 @@ proptest! {
         assert_packing_invariants(&spheres, &sdf);
         prop_assume!(!spheres.is_empty());
         let hopts = HierarchyOptions { fanout, ..Default::default() };
-        let (tree, _) = hierarchy::build(&spheres, &hopts, meta(), &Silent).unwrap();
+        let (tree, _) = tree_of_spheres(&spheres, &hopts, meta(), &Silent).unwrap();
         assert_tree_invariants(&tree, &spheres);
     }
 }
@@ -279,7 +280,7 @@ proptest! {
         let plain = packing::pack(&field, &PackingOptions { min_radius: min_r, ..Default::default() }, None, &Silent);
         let (vr, vp) = (packing::total_volume(&spheres), packing::total_volume(&plain));
         prop_assert!(vr >= 0.9 * vp, "refined coverage {} much below plain {}", vr, vp);
-        let (tree, _) = hierarchy::build(&spheres, &HierarchyOptions::default(), meta(), &Silent).unwrap();
+        let (tree, _) = tree_of_spheres(&spheres, &HierarchyOptions::default(), meta(), &Silent).unwrap();
         assert_tree_invariants(&tree, &spheres);
     }
 }

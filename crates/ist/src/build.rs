@@ -234,8 +234,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             report.nodes, report.depth, report.fanout, report.enclosing_ratio_mean
         );
         println!(
-            "  seconds     {total:.2} total: load {t_load:.2}, prepare {:.2}, distance field {:.2}, packing {:.2}, hierarchy {:.2}, write {t_write:.2}",
-            s.prepare, s.distance_field, s.packing, s.hierarchy
+            "  seconds     {total:.2} total: load {t_load:.2}, prepare {:.2}, distance field {:.2}, packing {:.2}, hierarchy {:.2}, tree {:.2}, write {t_write:.2}",
+            s.prepare, s.distance_field, s.packing, s.hierarchy, s.tree
         );
     }
     Ok(0)

@@ -1,9 +1,13 @@
-//! The whole build, mesh → tree: validate and orient the mesh, voxel distance field, sphere
-//! packing, BNG hierarchy, flat layout.
+//! The whole build, mesh → tree, as named stages (`stages.rs`, timed in [`StageSeconds`]):
+//! prepare (validate and orient the mesh, choose the grid), field (voxel distance bounds),
+//! packing (the inner spheres), hierarchy (BNG clustering and flat layout), tree (the
+//! [`SphereTree`] with its meta), report ([`BuildReport`]).
 //!
 //! [`SphereTree::build`] is the short way (tree only); [`SphereTree::build_with_progress`]
-//! also reports progress and returns the [`BuildReport`] (warnings included);
-//! [`build_tree`] is the same function under its older name (what `ist build` runs).
+//! also reports progress and returns the [`BuildReport`] (warnings included; what `ist build`
+//! runs); [`build_tree`] is the same function under its older name (what [`BuildCache`] and
+//! the tests call). [`tree_of_spheres`] makes the tree of a sphere set that no mesh was
+//! packed into.
 //!
 //! Lengths are in **model units**: the library never assumes a unit. [`BuildOptions`] says
 //! how fine the packing is, either as numbers or from a named [`Preset`]
@@ -15,12 +19,13 @@ mod mass;
 mod options;
 mod pipeline;
 mod preset;
+mod stages;
 mod verdict;
 
 pub use crate::field::thick::ThickParts;
 pub use cache::{BuildCache, CacheOutcome};
 pub use options::{validate_options, BuildOptions, Resolution};
-pub use pipeline::{build_tree, BuildReport, StageSeconds, MIN_EXTENT};
+pub use pipeline::{build_tree, tree_of_spheres, BuildReport, StageSeconds, MIN_EXTENT};
 pub use preset::{
     Preset, CALIBRATED_MIN_RADIUS_PER_VOXEL, CALIBRATED_REFINE_STEPS, FAST_CELLS, FINE_CELLS,
     JAW_PRESET_SIZE_MM, JAW_THICK_LATTICE_MM, JAW_THICK_MARGIN_MM, JAW_THICK_MIN_RADIUS_MM,

@@ -1,6 +1,7 @@
 //! The hierarchy over the inner spheres: top-down batch neural gas clustering ([`bng`]),
-//! minimal enclosing spheres ([`enclosing`]) and the flat breadth-first layout of
-//! [`SphereTree`].
+//! minimal enclosing spheres ([`enclosing`]) and the flat breadth-first layout
+//! ([`Hierarchy`]) that the build's tree stage turns into a
+//! [`SphereTree`](crate::tree::SphereTree) with its meta.
 //!
 //! Every node is split into at most `fanout` groups by BNG until each leaf holds exactly one
 //! inner sphere (no depth cap). A node's sphere is the minimal sphere enclosing the leaf
@@ -14,7 +15,7 @@ pub mod bng;
 pub mod enclosing;
 
 use crate::packing::Sphere;
-use crate::tree::{SphereTree, TreeMeta, NO_PARENT};
+use crate::tree::NO_PARENT;
 use enclosing::Ball;
 use glam::DVec3;
 
@@ -50,19 +51,57 @@ pub struct HierarchyStats {
     pub fallback_splits: usize,
 }
 
+/// The clustered spheres: the hierarchy's nodes laid out breadth-first in flat `f32` arrays,
+/// as a [`SphereTree`](crate::tree::SphereTree) holds them (see there for their meaning),
+/// and facts about the clustering.
+#[derive(Debug, Clone)]
+pub struct Hierarchy {
+    /// Sphere centre x of each node.
+    pub x: Vec<f32>,
+    /// Sphere centre y of each node.
+    pub y: Vec<f32>,
+    /// Sphere centre z of each node.
+    pub z: Vec<f32>,
+    /// Sphere radius of each node.
+    pub r: Vec<f32>,
+    /// Index of the first child (0 for leaves).
+    pub first_child: Vec<u32>,
+    /// Number of children; 0 for leaves.
+    pub child_count: Vec<u8>,
+    /// Parent index; [`NO_PARENT`] for the root.
+    pub parent: Vec<u32>,
+    /// Depth below the root (root = 0).
+    pub depth: Vec<u16>,
+    /// How tight the enclosing spheres are, and how often BNG fell back.
+    pub stats: HierarchyStats,
+}
+
+impl Hierarchy {
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.r.len()
+    }
+
+    /// True without nodes (never produced by [`cluster`]).
+    pub fn is_empty(&self) -> bool {
+        self.r.is_empty()
+    }
+}
+
 /// A node of the tree while it is being built (f64, pointer-free recursion result).
 struct Draft {
     ball: Ball,
     children: Vec<Draft>,
 }
 
-/// Builds the hierarchy over `spheres` and lays it out as a [`SphereTree`].
-pub fn build(
+/// Clusters `spheres` into the hierarchy and lays it out breadth-first: every leaf is one of
+/// `spheres` (rounded to `f32` inside it), every inner node's sphere encloses the leaves
+/// below it. Refuses an empty sphere set and a fan-out outside `2..=32`.
+pub fn cluster(
     spheres: &[Sphere],
     opts: &HierarchyOptions,
-    meta: TreeMeta,
     progress: &dyn crate::progress::Progress,
-) -> crate::error::Result<(SphereTree, HierarchyStats)> {
+) -> crate::error::Result<Hierarchy> {
     if spheres.is_empty() {
         return Err(crate::error::Error::InvalidMesh(
             "no inner sphere could be placed (the mesh encloses no volume at this voxel size)"
@@ -86,15 +125,9 @@ pub fn build(
     let fallbacks = std::sync::atomic::AtomicUsize::new(0);
     let root = split(&leaves, &mut idx, opts, progress, &fallbacks, 0);
     progress.finish();
-    let (tree, ratio_mean, ratio_max) = flatten(root, meta);
-    Ok((
-        tree,
-        HierarchyStats {
-            enclosing_ratio_mean: ratio_mean,
-            enclosing_ratio_max: ratio_max,
-            fallback_splits: fallbacks.into_inner(),
-        },
-    ))
+    let mut h = flatten(root);
+    h.stats.fallback_splits = fallbacks.into_inner();
+    Ok(h)
 }
 
 /// Rounds a leaf sphere to f32 so that the rounded sphere lies inside the original one.
@@ -235,8 +268,8 @@ fn split(
 
 /// Lays the draft tree out breadth-first into flat arrays; also measures how tight the
 /// enclosing spheres are (against exact subset enumeration, for nodes with ≤ 8 children).
-fn flatten(root: Draft, meta: TreeMeta) -> (SphereTree, f64, f64) {
-    let mut t = SphereTree {
+fn flatten(root: Draft) -> Hierarchy {
+    let mut t = Hierarchy {
         x: Vec::new(),
         y: Vec::new(),
         z: Vec::new(),
@@ -245,9 +278,9 @@ fn flatten(root: Draft, meta: TreeMeta) -> (SphereTree, f64, f64) {
         child_count: Vec::new(),
         parent: Vec::new(),
         depth: Vec::new(),
-        meta,
+        stats: HierarchyStats::default(),
     };
-    let push = |t: &mut SphereTree, b: Ball, parent: u32, depth: u16| {
+    let push = |t: &mut Hierarchy, b: Ball, parent: u32, depth: u16| {
         t.x.push(b.0.x as f32);
         t.y.push(b.0.y as f32);
         t.z.push(b.0.z as f32);
@@ -273,15 +306,15 @@ fn flatten(root: Draft, meta: TreeMeta) -> (SphereTree, f64, f64) {
             queue.push_back((id, child));
         }
     }
-    let (mean, max) = enclosing_ratios(&t);
-    (t, mean, max)
+    (t.stats.enclosing_ratio_mean, t.stats.enclosing_ratio_max) = enclosing_ratios(&t);
+    t
 }
 
 /// The mean and largest ratio of an inner node's radius to the exact minimal radius
 /// enclosing its children (nodes of at most 8 children, by subset enumeration, on all
 /// threads; summed in node order). The tree's f32 spheres are the draft's, which were
 /// rounded to f32 already.
-fn enclosing_ratios(t: &SphereTree) -> (f64, f64) {
+fn enclosing_ratios(t: &Hierarchy) -> (f64, f64) {
     use rayon::prelude::*;
     let ball = |n: usize| -> Ball {
         (

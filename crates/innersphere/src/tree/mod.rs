@@ -109,7 +109,7 @@ impl MeshSource {
 
 impl TreeMeta {
     /// The meta of spheres that were not packed from a mesh (a hand-made or analytic sphere
-    /// set given to [`hierarchy::build`](crate::hierarchy::build)): its fan-out, voxel size
+    /// set given to [`tree_of_spheres`](crate::build::tree_of_spheres)): its fan-out, voxel size
     /// and box; a mesh volume of 1 (no source volume), the centre of mass at the origin, no
     /// coverage, no stamp, no inertia. Change the fields that matter afterwards.
     pub fn unmeasured(

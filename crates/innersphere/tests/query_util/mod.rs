@@ -3,8 +3,9 @@
 #![allow(dead_code)]
 
 use glam::{DQuat, DVec3};
+use innersphere::build::tree_of_spheres;
 use innersphere::field::{DistanceField, VoxelGrid};
-use innersphere::hierarchy::{self, HierarchyOptions};
+use innersphere::hierarchy::HierarchyOptions;
 use innersphere::packing::{self, PackingOptions};
 use innersphere::progress::Silent;
 use innersphere::tree::{SphereTree, TreeMeta};
@@ -32,7 +33,7 @@ pub fn analytic_tree(
         fanout,
         ..Default::default()
     };
-    hierarchy::build(&spheres, &opts, meta, &Silent).unwrap().0
+    tree_of_spheres(&spheres, &opts, meta, &Silent).unwrap().0
 }
 
 /// A box of half extents `half` centred at `c`.

@@ -2,8 +2,8 @@
 
 use crate::convert::{error, pose_or_identity};
 use crate::tree::mesh_like;
-use innersphere_dental::contact_map::ContactMap;
 use innersphere::exact::ExactMesh;
+use innersphere_dental::contact_map::ContactMap;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 

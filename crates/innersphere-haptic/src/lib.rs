@@ -18,7 +18,7 @@
 
 mod blend;
 pub mod body;
-mod contact;
+mod deadline;
 pub mod device;
 pub mod mat6;
 pub mod model;

@@ -7,7 +7,7 @@
 //! its time does not depend on the contact (Mark et al. 1996; Otaduy & Lin 2006).
 
 use crate::body::{BodyState, RigidBody};
-use crate::contact::{needs_exact, Answer, Deadline};
+use crate::deadline::{needs_exact, Answer, Deadline};
 use crate::model::ContactModel;
 use crate::render::{HapticOptions, Tick};
 use crate::servo::Servo;

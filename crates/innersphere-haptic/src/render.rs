@@ -2,7 +2,7 @@
 //! send, moving a virtual tool that the contact stops at the other body's surface.
 
 use crate::body::{BodyState, RigidBody, TOOTH_DENSITY};
-use crate::contact::{needs_exact, Answer, Deadline};
+use crate::deadline::{needs_exact, Answer, Deadline};
 use crate::device::{Coupling, DeviceClass, DeviceLimits};
 use crate::model::ContactModel;
 use crate::servo::Servo;

@@ -1,4 +1,4 @@
-//! The crate's modules import one way, down a ladder: device, mat6, realtime ← body ← step ← model ← contact, blend ← servo, render (the loop's options and tick are render's) ← multirate. Reads every `crate::…` path in
+//! The crate's modules import one way, down a ladder: device, mat6, realtime ← body ← step ← model ← deadline, blend ← servo, render (the loop's options and tick are render's) ← multirate. Reads every `crate::…` path in
 //! the sources (outside their `#[cfg(test)]` modules) and fails on an import from a rung above,
 //! or through the crate root's re-exports.
 
@@ -11,7 +11,7 @@ fn layer(module: &str) -> Option<u32> {
         "body" => 1,
         "step" => 2,
         "model" => 3,
-        "contact" | "blend" => 4,
+        "deadline" | "blend" => 4,
         "servo" | "render" => 5,
         "multirate" => 6,
         _ => return None,

@@ -3,7 +3,7 @@
 use crate::error::{pointer, status, Fail};
 use crate::types::ist_build_options;
 use crate::{path_arg, reference};
-use innersphere::packing::PackingOptions;
+use innersphere::build::PackingOptions;
 use innersphere::{BuildOptions, Mesh, Resolution, SharedTree, SphereTree};
 use std::ffi::{c_char, c_int};
 

@@ -3,8 +3,8 @@
 //! the version and the identity pose are what they say. (The C program of `tests/c/run.sh`
 //! checks the same from C, under the sanitizers.)
 
+use innersphere::build::PackingOptions;
 use innersphere::glam::DVec3;
-use innersphere::packing::PackingOptions;
 use innersphere::{shapes, BuildOptions, Pair, Pose, Resolution, SphereTree};
 use innersphere_c::*;
 use std::ffi::{CStr, CString};

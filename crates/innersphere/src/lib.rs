@@ -53,11 +53,16 @@
 pub mod build;
 pub mod error;
 pub mod exact;
+// The build's stages: public for the evaluation harness (packings without a mesh) and the
+// tests, not the API; their options are named in `build`.
+#[doc(hidden)]
 pub mod field;
+#[doc(hidden)]
 pub mod hierarchy;
 pub mod input;
 pub mod mesh;
 pub mod output;
+#[doc(hidden)]
 pub mod packing;
 pub mod pose;
 pub mod progress;

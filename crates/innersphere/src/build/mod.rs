@@ -23,11 +23,19 @@ mod stages;
 mod verdict;
 
 pub use crate::field::thick::ThickParts;
+pub use crate::hierarchy::HierarchyOptions;
+pub use crate::packing::PackingOptions;
 pub use cache::{BuildCache, CacheOutcome};
 pub use options::{validate_options, BuildOptions, Resolution};
-pub use pipeline::{build_tree, tree_of_spheres, BuildReport, StageSeconds, MIN_EXTENT};
+pub use pipeline::{build_tree, BuildReport, StageSeconds, MIN_EXTENT};
+// A tree from spheres packed elsewhere (the evaluation's analytic solids): not the API.
+#[doc(hidden)]
+pub use pipeline::tree_of_spheres;
+pub use preset::Preset;
+// The presets' numbers, documented on `Preset`: public for the tools that print them.
+#[doc(hidden)]
 pub use preset::{
-    Preset, CALIBRATED_MIN_RADIUS_PER_VOXEL, CALIBRATED_REFINE_STEPS, FAST_CELLS, FINE_CELLS,
+    CALIBRATED_MIN_RADIUS_PER_VOXEL, CALIBRATED_REFINE_STEPS, FAST_CELLS, FINE_CELLS,
     JAW_PRESET_SIZE_MM, JAW_THICK_LATTICE_MM, JAW_THICK_MARGIN_MM, JAW_THICK_MIN_RADIUS_MM,
     JAW_THICK_RADIUS_MM,
 };

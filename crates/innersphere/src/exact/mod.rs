@@ -52,6 +52,8 @@ mod mesh;
 mod overlap;
 mod penetration;
 mod scratch;
+// Triangle–triangle primitives: the kernels of the exact queries, not the API.
+#[doc(hidden)]
 pub mod tri_tri;
 
 pub use distance::{brute_force_distance, distance, ExactDistance};
@@ -60,6 +62,7 @@ pub use intersects::{brute_force_intersects, intersects};
 pub use mesh::ExactMesh;
 pub use penetration::{penetration, penetration_depth, Body, ExactPenetration};
 pub use scratch::{ExactScratch, ExactStats};
+#[doc(hidden)]
 pub use tri_tri::{
     segment_segment_closest, segment_triangle_intersect, segments_intersect, triangle_distance,
     triangles_intersect, TriDistance,

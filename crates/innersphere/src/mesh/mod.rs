@@ -2,14 +2,21 @@
 //! BVH ([`bvh`]), the generalized winding number ([`winding`]) and mass properties
 //! ([`mass`]).
 
+// The geometry kernels under the mesh's queries: public for the other crates of the
+// workspace (the wafer, the viewer, the tests), not the API.
+#[doc(hidden)]
 pub mod bvh;
+#[doc(hidden)]
 pub mod closest;
 pub mod io;
 pub mod mass;
+#[doc(hidden)]
 pub mod ray;
 pub mod report;
+#[doc(hidden)]
 pub mod union_find;
 pub mod unit;
+#[doc(hidden)]
 pub mod untangle;
 pub mod winding;
 

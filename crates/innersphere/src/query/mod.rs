@@ -46,6 +46,8 @@ mod penetration;
 mod refined;
 mod search;
 
+// The brute-force references of the tests and benchmarks: not the API.
+#[doc(hidden)]
 pub mod brute;
 pub(crate) mod kernel;
 
@@ -54,8 +56,12 @@ pub use budgeted::BudgetedVolume;
 pub use contact::ContactResult;
 pub use distance::{Distance, DistanceOptions};
 pub use kernel::geometry::Contact;
+// The kernel's types seen by the other crates' tests: not the API.
+#[doc(hidden)]
 pub use kernel::info::TreeInfo;
+#[doc(hidden)]
 pub use kernel::lenses::lens_volume;
+#[doc(hidden)]
 pub use kernel::separation::SeparationRecord;
 pub use multipoint::{Multipoint, MultipointOptions};
 pub use pair::{Pair, Paper, SharedTree};

@@ -139,275 +139,15 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     }
     let pose_a = Pose::IDENTITY;
     let mut pair = Pair::new(a, b);
-    let t0 = std::time::Instant::now();
     let (out, summary) = match args.query {
-        Kind::Distance => {
-            let opts = DistanceOptions {
-                abs_tolerance: args.abs_tol,
-                rel_tolerance: args.rel_tol,
-                signed: args.signed,
-                coherence: false,
-                best_first: false,
-            };
-            let p = pair.distance_with(&pose_a, &pose_b, &opts);
-            let secs = t0.elapsed().as_secs_f64();
-            (
-                json!({
-                    "query": "distance",
-                    "distance_is_lower_bound": false,
-                    "distance": p.distance,
-                    "contact": p.overlapping,
-                    "lower_bound": p.lower_bound,
-                    "point_a": v3(p.point_a),
-                    "point_b": v3(p.point_b),
-                    "normal": v3(p.normal),
-                    "leaf_a": p.leaf_a,
-                    "leaf_b": p.leaf_b,
-                    "visits": p.visits,
-                    "seconds": secs,
-                }),
-                format!(
-                    "distance {:.6} units ({}), closest points A {:?} B {:?} (units), leaves {}/{}, {} node pairs, {:.1} µs",
-                    p.distance,
-                    if p.overlapping { "overlapping" } else { "separated" },
-                    v3(p.point_a),
-                    v3(p.point_b),
-                    p.leaf_a,
-                    p.leaf_b,
-                    p.visits,
-                    secs * 1e6
-                ),
-            )
-        }
-        Kind::RefinedDistance => {
-            let r = pair.refined_distance_with(&pose_a, &pose_b, &refine)?;
-            let secs = t0.elapsed().as_secs_f64();
-            let tri = |t: u32| (t != u32::MAX).then_some(t);
-            (
-                json!({
-                    "query": "refined-distance",
-                    "distance_is_lower_bound": false,
-                    "distance": r.distance,
-                    "contact": r.intersecting,
-                    "refined": r.refined,
-                    "complete": r.complete,
-                    "point_a": v3(r.point_a),
-                    "point_b": v3(r.point_b),
-                    "triangle_a": tri(r.tri_a),
-                    "triangle_b": tri(r.tri_b),
-                    "sphere_distance": r.spheres.distance,
-                    "radius": r.radius,
-                    "node_pairs": r.node_pairs,
-                    "triangle_pairs": r.triangle_pairs,
-                    "visits": r.spheres.visits,
-                    "seconds": secs,
-                }),
-                format!(
-                    "distance {:.6} units ({}), closest points A {:?} B {:?} (units){}; the sphere distance {:.6}, refined within {:.4} units of its closest points ({} triangle-node pairs, {} triangle pairs{}), {:.1} µs",
-                    r.distance,
-                    if r.intersecting { "touching" } else { "separated" },
-                    v3(r.point_a),
-                    v3(r.point_b),
-                    if r.refined {
-                        format!(", triangles {}/{}", r.tri_a, r.tri_b)
-                    } else {
-                        String::new()
-                    },
-                    r.spheres.distance,
-                    r.radius,
-                    r.node_pairs,
-                    r.triangle_pairs,
-                    if r.complete { "" } else { ", out of budget" },
-                    secs * 1e6
-                ),
-            )
-        }
+        Kind::Distance => distance(&mut pair, &pose_a, &pose_b, &args),
+        Kind::RefinedDistance => refined_distance(&mut pair, &pose_a, &pose_b, &refine)?,
         Kind::Contact | Kind::DistanceTraversal | Kind::Backtracking => {
-            let traversal = TraversalOptions { safe_motion: false };
-            let (q, name) = match args.query {
-                Kind::DistanceTraversal => (
-                    pair.paper()
-                        .distance_traversal(&pose_a, &pose_b, &traversal),
-                    "distance-traversal",
-                ),
-                Kind::Backtracking => (
-                    pair.paper().backtracking(&pose_a, &pose_b, &traversal),
-                    "backtracking",
-                ),
-                _ => (pair.contact(&pose_a, &pose_b), "contact"),
-            };
-            let secs = t0.elapsed().as_secs_f64();
-            (
-                json!({
-                    "query": name,
-                    // "distance" here is a proved lower bound, not the distance (see
-                    // SEPARATION_NOTE); said in the JSON too, for scripts.
-                    "distance_is_lower_bound": true,
-                    "contact": q.in_contact(),
-                    "distance": q.distance,
-                    "point": q.contact.map(|c| v3(c.point)),
-                    "normal": q.contact.map(|c| v3(c.normal)),
-                    "depth": q.contact.map(|c| c.depth),
-                    "leaf_a": q.contact.map(|c| c.leaf_a),
-                    "leaf_b": q.contact.map(|c| c.leaf_b),
-                    "visits": q.visits,
-                    "seconds": secs,
-                }),
-                match q.contact {
-                    Some(c) => format!(
-                        "contact at {:?} units (depth {:.6} units, leaves {}/{}), {} node pairs, {:.1} µs",
-                        v3(c.point),
-                        c.depth,
-                        c.leaf_a,
-                        c.leaf_b,
-                        q.visits,
-                        secs * 1e6
-                    ),
-                    None => format!(
-                        "no contact, separated by at least {:.6} units, {} node pairs, {:.1} µs\n{SEPARATION_NOTE}",
-                        q.distance,
-                        q.visits,
-                        secs * 1e6
-                    ),
-                },
-            )
+            contact_kind(&mut pair, &pose_a, &pose_b, &args)
         }
-        Kind::Multipoint => {
-            let opts = MultipointOptions {
-                k: args.k,
-                split_depth: args.split_depth,
-                reuse: false,
-                safe_motion: false,
-                tracking: false,
-            };
-            let m = pair.multipoint(&pose_a, &pose_b, &opts);
-            let secs = t0.elapsed().as_secs_f64();
-            let contacts = pair.contacts();
-            let mut s = format!(
-                "{} contacts (k = {}, split depth {}), {} node pairs, {:.1} µs",
-                m.count,
-                args.k,
-                args.split_depth,
-                m.visits,
-                secs * 1e6
-            );
-            for c in contacts {
-                s += &format!("\n  at {:?} units, depth {:.6} units", v3(c.point), c.depth);
-            }
-            if contacts.is_empty() {
-                s += &format!(
-                    "; separated by at least {:.6} units\n{SEPARATION_NOTE}",
-                    m.distance
-                );
-            }
-            (
-                json!({
-                    "query": "multipoint",
-                    "distance_is_lower_bound": true,
-                    "contact": !contacts.is_empty(),
-                    "distance": m.distance,
-                    "contacts": contacts,
-                    "visits": m.visits,
-                    "seconds": secs,
-                }),
-                s,
-            )
-        }
-        Kind::PenetrationWithin => {
-            let opts = PenetrationOptions {
-                stiffness: args.stiffness,
-                ..Default::default()
-            };
-            let w = pair.penetration_within_with(&pose_a, &pose_b, args.budget, &opts);
-            let secs = t0.elapsed().as_secs_f64();
-            (
-                json!({
-                    "query": "penetration-within",
-                    "budget": args.budget,
-                    "complete": w.complete,
-                    "volume": w.volume,
-                    "upper_bound": w.upper_bound,
-                    "max_depth": w.max_depth,
-                    "normal": v3(w.normal),
-                    "force": v3(w.force),
-                    "torque": v3(w.torque_b),
-                    "visits": w.visits,
-                    "seconds": secs,
-                }),
-                format!(
-                    "penetration volume found {:.6e} units³, at most {:.6e} units³ ({}), deepest {:.6} units, {} of {} node-pair tests, {:.1} µs\n\
-                     force on B {:?}, torque on B {:?} (the pairs found, and any left unrefined as their bounds)",
-                    w.volume,
-                    w.upper_bound,
-                    if w.complete { "complete: the exact volume" } else { "the budget ran out" },
-                    w.max_depth,
-                    w.visits,
-                    args.budget,
-                    secs * 1e6,
-                    v3(w.force),
-                    v3(w.torque_b)
-                ),
-            )
-        }
-        Kind::Penetration => {
-            let opts = PenetrationOptions {
-                stiffness: args.stiffness,
-                safe_motion: false,
-                ..Default::default()
-            };
-            let p = pair.penetration_with(&pose_a, &pose_b, &opts);
-            let patches = pair.patches();
-            let secs = t0.elapsed().as_secs_f64();
-            let mut s = format!(
-                "penetration volume {:.6e} units³ over {} leaf pairs (deepest {:.6} units), {} node pairs, {:.1} µs\n\
-                 force on B {:?}, torque on B {:?}, torque on A {:?}\n\
-                 (force = stiffness {} × volume, in the force unit of --stiffness: N for N/mm³ on mm meshes; torques in that unit × units, each about its body's centre of mass)",
-                p.volume,
-                p.pairs,
-                p.max_depth,
-                p.visits,
-                secs * 1e6,
-                v3(p.force),
-                v3(p.torque_b),
-                v3(p.torque_a),
-                args.stiffness
-            );
-            for q in patches {
-                s += &format!(
-                    "\n  patch at {:?} units, normal {:?}, depth {:.6} units, volume {:.6e} units³",
-                    v3(q.point),
-                    v3(q.normal),
-                    q.depth,
-                    q.volume
-                );
-            }
-            if p.pairs == 0 {
-                s += &format!(
-                    "\nno contact, separated by at least {:.6} units\n{SEPARATION_NOTE}",
-                    p.distance
-                );
-            }
-            (
-                json!({
-                    "query": "penetration",
-                    "distance_is_lower_bound": true,
-                    "contact": p.pairs > 0,
-                    "distance": p.distance,
-                    "volume": p.volume,
-                    "pairs": p.pairs,
-                    "max_depth": p.max_depth,
-                    "normal": v3(p.normal),
-                    "force": v3(p.force),
-                    "torque": v3(p.torque_b),
-                    "torque_a": v3(p.torque_a),
-                    "torque_b": v3(p.torque_b),
-                    "patches": patches,
-                    "visits": p.visits,
-                    "seconds": secs,
-                }),
-                s,
-            )
-        }
+        Kind::Multipoint => multipoint(&mut pair, &pose_a, &pose_b, &args),
+        Kind::PenetrationWithin => penetration_within(&mut pair, &pose_a, &pose_b, &args),
+        Kind::Penetration => penetration(&mut pair, &pose_a, &pose_b, &args),
     };
     if args.json {
         crate::print::print_json(&out)?;
@@ -415,4 +155,318 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         println!("{summary}");
     }
     Ok(0)
+}
+
+/// The exact distance of the sphere packings.
+fn distance(
+    pair: &mut Pair,
+    pose_a: &Pose,
+    pose_b: &Pose,
+    args: &Args,
+) -> (serde_json::Value, String) {
+    let t0 = std::time::Instant::now();
+    let opts = DistanceOptions {
+        abs_tolerance: args.abs_tol,
+        rel_tolerance: args.rel_tol,
+        signed: args.signed,
+        coherence: false,
+        best_first: false,
+    };
+    let p = pair.distance_with(pose_a, pose_b, &opts);
+    let secs = t0.elapsed().as_secs_f64();
+    (
+        json!({
+            "query": "distance",
+            "distance_is_lower_bound": false,
+            "distance": p.distance,
+            "contact": p.overlapping,
+            "lower_bound": p.lower_bound,
+            "point_a": v3(p.point_a),
+            "point_b": v3(p.point_b),
+            "normal": v3(p.normal),
+            "leaf_a": p.leaf_a,
+            "leaf_b": p.leaf_b,
+            "visits": p.visits,
+            "seconds": secs,
+        }),
+        format!(
+            "distance {:.6} units ({}), closest points A {:?} B {:?} (units), leaves {}/{}, {} node pairs, {:.1} µs",
+            p.distance,
+            if p.overlapping { "overlapping" } else { "separated" },
+            v3(p.point_a),
+            v3(p.point_b),
+            p.leaf_a,
+            p.leaf_b,
+            p.visits,
+            secs * 1e6
+        ),
+    )
+}
+
+/// The distance refined to the meshes.
+fn refined_distance(
+    pair: &mut Pair,
+    pose_a: &Pose,
+    pose_b: &Pose,
+    refine: &RefineOptions,
+) -> anyhow::Result<(serde_json::Value, String)> {
+    let t0 = std::time::Instant::now();
+    let r = pair.refined_distance_with(pose_a, pose_b, refine)?;
+    let secs = t0.elapsed().as_secs_f64();
+    let tri = |t: u32| (t != u32::MAX).then_some(t);
+    Ok((
+        json!({
+            "query": "refined-distance",
+            "distance_is_lower_bound": false,
+            "distance": r.distance,
+            "contact": r.intersecting,
+            "refined": r.refined,
+            "complete": r.complete,
+            "point_a": v3(r.point_a),
+            "point_b": v3(r.point_b),
+            "triangle_a": tri(r.tri_a),
+            "triangle_b": tri(r.tri_b),
+            "sphere_distance": r.spheres.distance,
+            "radius": r.radius,
+            "node_pairs": r.node_pairs,
+            "triangle_pairs": r.triangle_pairs,
+            "visits": r.spheres.visits,
+            "seconds": secs,
+        }),
+        format!(
+            "distance {:.6} units ({}), closest points A {:?} B {:?} (units){}; the sphere distance {:.6}, refined within {:.4} units of its closest points ({} triangle-node pairs, {} triangle pairs{}), {:.1} µs",
+            r.distance,
+            if r.intersecting { "touching" } else { "separated" },
+            v3(r.point_a),
+            v3(r.point_b),
+            if r.refined {
+                format!(", triangles {}/{}", r.tri_a, r.tri_b)
+            } else {
+                String::new()
+            },
+            r.spheres.distance,
+            r.radius,
+            r.node_pairs,
+            r.triangle_pairs,
+            if r.complete { "" } else { ", out of budget" },
+            secs * 1e6
+        ),
+    ))
+}
+
+/// First contact, or the paper's distance traversal or backtracking (`args.query`): a proved lower bound when apart.
+fn contact_kind(
+    pair: &mut Pair,
+    pose_a: &Pose,
+    pose_b: &Pose,
+    args: &Args,
+) -> (serde_json::Value, String) {
+    let t0 = std::time::Instant::now();
+    let traversal = TraversalOptions { safe_motion: false };
+    let (q, name) = match args.query {
+        Kind::DistanceTraversal => (
+            pair.paper().distance_traversal(pose_a, pose_b, &traversal),
+            "distance-traversal",
+        ),
+        Kind::Backtracking => (
+            pair.paper().backtracking(pose_a, pose_b, &traversal),
+            "backtracking",
+        ),
+        _ => (pair.contact(pose_a, pose_b), "contact"),
+    };
+    let secs = t0.elapsed().as_secs_f64();
+    (
+        json!({
+            "query": name,
+            // "distance" here is a proved lower bound, not the distance (see
+            // SEPARATION_NOTE); said in the JSON too, for scripts.
+            "distance_is_lower_bound": true,
+            "contact": q.in_contact(),
+            "distance": q.distance,
+            "point": q.contact.map(|c| v3(c.point)),
+            "normal": q.contact.map(|c| v3(c.normal)),
+            "depth": q.contact.map(|c| c.depth),
+            "leaf_a": q.contact.map(|c| c.leaf_a),
+            "leaf_b": q.contact.map(|c| c.leaf_b),
+            "visits": q.visits,
+            "seconds": secs,
+        }),
+        match q.contact {
+            Some(c) => format!(
+                "contact at {:?} units (depth {:.6} units, leaves {}/{}), {} node pairs, {:.1} µs",
+                v3(c.point),
+                c.depth,
+                c.leaf_a,
+                c.leaf_b,
+                q.visits,
+                secs * 1e6
+            ),
+            None => format!(
+                "no contact, separated by at least {:.6} units, {} node pairs, {:.1} µs\n{SEPARATION_NOTE}",
+                q.distance,
+                q.visits,
+                secs * 1e6
+            ),
+        },
+    )
+}
+
+/// Up to `--k` contacts.
+fn multipoint(
+    pair: &mut Pair,
+    pose_a: &Pose,
+    pose_b: &Pose,
+    args: &Args,
+) -> (serde_json::Value, String) {
+    let t0 = std::time::Instant::now();
+    let opts = MultipointOptions {
+        k: args.k,
+        split_depth: args.split_depth,
+        reuse: false,
+        safe_motion: false,
+        tracking: false,
+    };
+    let m = pair.multipoint(pose_a, pose_b, &opts);
+    let secs = t0.elapsed().as_secs_f64();
+    let contacts = pair.contacts();
+    let mut s = format!(
+        "{} contacts (k = {}, split depth {}), {} node pairs, {:.1} µs",
+        m.count,
+        args.k,
+        args.split_depth,
+        m.visits,
+        secs * 1e6
+    );
+    for c in contacts {
+        s += &format!("\n  at {:?} units, depth {:.6} units", v3(c.point), c.depth);
+    }
+    if contacts.is_empty() {
+        s += &format!(
+            "; separated by at least {:.6} units\n{SEPARATION_NOTE}",
+            m.distance
+        );
+    }
+    (
+        json!({
+            "query": "multipoint",
+            "distance_is_lower_bound": true,
+            "contact": !contacts.is_empty(),
+            "distance": m.distance,
+            "contacts": contacts,
+            "visits": m.visits,
+            "seconds": secs,
+        }),
+        s,
+    )
+}
+
+/// The penetration volume within a node-pair budget.
+fn penetration_within(
+    pair: &mut Pair,
+    pose_a: &Pose,
+    pose_b: &Pose,
+    args: &Args,
+) -> (serde_json::Value, String) {
+    let t0 = std::time::Instant::now();
+    let opts = PenetrationOptions {
+        stiffness: args.stiffness,
+        ..Default::default()
+    };
+    let w = pair.penetration_within_with(pose_a, pose_b, args.budget, &opts);
+    let secs = t0.elapsed().as_secs_f64();
+    (
+        json!({
+            "query": "penetration-within",
+            "budget": args.budget,
+            "complete": w.complete,
+            "volume": w.volume,
+            "upper_bound": w.upper_bound,
+            "max_depth": w.max_depth,
+            "normal": v3(w.normal),
+            "force": v3(w.force),
+            "torque": v3(w.torque_b),
+            "visits": w.visits,
+            "seconds": secs,
+        }),
+        format!(
+            "penetration volume found {:.6e} units³, at most {:.6e} units³ ({}), deepest {:.6} units, {} of {} node-pair tests, {:.1} µs\n\
+             force on B {:?}, torque on B {:?} (the pairs found, and any left unrefined as their bounds)",
+            w.volume,
+            w.upper_bound,
+            if w.complete { "complete: the exact volume" } else { "the budget ran out" },
+            w.max_depth,
+            w.visits,
+            args.budget,
+            secs * 1e6,
+            v3(w.force),
+            v3(w.torque_b)
+        ),
+    )
+}
+
+/// The penetration volume, force, torques and patches.
+fn penetration(
+    pair: &mut Pair,
+    pose_a: &Pose,
+    pose_b: &Pose,
+    args: &Args,
+) -> (serde_json::Value, String) {
+    let t0 = std::time::Instant::now();
+    let opts = PenetrationOptions {
+        stiffness: args.stiffness,
+        safe_motion: false,
+        ..Default::default()
+    };
+    let p = pair.penetration_with(pose_a, pose_b, &opts);
+    let patches = pair.patches();
+    let secs = t0.elapsed().as_secs_f64();
+    let mut s = format!(
+        "penetration volume {:.6e} units³ over {} leaf pairs (deepest {:.6} units), {} node pairs, {:.1} µs\n\
+         force on B {:?}, torque on B {:?}, torque on A {:?}\n\
+         (force = stiffness {} × volume, in the force unit of --stiffness: N for N/mm³ on mm meshes; torques in that unit × units, each about its body's centre of mass)",
+        p.volume,
+        p.pairs,
+        p.max_depth,
+        p.visits,
+        secs * 1e6,
+        v3(p.force),
+        v3(p.torque_b),
+        v3(p.torque_a),
+        args.stiffness
+    );
+    for q in patches {
+        s += &format!(
+            "\n  patch at {:?} units, normal {:?}, depth {:.6} units, volume {:.6e} units³",
+            v3(q.point),
+            v3(q.normal),
+            q.depth,
+            q.volume
+        );
+    }
+    if p.pairs == 0 {
+        s += &format!(
+            "\nno contact, separated by at least {:.6} units\n{SEPARATION_NOTE}",
+            p.distance
+        );
+    }
+    (
+        json!({
+            "query": "penetration",
+            "distance_is_lower_bound": true,
+            "contact": p.pairs > 0,
+            "distance": p.distance,
+            "volume": p.volume,
+            "pairs": p.pairs,
+            "max_depth": p.max_depth,
+            "normal": v3(p.normal),
+            "force": v3(p.force),
+            "torque": v3(p.torque_b),
+            "torque_a": v3(p.torque_a),
+            "torque_b": v3(p.torque_b),
+            "patches": patches,
+            "visits": p.visits,
+            "seconds": secs,
+        }),
+        s,
+    )
 }

@@ -241,33 +241,17 @@ pub struct PaperSummary {
     pub main_refined_abs_err_p95: f64,
 }
 
-/// Runs the whole evaluation of the pair (`mesh_a` fixed, `mesh_b` moved by `motion`) and
-/// writes CSV files and PNG charts into `out`; `log` receives one line per step.
-pub fn run(
+/// Figs. 6 and 9: query time and distance error against the leaf count, one tree pair per
+/// voxel size of `opts`; the voxel sizes and leaf counts built, for the fan-out figure.
+fn leaf_sweep(
     mesh_a: &Mesh,
     mesh_b: &Mesh,
     motion: &Motion,
     opts: &PaperOptions,
-    out: &Path,
+    (ea, eb): (&Arc<ExactMesh>, &Arc<ExactMesh>),
+    out: &mut Out,
     log: &mut dyn FnMut(&str),
-) -> Result<PaperSummary> {
-    if motion.frames.is_empty() {
-        return Err(Error::InvalidOption("the motion has no frames".into()));
-    }
-    if opts.voxel_sizes.is_empty() || opts.voxel_sizes.iter().any(|h| h.is_nan() || *h <= 0.0) {
-        return Err(Error::InvalidOption(
-            "voxel sizes must be positive numbers".into(),
-        ));
-    }
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    let mut out = Out {
-        dir: out,
-        files: Vec::new(),
-    };
-    let ea = Arc::new(ExactMesh::new(mesh_a)?);
-    let eb = Arc::new(ExactMesh::new(mesh_b)?);
-    let id = Pose::IDENTITY;
-
+) -> Result<Vec<(f64, usize)>> {
     // Figs. 6 and 9: speed and error against leaf count.
     let mut speed = String::from(
         "voxel,leaves_a,leaves_b,depth_a,depth_b,build_s,query,p50_us,p99_us,max_us,mean_us\n",
@@ -330,7 +314,7 @@ pub fn run(
             );
             speed_series[k].points.push((leaves as f64, mean));
         }
-        if let Some(acc) = accuracy_refined(&ta, &tb, motion, (&ea, &eb), opts.every)? {
+        if let Some(acc) = accuracy_refined(&ta, &tb, motion, (ea, eb), opts.every)? {
             let r = acc.refined.clone().unwrap_or_default();
             let _ = writeln!(
                 error,
@@ -392,7 +376,20 @@ pub fn run(
         },
         &err_series,
     )?;
+    Ok(sweep_leaves)
+}
 
+/// Figs. 7–8: query time against the fan-out at the voxel sizes of the sweep nearest each
+/// target leaf count of `opts`.
+fn fan_out_figure(
+    mesh_a: &Mesh,
+    mesh_b: &Mesh,
+    motion: &Motion,
+    opts: &PaperOptions,
+    sweep_leaves: &[(f64, usize)],
+    out: &mut Out,
+    log: &mut dyn FnMut(&str),
+) -> Result<()> {
     // Figs. 7–8: fan-out and depth at about 3k and 16k leaves.
     let mut fan = String::from(
         "target_leaves,voxel,fanout,leaves_a,leaves_b,depth_a,depth_b,query,p50_us,p99_us,mean_us\n",
@@ -461,6 +458,38 @@ pub fn run(
         },
         &fan_series,
     )?;
+    Ok(())
+}
+
+/// Runs the whole evaluation of the pair (`mesh_a` fixed, `mesh_b` moved by `motion`) and
+/// writes CSV files and PNG charts into `out`; `log` receives one line per step.
+pub fn run(
+    mesh_a: &Mesh,
+    mesh_b: &Mesh,
+    motion: &Motion,
+    opts: &PaperOptions,
+    out: &Path,
+    log: &mut dyn FnMut(&str),
+) -> Result<PaperSummary> {
+    if motion.frames.is_empty() {
+        return Err(Error::InvalidOption("the motion has no frames".into()));
+    }
+    if opts.voxel_sizes.is_empty() || opts.voxel_sizes.iter().any(|h| h.is_nan() || *h <= 0.0) {
+        return Err(Error::InvalidOption(
+            "voxel sizes must be positive numbers".into(),
+        ));
+    }
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let mut out = Out {
+        dir: out,
+        files: Vec::new(),
+    };
+    let ea = Arc::new(ExactMesh::new(mesh_a)?);
+    let eb = Arc::new(ExactMesh::new(mesh_b)?);
+    let id = Pose::IDENTITY;
+
+    let sweep_leaves = leaf_sweep(mesh_a, mesh_b, motion, opts, (&ea, &eb), &mut out, log)?;
+    fan_out_figure(mesh_a, mesh_b, motion, opts, &sweep_leaves, &mut out, log)?;
 
     // The main trees: backtracking, multipoint, ours against the paper and the exact mesh.
     let (ta, sa) = build(mesh_a, &opts.main)?;

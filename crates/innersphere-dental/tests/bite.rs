@@ -1,4 +1,4 @@
-//! The bite as the planners ask for it (`haptic::bite`), on generated arches: it is the
+//! The bite as the planners ask for it (`innersphere_dental::bite`), on generated arches: it is the
 //! occlusion (with the temporomandibular joints) or the free occlusion (many starts) run
 //! with the frame, the joints and the defaults it documents; its JSON says what it found
 //! and what it ran with.

@@ -31,6 +31,8 @@ use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 const RATIO: f64 = 0.9;
 
 /// The packing of [`super::pack_bounded`] in bands and blocks (see the module docs).
+// Kept whole (over 120 lines): the bands' loop owns the queue, the refiner and the
+// remaining distances that every block of a band reads and writes.
 pub(super) fn pack(
     field: Voxels<'_>,
     bounds: &[f64],

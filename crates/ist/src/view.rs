@@ -80,60 +80,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         }
         Scene::demo()?
     } else {
-        let (Some(a), Some(b)) = (&args.a, &args.b) else {
-            anyhow::bail!("give two tree files (A.ist B.ist), or --demo for the built-in scene");
-        };
-        let mesh = |p: &Option<PathBuf>, which: &str| -> anyhow::Result<_> {
-            p.as_ref()
-                .map(|p| {
-                    crate::files::load_mesh(p, args.body.unit.unit)
-                        .with_context(|| format!("loading {which}"))
-                })
-                .transpose()
-        };
-        // A body given as a mesh is also its drawn surface (unless --mesh-a/-b say otherwise).
-        // A tree built from a file draws that file's mesh while it still holds it.
-        let (tree_a, body_a) = crate::bodies::load_body(a, &args.body)?;
-        let (tree_b, body_b) = crate::bodies::load_body(b, &args.body)?;
-        let remembered = |tree: &innersphere::SphereTree, which: &str, flag: &str| {
-            let source = tree.meta.source.as_ref()?;
-            match source.load() {
-                Ok(m) => {
-                    eprintln!(
-                        "{which}: drawing {} (the mesh its tree was built from)",
-                        source.path
-                    );
-                    Some(m)
-                }
-                Err(e) => {
-                    eprintln!("{which}: not drawing its surface ({e}); give {flag}");
-                    None
-                }
-            }
-        };
-        let mesh_a = match (mesh(&args.mesh_a, "--mesh-a")?, body_a) {
-            (Some(m), _) | (None, Some(m)) => Some(m),
-            (None, None) => remembered(&tree_a, "A", "--mesh-a"),
-        };
-        let mesh_b = match (mesh(&args.mesh_b, "--mesh-b")?, body_b) {
-            (Some(m), _) | (None, Some(m)) => Some(m),
-            (None, None) => remembered(&tree_b, "B", "--mesh-b"),
-        };
-        Scene {
-            a: SharedTree::new(tree_a),
-            b: SharedTree::new(tree_b),
-            mesh_a,
-            mesh_b,
-            motion: args
-                .motion
-                .as_ref()
-                .map(|p| Motion::load(p).context("loading --motion"))
-                .transpose()?,
-            teeth_a: None,
-            teeth_b: None,
-            splint: None,
-            start: None,
-        }
+        scene_from_files(&args)?
     };
     let meshes = scene.mesh_a.is_some() && scene.mesh_b.is_some();
     // The distance shown: between the meshes where they are the trees' own.
@@ -196,4 +143,64 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     })
     .map_err(|e| anyhow::anyhow!(e))?;
     Ok(0)
+}
+
+/// The scene of two bodies given as files: their trees (built from meshes through the cache
+/// where a body is a mesh), the surfaces to draw (`--mesh-a/-b`, the body's own mesh, or
+/// the mesh its tree was built from while it still holds it) and the motion.
+fn scene_from_files(args: &Args) -> anyhow::Result<Scene> {
+    let (Some(a), Some(b)) = (&args.a, &args.b) else {
+        anyhow::bail!("give two tree files (A.ist B.ist), or --demo for the built-in scene");
+    };
+    let mesh = |p: &Option<PathBuf>, which: &str| -> anyhow::Result<_> {
+        p.as_ref()
+            .map(|p| {
+                crate::files::load_mesh(p, args.body.unit.unit)
+                    .with_context(|| format!("loading {which}"))
+            })
+            .transpose()
+    };
+    // A body given as a mesh is also its drawn surface (unless --mesh-a/-b say otherwise).
+    // A tree built from a file draws that file's mesh while it still holds it.
+    let (tree_a, body_a) = crate::bodies::load_body(a, &args.body)?;
+    let (tree_b, body_b) = crate::bodies::load_body(b, &args.body)?;
+    let remembered = |tree: &innersphere::SphereTree, which: &str, flag: &str| {
+        let source = tree.meta.source.as_ref()?;
+        match source.load() {
+            Ok(m) => {
+                eprintln!(
+                    "{which}: drawing {} (the mesh its tree was built from)",
+                    source.path
+                );
+                Some(m)
+            }
+            Err(e) => {
+                eprintln!("{which}: not drawing its surface ({e}); give {flag}");
+                None
+            }
+        }
+    };
+    let mesh_a = match (mesh(&args.mesh_a, "--mesh-a")?, body_a) {
+        (Some(m), _) | (None, Some(m)) => Some(m),
+        (None, None) => remembered(&tree_a, "A", "--mesh-a"),
+    };
+    let mesh_b = match (mesh(&args.mesh_b, "--mesh-b")?, body_b) {
+        (Some(m), _) | (None, Some(m)) => Some(m),
+        (None, None) => remembered(&tree_b, "B", "--mesh-b"),
+    };
+    Ok(Scene {
+        a: SharedTree::new(tree_a),
+        b: SharedTree::new(tree_b),
+        mesh_a,
+        mesh_b,
+        motion: args
+            .motion
+            .as_ref()
+            .map(|p| Motion::load(p).context("loading --motion"))
+            .transpose()?,
+        teeth_a: None,
+        teeth_b: None,
+        splint: None,
+        start: None,
+    })
 }

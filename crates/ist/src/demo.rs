@@ -121,38 +121,45 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         );
     }
     if let Some(rep) = replay {
-        println!();
-        println!(
-            "replay of a generated {:.1} s chewing motion ({} frames at 1 kHz), one thread:",
-            args.seconds, rep.frames
-        );
-        println!("| query | sustained rate (1/p99) | p50 µs | p99 µs | worst frame µs | frames over 1 ms |");
-        println!("|---|---|---|---|---|---|");
-        for k in &rep.kinds {
-            println!(
-                "| {:?} | {:.0} Hz | {:.1} | {:.1} | {:.1} | {} |",
-                k.kind,
-                1e6 / k.p99_us.max(1e-3),
-                k.p50_us,
-                k.p99_us,
-                k.max_us,
-                k.frames_over_1ms
-            );
-        }
-        if let Some(acc) = &rep.accuracy {
-            println!(
-                "distance error against the exact mesh distance ({} separated frames): p50 {:.4}, p95 {:.4}, max {:.4} {unit}; missed contacts {} ({} deeper than 0.1 {unit}), false contacts {}",
-                acc.separated_frames, acc.errors.abs_err_p50, acc.errors.abs_err_p95, acc.errors.abs_err_max,
-                acc.errors.missed_contacts, acc.errors.missed_contacts_deep, acc.errors.false_contacts
-            );
-            if let Some(r) = &acc.refined {
-                println!(
-                    "the distance refined to the meshes (RefinedDistance): p50 {:.5}, p95 {:.5}, max {:.5} {unit}; missed contacts {} (the deepest {:.4} {unit}), false contacts {}",
-                    r.errors.abs_err_p50, r.errors.abs_err_p95, r.errors.abs_err_max,
-                    r.errors.missed_contacts, r.errors.missed_contacts_max_depth, r.errors.false_contacts
-                );
-            }
-        }
+        print_replay(&rep, args.seconds, unit);
     }
     Ok(0)
+}
+
+/// The replay's table and its accuracy against the exact mesh distance, in `unit`.
+fn print_replay(rep: &innersphere_eval::replay::ReplayReport, seconds: f64, unit: &str) {
+    println!();
+    println!(
+        "replay of a generated {:.1} s chewing motion ({} frames at 1 kHz), one thread:",
+        seconds, rep.frames
+    );
+    println!(
+        "| query | sustained rate (1/p99) | p50 µs | p99 µs | worst frame µs | frames over 1 ms |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for k in &rep.kinds {
+        println!(
+            "| {:?} | {:.0} Hz | {:.1} | {:.1} | {:.1} | {} |",
+            k.kind,
+            1e6 / k.p99_us.max(1e-3),
+            k.p50_us,
+            k.p99_us,
+            k.max_us,
+            k.frames_over_1ms
+        );
+    }
+    if let Some(acc) = &rep.accuracy {
+        println!(
+            "distance error against the exact mesh distance ({} separated frames): p50 {:.4}, p95 {:.4}, max {:.4} {unit}; missed contacts {} ({} deeper than 0.1 {unit}), false contacts {}",
+            acc.separated_frames, acc.errors.abs_err_p50, acc.errors.abs_err_p95, acc.errors.abs_err_max,
+            acc.errors.missed_contacts, acc.errors.missed_contacts_deep, acc.errors.false_contacts
+        );
+        if let Some(r) = &acc.refined {
+            println!(
+                "the distance refined to the meshes (RefinedDistance): p50 {:.5}, p95 {:.5}, max {:.5} {unit}; missed contacts {} (the deepest {:.4} {unit}), false contacts {}",
+                r.errors.abs_err_p50, r.errors.abs_err_p95, r.errors.abs_err_max,
+                r.errors.missed_contacts, r.errors.missed_contacts_max_depth, r.errors.false_contacts
+            );
+        }
+    }
 }

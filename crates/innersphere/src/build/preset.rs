@@ -19,42 +19,34 @@ use crate::packing::PackingOptions;
 /// dental scan in millimetres (a jaw in metres would get a one-cell grid, one in micrometres
 /// a grid too large to build).
 ///
-/// Numbers below come from `docs/RESULTS.md` ("Calibration") and `BENCHMARKS.md`, measured
-/// on the project's 2-core VM; "error" is the distance error of the sphere sets against the
-/// exact mesh distance along a chewing motion.
+/// What each costs and how accurate it is, measured: `BENCHMARKS.md` ("Build", "An arch
+/// with its bone") and `docs/RESULTS.md` ("Calibration").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Preset {
     /// A quick look: 64 cells along the longest side of the bounding box, plain greedy
-    /// packing (no minimum radius, no refinement). 8× fewer voxels than `Default`: the bunny
-    /// (`../shared/data/classic`) in 0.2 s, 16k spheres.
+    /// packing (no minimum radius, no refinement); 8× fewer voxels than `Default`.
     Fast,
     /// [`BuildOptions::default`]: 128 cells along the longest side, plain greedy packing (the
-    /// paper's). The bunny in 1.7 s, 92k spheres (`BENCHMARKS.md`).
+    /// paper's).
     Default,
     /// The calibrated packing scaled to the mesh: voxel = longest side / 384 (the main trees
     /// of the paper's evaluation, `ist bench paper`), minimum radius half a voxel and 8
-    /// off-grid refinement steps (the ratio and steps chosen in `docs/RESULTS.md`, where they
-    /// gave a distance error p95 of about a quarter voxel with 4× fewer spheres than the
-    /// plain packing at the same error). 27× the voxels of `Default`: the bunny in 4.6 s and
-    /// 0.40 GB, 132k spheres (2 cores). What [`BuildOptions::recommended_for`] returns.
+    /// off-grid refinement steps (the ratio and steps chosen in `docs/RESULTS.md`: about a
+    /// quarter voxel of distance error with fewer spheres than the plain packing at the same
+    /// error); 27× the voxels of `Default`. What [`BuildOptions::recommended_for`] returns.
     Fine,
     /// Jaw scans in **millimetres**, the accuracy-calibrated setting of `docs/RESULTS.md`:
-    /// 0.1 mm voxels, 0.05 mm minimum radius, 8 refinement steps. On the real arches:
-    /// sphere distance error p95 0.028 mm on the 5 s chew of `docs/RESULTS.md` (its bar:
-    /// 0.03 mm) and 0.021–0.045 mm on four unseen motions, no missed contact deeper than
-    /// 0.09 mm; refined to the meshes ([`Pair::refined_distance`](crate::Pair::refined_distance))
-    /// p95 0.00003–0.0008 mm on six motions, no missed contact deeper than 0.025 mm;
-    /// about 150k spheres, 2.3–2.6 s and 0.38 GB per arch on 2 cores (1.6–1.8× FCL's OBBRSS build
-    /// of an arch), about 1 s on 16; a molar in 0.3 s (14k spheres). Thick parts (where a
-    /// 12 mm ball fits: bone, [`JAW_THICK_RADIUS_MM`]) are packed from a 0.4 mm lattice with
-    /// spheres of at least 0.2 mm, so an arch modelled with its bone builds at about twice
-    /// its teeth's cost instead of its volume's (`BENCHMARKS.md`, "An arch with its bone").
+    /// 0.1 mm voxels, 0.05 mm minimum radius, 8 refinement steps, chosen so that the sphere
+    /// distance error stays within the 0.03 mm bar on the real arches (refined to the meshes
+    /// by [`Pair::refined_distance`](crate::Pair::refined_distance), far below it). Thick
+    /// parts (where a 12 mm ball fits: bone, [`JAW_THICK_RADIUS_MM`]) are packed from a
+    /// 0.4 mm lattice with spheres of at least 0.2 mm, so an arch modelled with its bone
+    /// builds at about its teeth's cost instead of its volume's.
     Jaw,
-    /// Jaw scans in **millimetres**, the query benchmark's trees (`BENCHMARKS.md`): 0.15 mm
-    /// voxels, 0.05 mm minimum radius, 8 refinement steps. About 110k spheres, 1.6 s and
-    /// 0.18 GB per arch on 2 cores (1.8× faster to build than `Jaw`), but distance error p95
-    /// 0.046 mm on the molars, above the 0.03 mm bar: for iterating and timing, not for the
-    /// final trees.
+    /// Jaw scans in **millimetres**, the query benchmark's trees: 0.15 mm voxels, 0.05 mm
+    /// minimum radius, 8 refinement steps. Faster to build than `Jaw` and with fewer
+    /// spheres, but its distance error is above the 0.03 mm bar: for iterating and timing,
+    /// not for the final trees.
     JawFast,
 }
 

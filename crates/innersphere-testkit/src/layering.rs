@@ -63,3 +63,16 @@ pub fn imports_against_the_ladder(src: &Path, layer: impl Fn(&str) -> Option<u32
     }
     wrong
 }
+
+/// Fails with every import of the crate at `manifest_dir` (its `src/`) that climbs its ladder
+/// `layer` ([`imports_against_the_ladder`]).
+pub fn assert_imports_down_the_ladder(manifest_dir: &str, layer: impl Fn(&str) -> Option<u32>) {
+    let src = Path::new(manifest_dir).join("src");
+    let wrong = imports_against_the_ladder(&src, layer);
+    assert!(
+        wrong.is_empty(),
+        "{} imports against the ladder:\n{}",
+        wrong.len(),
+        wrong.join("\n")
+    );
+}

@@ -27,13 +27,9 @@ fn layer(module: &str) -> Option<u32> {
 
 #[test]
 fn modules_import_down_the_ladder_by_their_own_paths() {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let wrong = innersphere_testkit::layering::imports_against_the_ladder(&src, layer);
-    assert!(
-        wrong.is_empty(),
-        "{} imports against the ladder:\n{}",
-        wrong.len(),
-        wrong.join("\n")
+    innersphere_testkit::layering::assert_imports_down_the_ladder(
+        env!("CARGO_MANIFEST_DIR"),
+        layer,
     );
 }
 

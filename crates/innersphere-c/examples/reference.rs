@@ -99,6 +99,8 @@ fn make(dir: &Path) {
     std::fs::write(dir.join("device.csv"), csv).unwrap();
 }
 
+// Over 120 lines: the reference answers, one query after another as the C test asks them,
+// kept in that order so that the two files read side by side.
 fn answer(dir: &Path) -> String {
     let a = SharedTree::new(SphereTree::load(dir.join("a.ist")).unwrap());
     let b = SharedTree::new(SphereTree::load(dir.join("b.ist")).unwrap());

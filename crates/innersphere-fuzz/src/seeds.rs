@@ -317,6 +317,7 @@ fn pose_variants() -> Vec<Vec<u8>> {
 /// Teeth-axes files: the generated arches' own (crown centres only, and with the axes'
 /// end points as the real files give them), and near misses (a key twice, both arches, in
 /// metres, keys that are no tooth numbers, a tooth twice under two spellings).
+// Over 120 lines: a table of cases, one short block each.
 fn teeth_variants() -> Vec<Vec<u8>> {
     let (upper, lower) = Teeth::of_arch_pair(6);
     let full: String = {

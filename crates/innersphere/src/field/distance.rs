@@ -163,6 +163,8 @@ pub fn bounds(
 
 /// [`bounds`] of the voxels a [`ThickSet`] keeps (in its thick parts only its lattice's
 /// nodes; all inside voxels without one).
+// Kept whole (over 120 lines): one parallel pass over the grid's rows whose bound, seed
+// triangle and thick-part test share the row's locals.
 pub fn bounds_where(
     mesh: &Mesh,
     bvh: &TriangleBvh,

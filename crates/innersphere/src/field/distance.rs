@@ -163,8 +163,9 @@ pub fn bounds(
 
 /// [`bounds`] of the voxels a [`ThickSet`] keeps (in its thick parts only its lattice's
 /// nodes; all inside voxels without one).
-// Kept whole (over 120 lines): one parallel pass over the grid's rows whose bound, seed
-// triangle and thick-part test share the row's locals.
+// Kept whole (over 120 lines): its passes (the inside cells, the coarse lattice's nodes and
+// their nearest triangles, every voxel's bound from its node) share the lattice's indexing
+// closures, which a split would hand from function to function.
 pub fn bounds_where(
     mesh: &Mesh,
     bvh: &TriangleBvh,

@@ -461,6 +461,61 @@ fn fan_out_figure(
     Ok(())
 }
 
+/// The multipoint traversal's time against k (each of `ks`) on the main trees.
+fn multipoint_figure(
+    ta: &SharedTree,
+    tb: &SharedTree,
+    motion: &Motion,
+    ks: &[usize],
+    out: &mut Out,
+) -> Result<()> {
+    let id = Pose::IDENTITY;
+    let mut mp = String::from("k,p50_us,p99_us,max_us,mean_us,mean_contacts\n");
+    let mut mp_series = vec![
+        Series {
+            name: "p50".into(),
+            points: vec![],
+        },
+        Series {
+            name: "p99".into(),
+            points: vec![],
+        },
+    ];
+    for &k in ks {
+        let o = MultipointOptions {
+            k,
+            ..Default::default()
+        };
+        let mut n_contacts = 0usize;
+        let t = time_frames(ta, tb, motion, |p, st| {
+            let r = st.multipoint(&id, p, &o);
+            n_contacts += r.count;
+            r.count > 0
+        });
+        let [p50, p99, max, mean] = stats(&t.us);
+        let _ = writeln!(
+            mp,
+            "{k},{p50:.3},{p99:.3},{max:.3},{mean:.3},{:.2}",
+            n_contacts as f64 / (2 * motion.frames.len()) as f64
+        );
+        mp_series[0].points.push((k as f64, p50));
+        mp_series[1].points.push((k as f64, p99));
+    }
+    out.csv("multipoint_k.csv", &mp)?;
+    out.png(
+        "multipoint_k.png",
+        &Chart {
+            title: "Multipoint traversal against k",
+            x_label: "k (contacts asked)",
+            y_label: "time per frame (µs)",
+            log_x: true,
+            log_y: true,
+        },
+        &mp_series,
+    )?;
+    Ok(())
+}
+
 /// Runs the whole evaluation of the pair (`mesh_a` fixed, `mesh_b` moved by `motion`) and
 /// writes CSV files and PNG charts into `out`; `log` receives one line per step.
 pub fn run(
@@ -486,7 +541,6 @@ pub fn run(
     };
     let ea = Arc::new(ExactMesh::new(mesh_a)?);
     let eb = Arc::new(ExactMesh::new(mesh_b)?);
-    let id = Pose::IDENTITY;
 
     let sweep_leaves = leaf_sweep(mesh_a, mesh_b, motion, opts, (&ea, &eb), &mut out, log)?;
     fan_out_figure(mesh_a, mesh_b, motion, opts, &sweep_leaves, &mut out, log)?;
@@ -553,49 +607,7 @@ pub fn run(
         log("no frame in contact: no backtracking chart");
     }
 
-    let mut mp = String::from("k,p50_us,p99_us,max_us,mean_us,mean_contacts\n");
-    let mut mp_series = vec![
-        Series {
-            name: "p50".into(),
-            points: vec![],
-        },
-        Series {
-            name: "p99".into(),
-            points: vec![],
-        },
-    ];
-    for &k in &opts.ks {
-        let o = MultipointOptions {
-            k,
-            ..Default::default()
-        };
-        let mut n_contacts = 0usize;
-        let t = time_frames(&ta, &tb, motion, |p, st| {
-            let r = st.multipoint(&id, p, &o);
-            n_contacts += r.count;
-            r.count > 0
-        });
-        let [p50, p99, max, mean] = stats(&t.us);
-        let _ = writeln!(
-            mp,
-            "{k},{p50:.3},{p99:.3},{max:.3},{mean:.3},{:.2}",
-            n_contacts as f64 / (2 * motion.frames.len()) as f64
-        );
-        mp_series[0].points.push((k as f64, p50));
-        mp_series[1].points.push((k as f64, p99));
-    }
-    out.csv("multipoint_k.csv", &mp)?;
-    out.png(
-        "multipoint_k.png",
-        &Chart {
-            title: "Multipoint traversal against k",
-            x_label: "k (contacts asked)",
-            y_label: "time per frame (µs)",
-            log_x: true,
-            log_y: true,
-        },
-        &mp_series,
-    )?;
+    multipoint_figure(&ta, &tb, motion, &opts.ks, &mut out)?;
 
     // Ours beside the paper's traversals and the exact mesh distance, per frame: single pass
     // (what a haptic loop sees) first, the best of two passes beside it.

@@ -141,6 +141,61 @@ pub fn same_body(a: &Mesh, b: &Mesh) -> bool {
     }
 }
 
+/// The bite a generated motion closes into: the identity when the pair overlaps slightly
+/// there (by `touch` to 8 `touch`), else B moved along the frame's up until it does (`k`: the
+/// pair's scale); an error that says why when no such pose exists.
+fn light_bite(
+    est: &mut ClearanceEstimator,
+    a: &Mesh,
+    b: &Mesh,
+    frame: &AnatomicalFrame,
+    touch: f64,
+    k: f64,
+) -> Result<Pose> {
+    let c0 = est.clearance(&Pose::IDENTITY);
+    Ok(if (-8.0 * touch..=-touch).contains(&c0) {
+        Pose::IDENTITY
+    } else {
+        let up = frame.up;
+        let target = -1.5 * touch;
+        let mut f = |x: f64| est.clearance(&Pose::from_translation(up * -x)) - target;
+        let x = solve(
+            &mut f,
+            0.0,
+            c0 - target,
+            1.0,
+            0.002 * k,
+            -1e3 * k,
+            1e3 * k,
+            0.02 * touch,
+        )
+        .ok_or_else(|| {
+            // Say why: the same body twice, bodies that overlap and never come apart, or
+            // bodies that never meet.
+            Error::InvalidOption(if same_body(a, b) {
+                format!(
+                    "cannot generate a motion: body A and body B are the same mesh ({} \
+                     triangles, the same bounding box and volume), so they coincide at the \
+                     identity pose, and moving B along the occlusal direction finds no light \
+                     bite; give two different bodies (an upper and a lower jaw, say)",
+                    a.triangles.len()
+                )
+            } else if c0 < 0.0 {
+                format!(
+                    "cannot generate a motion: the bodies overlap at the identity pose \
+                     (clearance estimate {c0:.3e}) and moving B along the occlusal direction \
+                     finds no light bite"
+                )
+            } else {
+                "cannot generate a motion: the bodies never touch when B moves along the \
+                 occlusal direction"
+                    .into()
+            })
+        })?;
+        Pose::from_translation(up * -x)
+    })
+}
+
 /// [`generate`] with options, returning the labels and the plan's anchors too.
 pub fn generate_with(
     scenario: Scenario,
@@ -190,49 +245,7 @@ pub fn generate_with(
     }
 
     let mut est = ClearanceEstimator::new(a, b, &opts.clearance);
-    // The bite: the identity when the pair overlaps slightly there, else solved along up.
-    let c0 = est.clearance(&Pose::IDENTITY);
-    let bite = if (-8.0 * touch..=-touch).contains(&c0) {
-        Pose::IDENTITY
-    } else {
-        let up = frame.up;
-        let target = -1.5 * touch;
-        let mut f = |x: f64| est.clearance(&Pose::from_translation(up * -x)) - target;
-        let x = solve(
-            &mut f,
-            0.0,
-            c0 - target,
-            1.0,
-            0.002 * k,
-            -1e3 * k,
-            1e3 * k,
-            0.02 * touch,
-        )
-        .ok_or_else(|| {
-            // Say why: the same body twice, bodies that overlap and never come apart, or
-            // bodies that never meet.
-            Error::InvalidOption(if same_body(a, b) {
-                format!(
-                    "cannot generate a motion: body A and body B are the same mesh ({} \
-                     triangles, the same bounding box and volume), so they coincide at the \
-                     identity pose, and moving B along the occlusal direction finds no light \
-                     bite; give two different bodies (an upper and a lower jaw, say)",
-                    a.triangles.len()
-                )
-            } else if c0 < 0.0 {
-                format!(
-                    "cannot generate a motion: the bodies overlap at the identity pose \
-                     (clearance estimate {c0:.3e}) and moving B along the occlusal direction \
-                     finds no light bite"
-                )
-            } else {
-                "cannot generate a motion: the bodies never touch when B moves along the \
-                 occlusal direction"
-                    .into()
-            })
-        })?;
-        Pose::from_translation(up * -x)
-    };
+    let bite = light_bite(&mut est, a, b, &frame, touch, k)?;
     // Finer samples where the bodies meet.
     est.add_contact_samples(a, b, &bite, 1.5 * k, opts.clearance.samples.max(1));
     let bite_clearance = est.clearance(&bite);

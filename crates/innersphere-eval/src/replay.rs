@@ -494,7 +494,6 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
 ) -> ReplayReport {
     let n = motion.frames.len();
     let passes = opts.passes.max(1);
-    let every = opts.every.max(1);
     let mut rows: Vec<FrameRow> = motion
         .frames
         .iter()
@@ -510,7 +509,6 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
             ..Default::default()
         })
         .collect();
-    let id = Pose::IDENTITY;
     let mut kinds = Vec::new();
     let mut times = vec![0.0; n];
     let mut answers = vec![Answer::default(); n];
@@ -572,82 +570,7 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
             passes_agree: agree,
         });
     }
-    let accuracy = exact.map(|(ma, mb)| {
-        // The tree distance is needed on compared frames even if Distance was not timed.
-        if !opts.kinds.contains(&QueryKind::Distance) {
-            let mut pair = Pair::new(a, b);
-            for (i, f) in motion.frames.iter().enumerate() {
-                let p = pair.distance(&id, &f.pose);
-                rows[i].distance = p.distance;
-                rows[i].contact = Some(p.overlapping);
-            }
-        }
-        let timed = time_exact(ma, mb, motion, every, passes, clock);
-        let mut scratch = ExactScratch::new();
-        let mut acc = Accuracy {
-            exact_warm_start_frames: every,
-            exact_passes_agree: timed.passes_agree,
-            ..Default::default()
-        };
-        let mut spheres = Tally::default();
-        let refined_slot = opts
-            .kinds
-            .iter()
-            .take(KINDS)
-            .position(|&k| k == QueryKind::RefinedDistance);
-        let mut refined = refined_slot.map(|_| (Tally::default(), RefinedAccuracy::default()));
-        let mut rus = Vec::new();
-        let mut depth_of =
-            |f: &crate::motion::Frame| exact::penetration_depth(ma, &id, mb, &f.pose, &mut scratch);
-        for (j, (i, f)) in motion.frames.iter().enumerate().step_by(every).enumerate() {
-            let e = timed.answers[j];
-            rows[i].exact_distance = e.distance;
-            rows[i].exact_intersecting = Some(e.intersecting);
-            rows[i].exact_us = timed.first[j];
-            acc.frames += 1;
-            acc.separated_frames += usize::from(!e.intersecting);
-            // The meshes' interpenetration depth, measured once per frame at most.
-            let mut depth = None;
-            if let (Some((tally, r)), Some(slot)) = (refined.as_mut(), refined_slot) {
-                rus.push(rows[i].us[slot]);
-                if let Some(ans) = rows[i].answers[slot] {
-                    let d = || *depth.get_or_insert_with(|| depth_of(f));
-                    tally.frame(&e, ans.value, ans.in_contact, d, opts.deep);
-                }
-                r.incomplete_frames += usize::from(rows[i].refine_incomplete);
-            }
-            let tree_contact = rows[i].contact == Some(true);
-            let d = || *depth.get_or_insert_with(|| depth_of(f));
-            spheres.frame(&e, rows[i].distance, tree_contact, d, opts.deep);
-        }
-        acc.errors = spheres.finish();
-        let (first, best) = (sorted(timed.first), sorted(timed.best));
-        acc.exact_p50_us = percentile(&first, 0.5);
-        acc.exact_p99_us = percentile(&first, 0.99);
-        acc.exact_max_us = first.last().copied().unwrap_or(f64::NAN);
-        acc.exact_best_of_passes_p99_us = percentile(&best, 0.99);
-        acc.exact_best_of_passes_max_us = best.last().copied().unwrap_or(f64::NAN);
-        acc.distance_p99_us = match opts
-            .kinds
-            .iter()
-            .take(KINDS)
-            .position(|&k| k == QueryKind::Distance)
-        {
-            Some(slot) => {
-                let ours = rows.iter().step_by(every).map(|r| r.us[slot]).collect();
-                percentile(&sorted(ours), 0.99)
-            }
-            None => f64::NAN,
-        };
-        acc.speedup_p99 = acc.exact_p99_us / acc.distance_p99_us;
-        if let Some((tally, mut r)) = refined {
-            r.errors = tally.finish();
-            r.p99_us = percentile(&sorted(rus), 0.99);
-            r.speedup_p99 = acc.exact_p99_us / r.p99_us;
-            acc.refined = Some(r);
-        }
-        acc
-    });
+    let accuracy = exact.map(|meshes| accuracy(a, b, meshes, motion, opts, &mut rows, clock));
     ReplayReport {
         frames: n,
         passes,
@@ -655,6 +578,96 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
         accuracy,
         rows,
     }
+}
+
+/// The exact reference on every `every`-th frame ([`ReplayOptions::every`]): the exact
+/// method timed (after the trees' queries, with the same clock), each row's exact answers
+/// filled in, and the sphere and refined distances' errors against them.
+fn accuracy<C: FnMut() -> f64>(
+    a: &SharedTree,
+    b: &SharedTree,
+    (ma, mb): (&ExactMesh, &ExactMesh),
+    motion: &Motion,
+    opts: &ReplayOptions,
+    rows: &mut [FrameRow],
+    clock: &mut C,
+) -> Accuracy {
+    let id = Pose::IDENTITY;
+    let (passes, every) = (opts.passes.max(1), opts.every.max(1));
+    // The tree distance is needed on compared frames even if Distance was not timed.
+    if !opts.kinds.contains(&QueryKind::Distance) {
+        let mut pair = Pair::new(a, b);
+        for (i, f) in motion.frames.iter().enumerate() {
+            let p = pair.distance(&id, &f.pose);
+            rows[i].distance = p.distance;
+            rows[i].contact = Some(p.overlapping);
+        }
+    }
+    let timed = time_exact(ma, mb, motion, every, passes, clock);
+    let mut scratch = ExactScratch::new();
+    let mut acc = Accuracy {
+        exact_warm_start_frames: every,
+        exact_passes_agree: timed.passes_agree,
+        ..Default::default()
+    };
+    let mut spheres = Tally::default();
+    let refined_slot = opts
+        .kinds
+        .iter()
+        .take(KINDS)
+        .position(|&k| k == QueryKind::RefinedDistance);
+    let mut refined = refined_slot.map(|_| (Tally::default(), RefinedAccuracy::default()));
+    let mut rus = Vec::new();
+    let mut depth_of =
+        |f: &crate::motion::Frame| exact::penetration_depth(ma, &id, mb, &f.pose, &mut scratch);
+    for (j, (i, f)) in motion.frames.iter().enumerate().step_by(every).enumerate() {
+        let e = timed.answers[j];
+        rows[i].exact_distance = e.distance;
+        rows[i].exact_intersecting = Some(e.intersecting);
+        rows[i].exact_us = timed.first[j];
+        acc.frames += 1;
+        acc.separated_frames += usize::from(!e.intersecting);
+        // The meshes' interpenetration depth, measured once per frame at most.
+        let mut depth = None;
+        if let (Some((tally, r)), Some(slot)) = (refined.as_mut(), refined_slot) {
+            rus.push(rows[i].us[slot]);
+            if let Some(ans) = rows[i].answers[slot] {
+                let d = || *depth.get_or_insert_with(|| depth_of(f));
+                tally.frame(&e, ans.value, ans.in_contact, d, opts.deep);
+            }
+            r.incomplete_frames += usize::from(rows[i].refine_incomplete);
+        }
+        let tree_contact = rows[i].contact == Some(true);
+        let d = || *depth.get_or_insert_with(|| depth_of(f));
+        spheres.frame(&e, rows[i].distance, tree_contact, d, opts.deep);
+    }
+    acc.errors = spheres.finish();
+    let (first, best) = (sorted(timed.first), sorted(timed.best));
+    acc.exact_p50_us = percentile(&first, 0.5);
+    acc.exact_p99_us = percentile(&first, 0.99);
+    acc.exact_max_us = first.last().copied().unwrap_or(f64::NAN);
+    acc.exact_best_of_passes_p99_us = percentile(&best, 0.99);
+    acc.exact_best_of_passes_max_us = best.last().copied().unwrap_or(f64::NAN);
+    acc.distance_p99_us = match opts
+        .kinds
+        .iter()
+        .take(KINDS)
+        .position(|&k| k == QueryKind::Distance)
+    {
+        Some(slot) => {
+            let ours = rows.iter().step_by(every).map(|r| r.us[slot]).collect();
+            percentile(&sorted(ours), 0.99)
+        }
+        None => f64::NAN,
+    };
+    acc.speedup_p99 = acc.exact_p99_us / acc.distance_p99_us;
+    if let Some((tally, mut r)) = refined {
+        r.errors = tally.finish();
+        r.p99_us = percentile(&sorted(rus), 0.99);
+        r.speedup_p99 = acc.exact_p99_us / r.p99_us;
+        acc.refined = Some(r);
+    }
+    acc
 }
 
 /// The exact mesh distance timed on the compared frames ([`time_exact`]).

@@ -122,6 +122,66 @@ pub struct Shape {
     pub dropped_parts: usize,
 }
 
+/// The columns over both arches' triangles (in the occlusal frame), padded by the rim and the
+/// outline's smoothing; refused at once when the least extraction grid any wafer needs on
+/// them (as tall as both coverages and the plate) would pass the memory bound.
+fn column_grid(
+    tris_a: &[[DVec3; 3]],
+    tris_b: &[[DVec3; 3]],
+    o: &SplintOptions,
+) -> Result<ColumnGrid> {
+    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    for t in tris_a.iter().chain(tris_b) {
+        for v in t {
+            lo = lo.min(v.truncate());
+            hi = hi.max(v.truncate());
+        }
+    }
+    let h = o.voxel;
+    let pad = o.rim + 3.0 * OUTLINE_SIGMA + 2.0 * h;
+    let (lo, hi) = (lo - pad, hi + pad);
+    let nx = ((hi.x - lo.x) / h).ceil() + 1.0;
+    let ny = ((hi.y - lo.y) / h).ceil() + 1.0;
+    // Before the columns' work: their maps, and the least extraction grid any wafer needs (as
+    // tall as both coverages and the plate), so that a voxel far too fine is refused at once.
+    let least_cells_per_column = (2.0 * o.coverage + o.min_thickness) / h + 6.0;
+    let bytes = nx * ny * (COLUMN_BYTES as f64 + 8.0 * least_cells_per_column);
+    if bytes.is_nan() || bytes > super::extract::MAX_SPLINT_BYTES as f64 {
+        return Err(super::extract::too_fine(
+            h,
+            bytes.min(u64::MAX as f64) as u64,
+            true,
+        ));
+    }
+    Ok(ColumnGrid {
+        origin: lo,
+        h,
+        dims: [nx as usize, ny as usize],
+    })
+}
+
+/// An arch's cusp tips on the columns, from its imprint `low` (NaN elsewhere): the columns
+/// where the imprint is lowest within CUSP_RADIUS, and within CUSP_BAND of the lowest within
+/// CUSP_REACH (the flat bone or gum beside the crowns is a local lowest too, but it stands
+/// back from the crowns).
+fn cusp_tips(low: &[f64], dims: Dims, h: f64) -> Vec<f64> {
+    let r = (CUSP_RADIUS / h).round() as usize;
+    let reach = (CUSP_REACH / h).round() as usize;
+    let wide = raster::min_filter(low, dims, reach);
+    raster::min_filter(low, dims, r)
+        .iter()
+        .zip(low)
+        .zip(&wide)
+        .map(|((m, z), w)| {
+            if z.is_finite() && z <= m && *z <= w + CUSP_BAND {
+                *z
+            } else {
+                f64::NAN
+            }
+        })
+        .collect()
+}
+
 /// The height field of the splint between `a` and `b` (B placed by `pose` in A's frame).
 pub fn shape(a: &Mesh, b: &Mesh, pose: &Pose, o: &SplintOptions) -> Result<Shape> {
     let b_world: Vec<DVec3> = b
@@ -150,34 +210,8 @@ pub fn shape(a: &Mesh, b: &Mesh, pose: &Pose, o: &SplintOptions) -> Result<Shape
             })
         })
         .collect();
-    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-    for t in tris_a.iter().chain(&tris_b) {
-        for v in t {
-            lo = lo.min(v.truncate());
-            hi = hi.max(v.truncate());
-        }
-    }
-    let h = o.voxel;
-    let pad = o.rim + 3.0 * OUTLINE_SIGMA + 2.0 * h;
-    let (lo, hi) = (lo - pad, hi + pad);
-    let nx = ((hi.x - lo.x) / h).ceil() + 1.0;
-    let ny = ((hi.y - lo.y) / h).ceil() + 1.0;
-    // Before the columns' work: their maps, and the least extraction grid any wafer needs (as
-    // tall as both coverages and the plate), so that a voxel far too fine is refused at once.
-    let least_cells_per_column = (2.0 * o.coverage + o.min_thickness) / h + 6.0;
-    let bytes = nx * ny * (COLUMN_BYTES as f64 + 8.0 * least_cells_per_column);
-    if bytes.is_nan() || bytes > super::extract::MAX_SPLINT_BYTES as f64 {
-        return Err(super::extract::too_fine(
-            h,
-            bytes.min(u64::MAX as f64) as u64,
-            true,
-        ));
-    }
-    let grid = ColumnGrid {
-        origin: lo,
-        h,
-        dims: [nx as usize, ny as usize],
-    };
+    let grid = column_grid(&tris_a, &tris_b, o)?;
+    let h = grid.h;
     let dims: Dims = grid.dims;
     let c = o.clearance + FIELD_MARGIN;
     let a_low = lowest_offset(&tris_a, &grid, c);
@@ -187,27 +221,9 @@ pub fn shape(a: &Mesh, b: &Mesh, pose: &Pose, o: &SplintOptions) -> Result<Shape
         .collect();
     inputs::check_facing(&a_low, &b_high, &grid, c)?;
 
-    // Each arch's occlusal surface: a smooth surface through its cusp tips (the columns
-    // where the imprint is lowest within CUSP_RADIUS, and within CUSP_BAND of the lowest
-    // within CUSP_REACH: the flat bone or gum beside the crowns is a local lowest too, but
-    // it stands back from the crowns), carried over the columns without teeth.
-    let r = (CUSP_RADIUS / h).round() as usize;
-    let reach = (CUSP_REACH / h).round() as usize;
-    let cusps = |low: &[f64]| -> Vec<f64> {
-        let wide = raster::min_filter(low, dims, reach);
-        raster::min_filter(low, dims, r)
-            .iter()
-            .zip(low)
-            .zip(&wide)
-            .map(|((m, z), w)| {
-                if z.is_finite() && z <= m && *z <= w + CUSP_BAND {
-                    *z
-                } else {
-                    f64::NAN
-                }
-            })
-            .collect()
-    };
+    // Each arch's occlusal surface: a smooth surface through its cusp tips ([`cusp_tips`]),
+    // carried over the columns without teeth.
+    let cusps = |low: &[f64]| cusp_tips(low, dims, h);
     let tip_a: Vec<f64> = cusps(&a_low).into_iter().map(|z| z + c).collect();
     let neg_b: Vec<f64> = b_high.iter().map(|z| -z).collect();
     let tip_b: Vec<f64> = cusps(&neg_b).into_iter().map(|z| -(z + c)).collect();

@@ -17,17 +17,6 @@ fn layer(module: &str) -> u32 {
     }
 }
 
-fn files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for e in std::fs::read_dir(dir).unwrap() {
-        let p = e.unwrap().path();
-        if p.is_dir() {
-            files(&p, out);
-        } else if p.extension().is_some_and(|x| x == "rs") {
-            out.push(p);
-        }
-    }
-}
-
 /// `query/`'s module of file `p` (`kernel/mod.rs` → `kernel`, `search/front.rs` →
 /// `search/front`).
 fn module_of(root: &Path, p: &Path) -> String {
@@ -106,7 +95,7 @@ fn imports(module: &str, text: &str, known: &BTreeSet<String>) -> BTreeSet<Strin
 fn query_imports_run_one_way() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src/query");
     let mut paths = Vec::new();
-    files(&root, &mut paths);
+    innersphere_testkit::layering::files(&root, &mut paths);
     let known: BTreeSet<String> = paths.iter().map(|p| module_of(&root, p)).collect();
     assert!(known.contains("kernel") && known.contains("pair") && known.contains("search"));
     let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();

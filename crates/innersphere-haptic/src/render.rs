@@ -211,8 +211,9 @@ pub fn check_step(dt: f64) -> Result<()> {
     }
 }
 
-/// What one tick did.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// What one tick did. Its serde form (the tool's pose as 7 numbers) is what Python's
+/// `Tick.to_dict` gives.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Tick {
     /// Force to send to the device (N, world frame): the coupling's pull on the hand,
     /// clamped to the device's maximum.

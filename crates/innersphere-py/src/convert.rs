@@ -1,7 +1,6 @@
 //! Conversions shared by the classes: library errors to Python exceptions, Python poses to
 //! [`Pose`]s, vectors and JSON values to Python objects.
 
-use innersphere::glam::DVec3;
 use innersphere::{Error, MatrixOrder, Pose};
 use numpy::ndarray::{ArrayViewD, Axis};
 use numpy::{AllowTypeChange, IxDyn, PyArray1, PyArrayLike, PyArrayMethods};
@@ -205,11 +204,6 @@ impl PosesA {
     }
 }
 
-/// A vector as a numpy array of shape (3,).
-pub(crate) fn vec3<'py>(py: Python<'py>, v: DVec3) -> Bound<'py, PyArray1<f64>> {
-    PyArray1::from_slice(py, &v.to_array())
-}
-
 /// A pose as a numpy array `(tx, ty, tz, qw, qx, qy, qz)`.
 pub(crate) fn pose7<'py>(py: Python<'py>, p: &Pose) -> Bound<'py, PyArray1<f64>> {
     PyArray1::from_slice(py, &p.to_array())
@@ -221,33 +215,116 @@ pub(crate) fn pose44<'py>(py: Python<'py>, p: &Pose) -> PyResult<Bound<'py, PyAn
     Ok(PyArray1::from_slice(py, &m).reshape([4, 4])?.into_any())
 }
 
-/// A JSON value as plain Python objects (dict, list, str, float, int, bool, None).
-pub(crate) fn json<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
+/// A serializable value (an answer, a JSON value) as plain Python objects (dict, list, str,
+/// float, int, bool, None): its JSON form, what `ist query --json` prints (vectors as lists,
+/// a non-finite number as None, as JSON has it).
+pub(crate) fn to_python<'py>(
+    py: Python<'py>,
+    v: &impl serde::Serialize,
+) -> PyResult<Bound<'py, PyAny>> {
+    let json = serde_json::to_value(v).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    pythonize::pythonize(py, &json).map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// An answer's serde form as a dict, with `more` (what the pair keeps beside it: patches)
+/// under its own keys.
+pub(crate) fn answer_dict<'py>(
+    py: Python<'py>,
+    answer: &impl serde::Serialize,
+    more: &[(&str, Bound<'py, PyAny>)],
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = to_python(py, answer)?.cast_into::<PyDict>()?;
+    for (k, v) in more {
+        d.set_item(k, v)?;
+    }
+    Ok(d)
+}
+
+/// Many answers of one type as columns: a dict with the keys of their serde form, each a
+/// numpy array over the answers — bools as bool, integers as int64 (null as −1), other
+/// numbers as float64 (null as NaN), fixed-length lists of numbers as (N, m) float64, records
+/// as dicts of such columns. `zero` (any answer of the type) gives the keys and kinds when
+/// there are no answers. Written here, not with pythonize, because numpy columns are what a
+/// batch of thousands wants (one array per key, not a dict per answer).
+pub(crate) fn columns<'py, T: serde::Serialize>(
+    py: Python<'py>,
+    answers: &[T],
+    zero: &T,
+) -> PyResult<Bound<'py, PyDict>> {
+    let value = |a: &T| serde_json::to_value(a).map_err(|e| PyValueError::new_err(e.to_string()));
+    let rows: Vec<serde_json::Value> = answers.iter().map(value).collect::<PyResult<_>>()?;
+    let template = value(zero)?;
+    let refs: Vec<&serde_json::Value> = rows.iter().collect();
+    column_record(py, &refs, &template)
+}
+
+/// The columns of records (all of one type's form, `template` one of them).
+fn column_record<'py>(
+    py: Python<'py>,
+    rows: &[&serde_json::Value],
+    template: &serde_json::Value,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let Some(fields) = template.as_object() else {
+        return Ok(d);
+    };
+    for (key, t) in fields {
+        let col: Vec<&serde_json::Value> = rows
+            .iter()
+            .map(|r| r.get(key).unwrap_or(&serde_json::Value::Null))
+            .collect();
+        d.set_item(key, column(py, &col, t)?)?;
+    }
+    Ok(d)
+}
+
+/// One column (see [`columns`]); its kind from its values, or from `template` when empty.
+fn column<'py>(
+    py: Python<'py>,
+    col: &[&serde_json::Value],
+    template: &serde_json::Value,
+) -> PyResult<Bound<'py, PyAny>> {
     use serde_json::Value;
-    Ok(match v {
-        Value::Null => py.None().into_bound(py),
-        Value::Bool(b) => b.into_pyobject(py)?.to_owned().into_any(),
-        Value::Number(n) => match (n.as_i64(), n.as_u64()) {
-            (Some(i), _) => i.into_pyobject(py)?.into_any(),
-            (None, Some(u)) => u.into_pyobject(py)?.into_any(),
-            _ => n.as_f64().unwrap_or(f64::NAN).into_pyobject(py)?.into_any(),
-        },
-        Value::String(s) => s.into_pyobject(py)?.into_any(),
-        Value::Array(a) => {
-            let list = PyList::empty(py);
-            for x in a {
-                list.append(json(py, x)?)?;
-            }
-            list.into_any()
-        }
-        Value::Object(o) => {
-            let d = PyDict::new(py);
-            for (k, x) in o {
-                d.set_item(k, json(py, x)?)?;
-            }
-            d.into_any()
-        }
-    })
+    let n = col.len();
+    let kind: Vec<&Value> = if col.is_empty() {
+        vec![template]
+    } else {
+        col.to_vec()
+    };
+    let all = |f: &dyn Fn(&Value) -> bool| kind.iter().all(|v| f(v));
+    if all(&Value::is_boolean) {
+        let v = col.iter().map(|v| v.as_bool() == Some(true));
+        return Ok(PyArray1::from_iter(py, v).into_any());
+    }
+    if all(&|v| v.is_i64() || v.is_u64() || v.is_null()) && !all(&Value::is_null) {
+        let v = col.iter().map(|v| v.as_i64().unwrap_or(-1));
+        return Ok(PyArray1::from_iter(py, v).into_any());
+    }
+    if all(&|v| v.is_number() || v.is_null()) {
+        let v = col.iter().map(|v| v.as_f64().unwrap_or(f64::NAN));
+        return Ok(PyArray1::from_iter(py, v).into_any());
+    }
+    let m = kind[0].as_array().map_or(0, Vec::len);
+    let numbers = |v: &Value| {
+        v.as_array()
+            .is_some_and(|a| a.len() == m && a.iter().all(|x| x.is_number() || x.is_null()))
+    };
+    if m > 0 && all(&numbers) {
+        let flat: Vec<f64> = col
+            .iter()
+            .flat_map(|v| v.as_array().into_iter().flatten())
+            .map(|x| x.as_f64().unwrap_or(f64::NAN))
+            .collect();
+        return Ok(PyArray1::from_vec(py, flat).reshape([n, m])?.into_any());
+    }
+    if all(&Value::is_object) {
+        return Ok(column_record(py, col, kind[0])?.into_any());
+    }
+    let list = PyList::empty(py);
+    for v in col {
+        list.append(to_python(py, v)?)?;
+    }
+    Ok(list.into_any())
 }
 
 /// A finite, non-negative number argument, or `ValueError`.

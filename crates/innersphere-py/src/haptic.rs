@@ -1,6 +1,6 @@
 //! `innersphere.Haptic`: the 6-DOF haptic loop (virtual coupling, penalty contact).
 
-use crate::convert::{error, pose, pose44, pose7, pose_or_identity, vec3};
+use crate::convert::{error, pose, pose44, pose7, pose_or_identity};
 use crate::pair::Pair;
 use innersphere_haptic::{CollisionOptions, DeviceClass, HapticLoop, HapticOptions, MultirateLoop};
 use numpy::PyArray1;
@@ -8,7 +8,10 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-/// What one haptic tick did (units: mm, N, s for the jaw scans in mm).
+/// What one haptic tick did (units: mm, N, s for the jaw scans in mm). Attributes: force
+/// (3,) and torque (3,) to the device, tool (the pose, 7 numbers), tool_matrix (4×4),
+/// contact_force (3,), volume, volume_bound, max_depth, patches (a count), budgeted, compute
+/// (s), late, model_age (s).
 #[pyclass(module = "innersphere", name = "Tick", frozen)]
 pub struct Tick {
     t: innersphere_haptic::Tick,
@@ -16,89 +19,23 @@ pub struct Tick {
 
 #[pymethods]
 impl Tick {
-    /// Force to send to the device (N, world), clamped to its maximum, shape (3,).
-    #[getter]
-    fn force<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec3(py, self.t.force)
-    }
-    /// Torque to send to the device (N·mm, world), clamped likewise, shape (3,).
-    #[getter]
-    fn torque<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec3(py, self.t.torque)
-    }
-    /// The tool's pose after the tick (what to draw): (tx, ty, tz, qw, qx, qy, qz).
-    #[getter]
-    fn tool<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        pose7(py, &self.t.tool)
-    }
     /// The tool's pose after the tick as a 4×4 homogeneous matrix.
     #[getter]
     fn tool_matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         pose44(py, &self.t.tool)
     }
-    /// Penalty force of the contact on the tool (N), shape (3,).
-    #[getter]
-    fn contact_force<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec3(py, self.t.contact_force)
-    }
-    /// Penetration volume (mm³): exact, or what the time-critical query found.
-    #[getter]
-    fn volume(&self) -> f64 {
-        self.t.volume
-    }
-    /// Upper bound on the penetration volume (equals volume unless budgeted).
-    #[getter]
-    fn volume_bound(&self) -> f64 {
-        self.t.volume_bound
-    }
-    /// Deepest leaf-pair overlap (mm).
-    #[getter]
-    fn max_depth(&self) -> f64 {
-        self.t.max_depth
-    }
-    /// Contact patches (exact path only).
-    #[getter]
-    fn patches(&self) -> usize {
-        self.t.patches
-    }
-    /// True when the time-critical query answered because the exact one would not fit the
-    /// tick's budget.
-    #[getter]
-    fn budgeted(&self) -> bool {
-        self.t.budgeted
-    }
-    /// Time the tick took (s).
-    #[getter]
-    fn compute(&self) -> f64 {
-        self.t.compute
-    }
-    /// True when the tick took longer than its budget.
-    #[getter]
-    fn late(&self) -> bool {
-        self.t.late
-    }
-    /// Age of the contact model the tick used (s): since the tool pose its query answered
-    /// for was taken (simulated time without a collision thread, real time with one).
-    #[getter]
-    fn model_age(&self) -> f64 {
-        self.t.model_age
-    }
-    /// The fields as a dict.
+    /// The tick as a dict: its serde form (vectors as lists, the tool's pose as 7 numbers).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let d = PyDict::new(py);
-        d.set_item("force", self.force(py))?;
-        d.set_item("torque", self.torque(py))?;
-        d.set_item("tool", self.tool(py))?;
-        d.set_item("contact_force", self.contact_force(py))?;
-        d.set_item("volume", self.t.volume)?;
-        d.set_item("volume_bound", self.t.volume_bound)?;
-        d.set_item("max_depth", self.t.max_depth)?;
-        d.set_item("patches", self.t.patches)?;
-        d.set_item("budgeted", self.t.budgeted)?;
-        d.set_item("compute", self.t.compute)?;
-        d.set_item("late", self.t.late)?;
-        d.set_item("model_age", self.t.model_age)?;
-        Ok(d)
+        crate::convert::answer_dict(py, &self.t, &[])
+    }
+    fn __getattr__<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
+        crate::results::attribute(&self.to_dict(py)?, "Tick", name)
+    }
+    fn __dir__(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        let mut names = crate::results::attribute_names(&self.to_dict(py)?)?;
+        names.push("tool_matrix".into());
+        names.sort();
+        Ok(names)
     }
     fn __repr__(&self) -> String {
         format!(

@@ -15,6 +15,7 @@ mod haptic;
 mod motion;
 mod occlude;
 mod pair;
+mod results;
 mod shapes;
 mod splint;
 mod tree;
@@ -28,8 +29,8 @@ fn _innersphere(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<tree::Tree>()?;
     m.add_class::<pair::Pair>()?;
-    m.add_class::<pair::DistanceResult>()?;
-    m.add_class::<pair::PenetrationResult>()?;
+    m.add_class::<results::DistanceResult>()?;
+    m.add_class::<results::PenetrationResult>()?;
     m.add_class::<haptic::Haptic>()?;
     m.add_class::<haptic::Tick>()?;
     m.add_function(wrap_pyfunction!(motion::load_motion, m)?)?;

@@ -1,6 +1,6 @@
 //! `innersphere.occlude`: the bite of a jaw pair, as `ist occlude` finds it.
 
-use crate::convert::{error, json, pose, pose_or_identity};
+use crate::convert::{error, pose, pose_or_identity, to_python};
 use crate::tree::Tree;
 use innersphere::glam::DVec3;
 use innersphere_dental::{bite, BiteOptions};
@@ -58,5 +58,5 @@ pub fn occlude<'py>(
     };
     let (a, b) = (tree_a.get().shared.clone(), tree_b.get().shared.clone());
     let found = py.detach(|| bite(&a, &b, &from, &opts)).map_err(error)?;
-    json(py, &found.to_json())
+    to_python(py, &found.to_json())
 }

@@ -1,210 +1,20 @@
 //! `innersphere.Pair` and its results: every query kind, single and batched.
 
-use crate::convert::{error, non_negative, pose, pose_or_identity, poses, vec3, PosesA};
+use crate::convert::{
+    answer_dict, columns, error, non_negative, pose, pose_or_identity, poses, PosesA,
+};
+use crate::results::{DistanceResult, PenetrationResult};
 use crate::tree::Tree;
-use innersphere::glam::DVec3;
 use innersphere::query::{BatchOptions, Paper, TraversalOptions};
 use innersphere::{
-    ContactResult, Distance, DistanceOptions, MultipointOptions, Patch, Penetration,
-    PenetrationOptions, Pose, RefineOptions, RefinedDistance, SharedTree,
+    ContactResult, DistanceOptions, MultipointOptions, Penetration, PenetrationOptions, Pose,
+    RefineOptions, RefinedDistance, SharedTree,
 };
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::PyDict;
 use std::sync::{Mutex, MutexGuard, TryLockError};
-
-/// The answer of Pair.distance: the exact minimum distance between the two inner-sphere
-/// packings, with the closest points (world frame).
-#[pyclass(module = "innersphere", name = "DistanceResult", frozen)]
-pub struct DistanceResult {
-    d: Distance,
-}
-
-#[pymethods]
-impl DistanceResult {
-    /// Minimum distance between the packings (0 when they overlap; with signed=True minus
-    /// the deepest leaf-pair overlap). With tolerances: within max(abs_tol, rel_tol·true)
-    /// above the true minimum.
-    #[getter]
-    fn distance(&self) -> f64 {
-        self.d.distance
-    }
-    /// True when the packings overlap.
-    #[getter]
-    fn contact(&self) -> bool {
-        self.d.overlapping
-    }
-    /// Closest point on A's sphere (world), shape (3,).
-    #[getter]
-    fn point_a<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec3(py, self.d.point_a)
-    }
-    /// Closest point on B's sphere (world), shape (3,).
-    #[getter]
-    fn point_b<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec3(py, self.d.point_b)
-    }
-    /// Unit direction from A's sphere centre to B's (world), shape (3,).
-    #[getter]
-    fn normal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec3(py, self.d.normal)
-    }
-    /// A proved lower bound on the exact answer (equal to distance without tolerances).
-    #[getter]
-    fn lower_bound(&self) -> f64 {
-        self.d.lower_bound
-    }
-    /// The leaf (node index) of A of the closest pair.
-    #[getter]
-    fn leaf_a(&self) -> u32 {
-        self.d.leaf_a
-    }
-    /// The leaf (node index) of B of the closest pair.
-    #[getter]
-    fn leaf_b(&self) -> u32 {
-        self.d.leaf_b
-    }
-    /// Node pairs whose distance was computed.
-    #[getter]
-    fn visits(&self) -> u64 {
-        self.d.visits
-    }
-    /// The fields as a dict (the keys of `ist query --json --query distance`).
-    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let d = PyDict::new(py);
-        d.set_item("distance", self.d.distance)?;
-        d.set_item("contact", self.d.overlapping)?;
-        d.set_item("lower_bound", self.d.lower_bound)?;
-        d.set_item("point_a", self.point_a(py))?;
-        d.set_item("point_b", self.point_b(py))?;
-        d.set_item("normal", self.normal(py))?;
-        d.set_item("leaf_a", self.d.leaf_a)?;
-        d.set_item("leaf_b", self.d.leaf_b)?;
-        d.set_item("visits", self.d.visits)?;
-        Ok(d)
-    }
-    fn __repr__(&self) -> String {
-        format!(
-            "DistanceResult(distance={}, contact={}, point_a={:?}, point_b={:?})",
-            self.d.distance,
-            if self.d.overlapping { "True" } else { "False" },
-            self.d.point_a.to_array(),
-            self.d.point_b.to_array()
-        )
-    }
-}
-
-/// The answer of Pair.penetration: the penetration volume (the volume of the intersection of
-/// the two sphere unions, exact), the penalty force and torques, the contact patches.
-#[pyclass(module = "innersphere", name = "PenetrationResult", frozen)]
-pub struct PenetrationResult {
-    p: Penetration,
-    patches: Vec<Patch>,
-}
-
-/// A patch as a dict of plain values and (3,) arrays.
-fn patch_dict<'py>(py: Python<'py>, q: &Patch) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("point", vec3(py, q.point))?;
-    d.set_item("normal", vec3(py, q.normal))?;
-    d.set_item("depth", q.depth)?;
-    d.set_item("volume", q.volume)?;
-    d.set_item("pairs", q.pairs)?;
-    Ok(d)
-}
-
-#[pymethods]
-impl PenetrationResult {
-    /// Penetration volume (model units³): the summed lens volumes of the overlapping leaf
-    /// pairs.
-    #[getter]
-    fn volume(&self) -> f64 {
-        self.p.volume
-    }
-    /// Largest leaf-pair overlap ra + rb − d (model units); 0 without contact.
-    #[getter]
-    fn max_depth(&self) -> f64 {
-        self.p.max_depth
-    }
-    /// Contact normal (world, unit; zeros without penetration), shape (3,).
-    #[getter]
-    fn normal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec3(py, self.p.normal)
-    }
-    /// Force on B (world): stiffness × volume × normal; the force on A is its opposite.
-    #[getter]
-    fn force<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec3(py, self.p.force)
-    }
-    /// Torque on A about A's centre of mass (world), shape (3,).
-    #[getter]
-    fn torque_a<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec3(py, self.p.torque_a)
-    }
-    /// Torque on B about B's centre of mass (world), shape (3,).
-    #[getter]
-    fn torque_b<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec3(py, self.p.torque_b)
-    }
-    /// The contact patches: a list of dicts with point (3,), normal (3,) (from A into B),
-    /// depth, volume and pairs.
-    #[getter]
-    fn patches<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        let list = PyList::empty(py);
-        for q in &self.patches {
-            list.append(patch_dict(py, q)?)?;
-        }
-        Ok(list)
-    }
-    /// Number of overlapping leaf pairs.
-    #[getter]
-    fn pairs(&self) -> usize {
-        self.p.pairs
-    }
-    /// True when at least one leaf pair overlaps.
-    #[getter]
-    fn contact(&self) -> bool {
-        self.p.pairs > 0
-    }
-    /// 0 with penetration; otherwise a proved lower bound on the separation (not the
-    /// distance: Pair.distance gives that).
-    #[getter]
-    fn distance(&self) -> f64 {
-        self.p.distance
-    }
-    /// Node pairs tested.
-    #[getter]
-    fn visits(&self) -> u64 {
-        self.p.visits
-    }
-    /// The fields as a dict (the keys of `ist query --json --query penetration`).
-    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let d = PyDict::new(py);
-        d.set_item("volume", self.p.volume)?;
-        d.set_item("pairs", self.p.pairs)?;
-        d.set_item("max_depth", self.p.max_depth)?;
-        d.set_item("contact", self.p.pairs > 0)?;
-        d.set_item("distance", self.p.distance)?;
-        d.set_item("normal", self.normal(py))?;
-        d.set_item("force", self.force(py))?;
-        d.set_item("torque", self.torque_b(py))?;
-        d.set_item("torque_a", self.torque_a(py))?;
-        d.set_item("torque_b", self.torque_b(py))?;
-        d.set_item("patches", self.patches(py)?)?;
-        d.set_item("visits", self.p.visits)?;
-        Ok(d)
-    }
-    fn __repr__(&self) -> String {
-        format!(
-            "PenetrationResult(volume={}, max_depth={}, force={:?}, patches={})",
-            self.p.volume,
-            self.p.max_depth,
-            self.p.force.to_array(),
-            self.patches.len()
-        )
-    }
-}
 
 /// Two trees and all per-pair state of their queries (temporal coherence, scratch memory).
 ///
@@ -482,10 +292,11 @@ impl Pair {
     }
 
     /// Time-critical penetration volume: refines the largest overlaps first for at most
-    /// budget node-pair tests (about 75 ns each). Returns a dict: volume (found), upper_bound
-    /// (proved), complete (the volume is exact), max_depth, normal (3,), force (3,) and
-    /// torque (3,) on B (of the pairs found and, when the budget ran out, the unrefined node
-    /// pairs as their bounds), visits.
+    /// budget node-pair tests (about 75 ns each). Returns the answer's serde form as a dict
+    /// (`ist query --json --query penetration-within` without its budget): volume (found),
+    /// upper_bound (proved), complete (the volume is exact), max_depth, normal, force and
+    /// torque_b on B (of the pairs found and, when the budget ran out, the unrefined node
+    /// pairs as their bounds), area, stiffness, visits.
     #[pyo3(signature = (pose_b, budget=8000, stiffness=1.0, *, pose_a=None))]
     fn penetration_within<'py>(
         &self,
@@ -504,25 +315,16 @@ impl Pair {
         let mut guard = self.lock()?;
         let inner: &mut innersphere::Pair = &mut guard;
         let w = py.detach(|| inner.penetration_within_with(&pa, &pb, budget, &opts));
-        let d = PyDict::new(py);
-        d.set_item("volume", w.volume)?;
-        d.set_item("upper_bound", w.upper_bound)?;
-        d.set_item("complete", w.complete)?;
-        d.set_item("max_depth", w.max_depth)?;
-        d.set_item("normal", vec3(py, w.normal))?;
-        d.set_item("force", vec3(py, w.force))?;
-        d.set_item("torque", vec3(py, w.torque_b))?;
-        d.set_item("visits", w.visits)?;
-        Ok(d)
+        answer_dict(py, &w, &[])
     }
 
     /// The distance between the meshes: the sphere distance refined by the exact distance of
     /// the triangles near its closest points (never below the exact mesh distance, never
     /// above the sphere distance). Both trees need their meshes (Tree.with_mesh): ValueError
-    /// otherwise. Returns a dict with the keys of `ist query --json --query
-    /// refined-distance`: distance, contact, refined, complete, point_a (3,), point_b (3,),
-    /// triangle_a, triangle_b (None unless refined), sphere_distance, radius, node_pairs,
-    /// triangle_pairs, visits.
+    /// otherwise. Returns the answer's serde form as a dict (`ist query --json
+    /// --query refined-distance`): distance, contact, refined, complete, point_a, point_b,
+    /// triangle_a, triangle_b (None unless refined), radius, node_pairs, triangle_pairs and
+    /// spheres (the sphere distance, as DistanceResult.to_dict()).
     #[pyo3(signature = (pose_b, *, pose_a=None, radius_scale=0.5, rel_tol=1e-3, max_node_pairs=4096))]
     fn refined_distance<'py>(
         &self,
@@ -546,22 +348,7 @@ impl Pair {
         let r = py
             .detach(|| inner.refined_distance_with(&pa, &pb, &opts))
             .map_err(error)?;
-        let tri = |t: u32| (t != u32::MAX).then_some(t);
-        let d = PyDict::new(py);
-        d.set_item("distance", r.distance)?;
-        d.set_item("contact", r.intersecting)?;
-        d.set_item("refined", r.refined)?;
-        d.set_item("complete", r.complete)?;
-        d.set_item("point_a", vec3(py, r.point_a))?;
-        d.set_item("point_b", vec3(py, r.point_b))?;
-        d.set_item("triangle_a", tri(r.tri_a))?;
-        d.set_item("triangle_b", tri(r.tri_b))?;
-        d.set_item("sphere_distance", r.spheres.distance)?;
-        d.set_item("radius", r.radius)?;
-        d.set_item("node_pairs", r.node_pairs)?;
-        d.set_item("triangle_pairs", r.triangle_pairs)?;
-        d.set_item("visits", r.spheres.visits)?;
-        Ok(d)
+        answer_dict(py, &r, &[])
     }
 
     /// The paper's distance traversal (its first-contact baseline): whether the packings
@@ -623,9 +410,9 @@ impl Pair {
     /// Pair.refined_distance for each pose of B (an (N, 7) or (N, 4, 4) array), in order,
     /// on `threads` threads in chunks of `chunk` as distance_many. Both trees need their
     /// meshes (Tree.with_mesh): ValueError otherwise, or for bad options, before any query.
-    /// Returns a dict of numpy arrays: distance (N,), contact (N,) bool, refined (N,) bool,
-    /// complete (N,) bool, point_a (N, 3), point_b (N, 3), triangle_a (N,) and triangle_b
-    /// (N,) int64 (−1 unless refined), sphere_distance (N,). Interpreter released.
+    /// Returns the keys of refined_distance as numpy columns over the poses (convert::columns:
+    /// triangle_a and triangle_b int64, −1 unless refined; spheres a dict of columns).
+    /// Interpreter released.
     #[pyo3(signature = (poses, *, pose_a=None, threads=None, chunk=1024, radius_scale=0.5, rel_tol=1e-3, max_node_pairs=4096))]
     #[allow(clippy::too_many_arguments)]
     fn refined_distance_many<'py>(
@@ -658,31 +445,7 @@ impl Pair {
                 )
             })
             .map_err(error)?;
-        let col = |f: fn(&RefinedDistance) -> f64| PyArray1::from_iter(py, out.iter().map(f));
-        let flag = |f: fn(&RefinedDistance) -> bool| PyArray1::from_iter(py, out.iter().map(f));
-        let tri = |f: fn(&RefinedDistance) -> u32| {
-            PyArray1::from_iter(
-                py,
-                out.iter().map(|r| match f(r) {
-                    u32::MAX => -1,
-                    t => t as i64,
-                }),
-            )
-        };
-        let v3 = |f: fn(&RefinedDistance) -> DVec3| -> Vec<[f64; 3]> {
-            out.iter().map(|r| f(r).to_array()).collect()
-        };
-        let d = PyDict::new(py);
-        d.set_item("distance", col(|r| r.distance))?;
-        d.set_item("contact", flag(|r| r.intersecting))?;
-        d.set_item("refined", flag(|r| r.refined))?;
-        d.set_item("complete", flag(|r| r.complete))?;
-        d.set_item("point_a", rows3(py, v3(|r| r.point_a))?)?;
-        d.set_item("point_b", rows3(py, v3(|r| r.point_b))?)?;
-        d.set_item("triangle_a", tri(|r| r.tri_a))?;
-        d.set_item("triangle_b", tri(|r| r.tri_b))?;
-        d.set_item("sphere_distance", col(|r| r.spheres.distance))?;
-        Ok(d)
+        columns(py, &out, &Default::default())
     }
 
     /// Pair.contact for each pose of B (an (N, 7) or (N, 4, 4) array), in order, on
@@ -705,10 +468,9 @@ impl Pair {
 
     /// Pair.penetration for each pose of B (an (N, 7) or (N, 4, 4) array), in order, on
     /// `threads` threads in chunks of `chunk` as distance_many (on a new pair and a batch of
-    /// at most `chunk` poses the volumes equal `ist replay --query penetration`'s). Returns a
-    /// dict of numpy arrays: volume (N,), max_depth (N,), force (N, 3), torque (N, 3) (on B,
-    /// about its centre of mass), torque_a (N, 3), normal (N, 3), pairs (N,) int64, contact
-    /// (N,) bool. Interpreter released.
+    /// at most `chunk` poses the volumes equal `ist replay --query penetration`'s). Returns the
+    /// keys of PenetrationResult.to_dict() but the patches as numpy columns over the poses
+    /// (convert::columns: vectors (N, 3), pairs int64, contact bool). Interpreter released.
     #[pyo3(signature = (poses, stiffness=1.0, *, pose_a=None, threads=None, chunk=1024))]
     fn penetration_many<'py>(
         &self,
@@ -729,31 +491,7 @@ impl Pair {
                 innersphere::query::batch::penetration_many(&a, &b, pa.as_slice(), &pb, &query, &o)
             })
             .map_err(error)?;
-        let v3 = |f: fn(&Penetration) -> DVec3| -> Vec<[f64; 3]> {
-            out.iter().map(|p| f(p).to_array()).collect()
-        };
-        let d = PyDict::new(py);
-        d.set_item(
-            "volume",
-            PyArray1::from_iter(py, out.iter().map(|p| p.volume)),
-        )?;
-        d.set_item(
-            "max_depth",
-            PyArray1::from_iter(py, out.iter().map(|p| p.max_depth)),
-        )?;
-        d.set_item("force", rows3(py, v3(|p| p.force))?)?;
-        d.set_item("torque", rows3(py, v3(|p| p.torque_b))?)?;
-        d.set_item("torque_a", rows3(py, v3(|p| p.torque_a))?)?;
-        d.set_item("normal", rows3(py, v3(|p| p.normal))?)?;
-        d.set_item(
-            "pairs",
-            PyArray1::from_iter(py, out.iter().map(|p| p.pairs as i64)),
-        )?;
-        d.set_item(
-            "contact",
-            PyArray1::from_iter(py, out.iter().map(|p| p.pairs > 0)),
-        )?;
-        Ok(d)
+        columns(py, &out, &Default::default())
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {

@@ -1,6 +1,6 @@
 //! `innersphere.splint`: the occlusal splint between two arches, as `ist splint` makes it.
 
-use crate::convert::{self, error, json, pose_or_identity};
+use crate::convert::{self, error, pose_or_identity, to_python};
 use crate::tree::mesh_like;
 use innersphere_dental::splint::{make_opened, Opening, SplintOptions};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
@@ -102,6 +102,6 @@ pub fn splint<'py>(
     Ok((
         PyArray1::from_vec(py, v).reshape([n, 3])?,
         PyArray1::from_vec(py, f).reshape([m, 3])?,
-        json(py, &report)?,
+        to_python(py, &report)?,
     ))
 }

@@ -494,7 +494,7 @@ impl Tree {
     fn meta<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let v = serde_json::to_value(&self.shared.meta)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        convert::json(py, &v)
+        convert::to_python(py, &v)
     }
 
     /// The build report as a dict (sphere count, coverage, stage times, warnings, ...) for a
@@ -502,7 +502,7 @@ impl Tree {
     #[getter]
     fn report<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         match &self.report {
-            Some(v) => convert::json(py, v),
+            Some(v) => convert::to_python(py, v),
             None => Ok(py.None().into_bound(py)),
         }
     }

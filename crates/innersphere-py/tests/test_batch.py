@@ -61,7 +61,7 @@ def test_penetration_many_equals_replay(trees, tree_files, ist, motion, loaded, 
     assert np.array_equal(got["pairs"], np.array([int(x) for x in csv["penetration_pairs"]]))
     assert np.array_equal(got["contact"], np.array([x == "true" for x in csv["penetration_in_contact"]]))
     n = len(loaded[1])
-    for k, shape in [("volume", (n,)), ("max_depth", (n,)), ("force", (n, 3)), ("torque", (n, 3)),
+    for k, shape in [("volume", (n,)), ("max_depth", (n,)), ("force", (n, 3)), ("torque_b", (n, 3)),
                      ("torque_a", (n, 3)), ("normal", (n, 3)), ("pairs", (n,)), ("contact", (n,))]:
         assert got[k].shape == shape, k
     assert got["volume"].max() > 0
@@ -86,7 +86,8 @@ def test_batches_equal_single_calls(trees, loaded):
     assert np.array_equal(pen["volume"], [s.volume for s in singles])
     assert np.array_equal(pen["max_depth"], [s.max_depth for s in singles])
     assert np.array_equal(pen["force"], [s.force for s in singles])
-    assert np.array_equal(pen["torque"], [s.torque_b for s in singles])
+    assert np.array_equal(pen["torque_b"], [s.torque_b for s in singles])
+    assert np.array_equal(pen["stiffness"]["linear"], [s.stiffness["linear"] for s in singles])
     assert np.array_equal(pen["torque_a"], [s.torque_a for s in singles])
     assert np.array_equal(pen["normal"], [s.normal for s in singles])
     one, many = innersphere.Pair(*trees), innersphere.Pair(*trees)
@@ -192,14 +193,16 @@ def test_refined_distance_many_equals_single_calls(trees, meshes, loaded):
     n = len(poses)
     for k, shape in [("distance", (n,)), ("contact", (n,)), ("refined", (n,)), ("complete", (n,)),
                      ("point_a", (n, 3)), ("point_b", (n, 3)), ("triangle_a", (n,)),
-                     ("triangle_b", (n,)), ("sphere_distance", (n,))]:
+                     ("triangle_b", (n,))]:
         assert got[k].shape == shape, k
-    for k in ("distance", "contact", "refined", "complete", "point_a", "point_b", "sphere_distance"):
+    assert got["spheres"]["distance"].shape == (n,) and got["spheres"]["point_a"].shape == (n, 3)
+    for k in ("distance", "contact", "refined", "complete", "point_a", "point_b"):
         assert np.array_equal(got[k], [s[k] for s in singles]), k
+    assert np.array_equal(got["spheres"]["distance"], [s["spheres"]["distance"] for s in singles])
     for k in ("triangle_a", "triangle_b"):
         assert np.array_equal(got[k], [-1 if s[k] is None else s[k] for s in singles]), k
     assert got["contact"].any() and not got["contact"].all()
-    assert (got["distance"] <= got["sphere_distance"]).all()
+    assert (got["distance"] <= got["spheres"]["distance"]).all()
     chunked = [innersphere.Pair(am, bm).refined_distance_many(poses, chunk=7, threads=t) for t in (1, 3)]
     reset = innersphere.Pair(am, bm)
     want = []

@@ -72,12 +72,11 @@ def test_a_distance_result_says_what_it_holds(pair):
 def test_a_penetration_result_says_what_it_holds(pair):
     p = pair.penetration(touching(pair), stiffness=3.0)
     assert p.contact and p.pairs > 0 and p.volume > 0 and len(p.patches) > 0
-    # "torque" is torque_b under the name the CLI uses.
-    d = p.to_dict()
-    assert np.array_equal(d["torque"], p.torque_b)
-    del d["torque"]
-    for key, value in d.items():
-        same(value, getattr(p, key))
+    assert_dict_is_the_getters(p)
+    assert "torque" not in p.to_dict() and p.patch_count == len(p.patches)
+    with pytest.raises(AttributeError, match="no attribute 'torque'"):
+        p.torque  # noqa: B018 (the attribute lookup is the test)
+    assert {"volume", "patches", "stiffness", "to_dict"} <= set(dir(p))
     # Apart: no contact in the dict either.
     apart = pair.penetration(POSES[0])
     assert not apart.contact and apart.to_dict()["contact"] is False
@@ -188,3 +187,27 @@ def test_the_build_reports_its_progress_on_standard_error(meshes, capfd):
     assert any(line.split("\r")[-2].endswith(": 100%") for line in lines), err
     innersphere.Tree.build(meshes["box"], resolution=12)
     assert capfd.readouterr().err == ""
+
+
+def test_the_stubs_declare_exactly_the_answers_keys(pair, trees):
+    """The result objects' attributes come from their answer's serialized form; the type stubs
+    declare them by hand, so they must name exactly its keys (plus the methods and derived
+    properties the classes define)."""
+    import ast
+    import pathlib
+
+    stub = pathlib.Path(innersphere.__file__).parent / "_innersphere.pyi"
+    classes = {c.name: c for c in ast.parse(stub.read_text()).body if isinstance(c, ast.ClassDef)}
+
+    def properties(name):
+        return {f.name for f in classes[name].body if isinstance(f, ast.FunctionDef)
+                and any(getattr(d, "id", None) == "property" for d in f.decorator_list)}
+
+    p = touching(pair)
+    h = innersphere.Haptic(innersphere.Pair(*trees), "omega", 1000.0, start=p, budget=1.0)
+    for name, result, extra in [("DistanceResult", pair.distance(p), set()),
+                                ("PenetrationResult", pair.penetration(p), set()),
+                                ("Tick", h.tick(p), {"tool_matrix"})]:
+        assert properties(name) == set(result.to_dict()) | extra, name
+        for key in result.to_dict():
+            getattr(result, key)

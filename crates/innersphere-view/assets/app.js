@@ -550,9 +550,21 @@ const posePoster = new LatestOnlyPoster('/api/pose', 16, (body, answer) => {
   const mode = currentMode();
   if (!mode || mode === 'free') {
     showPose(body.pose_b);
-    showContact(answer);
+    showContact(contactOfAnswer(answer));
   }
 });
+
+/** A /api/pose answer (each query in the form `ist query --json` prints) as the contact
+ *  quantities a state holds: the sphere distance and its closest points, the penetration's
+ *  volume, depth, force, torque on B and patches. */
+function contactOfAnswer(a) {
+  const d = a.distance, p = a.penetration;
+  return {
+    distance: d.distance, contact: d.contact, point_a: d.point_a, point_b: d.point_b,
+    volume: p.volume, max_depth: p.max_depth, force: p.force, torque: p.torque_b,
+    patches: p.patches,
+  };
+}
 function sendPose(p) {
   lastSent = { pose: p, at: performance.now() };
   leaveMotionMode();

@@ -6,23 +6,12 @@
 use crate::contact::{Snapshot, Status, CAP};
 use crate::sim::{LoopState, HISTORY};
 use innersphere::glam::DVec3;
-use innersphere::{Mesh, Patch, Pose, SphereTree};
+use innersphere::{Mesh, Pose, SphereTree};
 use innersphere_dental::contact_map::{gap_colour, RegionSummary, LEGEND};
 use serde_json::{json, Value};
 
 fn v3(v: DVec3) -> [f64; 3] {
     v.to_array()
-}
-
-/// A patch as `ist query --json` writes it.
-pub(crate) fn patch(p: &Patch) -> Value {
-    json!({
-        "point": v3(p.point),
-        "normal": v3(p.normal),
-        "depth": p.depth,
-        "volume": p.volume,
-        "pairs": p.pairs,
-    })
 }
 
 /// The loop state as the page reads it (`docs/VIEWER.md`).
@@ -47,7 +36,7 @@ pub(crate) fn state(s: &LoopState, motion_seconds: Option<f64>) -> Value {
         "max_depth": s.max_depth,
         "force": v3(s.force),
         "torque": v3(s.torque),
-        "patches": s.patches[..s.patch_count].iter().map(patch).collect::<Vec<_>>(),
+        "patches": &s.patches[..s.patch_count],
         "device_force": v3(s.device_force),
         "loop": {
             "rate_hz": s.rate_hz,

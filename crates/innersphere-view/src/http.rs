@@ -558,33 +558,20 @@ fn pose(app: &App, v: &Value) -> Resp {
             ..Default::default()
         },
     );
-    let r = crate::sim::refined(&mut pair, &p);
+    // A pair of its own, so that the refined answer too is a fresh pair's (`ist query`'s).
+    let r = crate::sim::refined(&mut Pair::new(app.scene.a.clone(), app.scene.b.clone()), &p);
+    let mut penetration = serde_json::to_value(q).expect("answers serialize");
+    penetration["patches"] = json!(pair.patches());
     json_response(
         200,
         &json!({
             "pose_b": p.to_array(),
-            // The refined distance between the meshes where the trees carry them (as
-            // `ist query --query refined-distance` answers), else null.
-            "refined_distance": r.map(|r| json!({
-                "distance": r.distance,
-                "contact": r.intersecting,
-                "refined": r.refined,
-                "complete": r.complete,
-                "point_a": r.point_a.to_array(),
-                "point_b": r.point_b.to_array(),
-                "sphere_distance": r.spheres.distance,
-            })),
-            "distance": d.distance,
-            "contact": d.overlapping,
-            "point_a": d.point_a.to_array(),
-            "point_b": d.point_b.to_array(),
-            "volume": q.volume,
-            "pairs": q.pairs,
-            "max_depth": q.max_depth,
-            "normal": q.normal.to_array(),
-            "force": q.force.to_array(),
-            "torque": q.torque_b.to_array(),
-            "patches": pair.patches().iter().map(encode::patch).collect::<Vec<_>>(),
+            // Each answer in its serde form, as `ist query --json` prints it: the sphere
+            // distance, the penetration with its patches, and the refined distance where the
+            // trees carry their meshes (else null).
+            "distance": d,
+            "penetration": penetration,
+            "refined_distance": r,
         }),
     )
 }

@@ -288,6 +288,14 @@ impl Pose {
 
 /// Parses `"tx ty tz qw qx qy qz"`, the numbers separated by whitespace and/or commas (the
 /// command line's `--pose-b`); the quaternion is normalised, checked as [`Pose::new`].
+/// Serialized as its 7 numbers `[tx, ty, tz, qw, qx, qy, qz]` ([`Pose::to_array`]): the
+/// form `ist query --pose-b` and Python take.
+impl serde::Serialize for Pose {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        serde::Serialize::serialize(&self.to_array(), s)
+    }
+}
+
 impl FromStr for Pose {
     type Err = PoseError;
 

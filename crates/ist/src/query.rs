@@ -99,6 +99,30 @@ fn v3(v: innersphere::glam::DVec3) -> [f64; 3] {
     v.to_array()
 }
 
+/// What `--json` prints: the answer's serde form (the library's, as every door prints it),
+/// with the query's name, how long it took, whether its `distance` is only a proved lower
+/// bound (`None`: it has none), and `more` (what the pair keeps beside the answer: contacts,
+/// patches).
+fn answer_json(
+    query: &str,
+    answer: &impl serde::Serialize,
+    lower_bound: Option<bool>,
+    seconds: f64,
+    more: serde_json::Value,
+) -> serde_json::Value {
+    let mut v = serde_json::to_value(answer).expect("answers serialize");
+    let o = v.as_object_mut().expect("an answer is a record");
+    o.insert("query".into(), json!(query));
+    if let Some(b) = lower_bound {
+        o.insert("distance_is_lower_bound".into(), json!(b));
+    }
+    o.insert("seconds".into(), json!(seconds));
+    if let serde_json::Value::Object(m) = more {
+        o.extend(m);
+    }
+    v
+}
+
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     let pose_b: Pose = args
@@ -175,20 +199,7 @@ fn distance(
     let p = pair.distance_with(pose_a, pose_b, &opts);
     let secs = t0.elapsed().as_secs_f64();
     (
-        json!({
-            "query": "distance",
-            "distance_is_lower_bound": false,
-            "distance": p.distance,
-            "contact": p.overlapping,
-            "lower_bound": p.lower_bound,
-            "point_a": v3(p.point_a),
-            "point_b": v3(p.point_b),
-            "normal": v3(p.normal),
-            "leaf_a": p.leaf_a,
-            "leaf_b": p.leaf_b,
-            "visits": p.visits,
-            "seconds": secs,
-        }),
+        answer_json("distance", &p, Some(false), secs, json!({})),
         format!(
             "distance {:.6} units ({}), closest points A {:?} B {:?} (units), leaves {}/{}, {} node pairs, {:.1} µs",
             p.distance,
@@ -213,26 +224,8 @@ fn refined_distance(
     let t0 = std::time::Instant::now();
     let r = pair.refined_distance_with(pose_a, pose_b, refine)?;
     let secs = t0.elapsed().as_secs_f64();
-    let tri = |t: u32| (t != u32::MAX).then_some(t);
     Ok((
-        json!({
-            "query": "refined-distance",
-            "distance_is_lower_bound": false,
-            "distance": r.distance,
-            "contact": r.intersecting,
-            "refined": r.refined,
-            "complete": r.complete,
-            "point_a": v3(r.point_a),
-            "point_b": v3(r.point_b),
-            "triangle_a": tri(r.tri_a),
-            "triangle_b": tri(r.tri_b),
-            "sphere_distance": r.spheres.distance,
-            "radius": r.radius,
-            "node_pairs": r.node_pairs,
-            "triangle_pairs": r.triangle_pairs,
-            "visits": r.spheres.visits,
-            "seconds": secs,
-        }),
+        answer_json("refined-distance", &r, Some(false), secs, json!({})),
         format!(
             "distance {:.6} units ({}), closest points A {:?} B {:?} (units){}; the sphere distance {:.6}, refined within {:.4} units of its closest points ({} triangle-node pairs, {} triangle pairs{}), {:.1} µs",
             r.distance,
@@ -276,21 +269,9 @@ fn contact_kind(
     };
     let secs = t0.elapsed().as_secs_f64();
     (
-        json!({
-            "query": name,
-            // "distance" here is a proved lower bound, not the distance (see
-            // SEPARATION_NOTE); said in the JSON too, for scripts.
-            "distance_is_lower_bound": true,
-            "contact": q.in_contact(),
-            "distance": q.distance,
-            "point": q.contact.map(|c| v3(c.point)),
-            "normal": q.contact.map(|c| v3(c.normal)),
-            "depth": q.contact.map(|c| c.depth),
-            "leaf_a": q.contact.map(|c| c.leaf_a),
-            "leaf_b": q.contact.map(|c| c.leaf_b),
-            "visits": q.visits,
-            "seconds": secs,
-        }),
+        // "distance" here is a proved lower bound, not the distance (see SEPARATION_NOTE);
+        // said in the JSON too, for scripts.
+        answer_json(name, &q, Some(true), secs, json!({})),
         match q.contact {
             Some(c) => format!(
                 "contact at {:?} units (depth {:.6} units, leaves {}/{}), {} node pairs, {:.1} µs",
@@ -347,15 +328,13 @@ fn multipoint(
         );
     }
     (
-        json!({
-            "query": "multipoint",
-            "distance_is_lower_bound": true,
-            "contact": !contacts.is_empty(),
-            "distance": m.distance,
-            "contacts": contacts,
-            "visits": m.visits,
-            "seconds": secs,
-        }),
+        answer_json(
+            "multipoint",
+            &m,
+            Some(true),
+            secs,
+            json!({ "contacts": contacts }),
+        ),
         s,
     )
 }
@@ -375,19 +354,13 @@ fn penetration_within(
     let w = pair.penetration_within_with(pose_a, pose_b, args.budget, &opts);
     let secs = t0.elapsed().as_secs_f64();
     (
-        json!({
-            "query": "penetration-within",
-            "budget": args.budget,
-            "complete": w.complete,
-            "volume": w.volume,
-            "upper_bound": w.upper_bound,
-            "max_depth": w.max_depth,
-            "normal": v3(w.normal),
-            "force": v3(w.force),
-            "torque": v3(w.torque_b),
-            "visits": w.visits,
-            "seconds": secs,
-        }),
+        answer_json(
+            "penetration-within",
+            &w,
+            None,
+            secs,
+            json!({ "budget": args.budget }),
+        ),
         format!(
             "penetration volume found {:.6e} units³, at most {:.6e} units³ ({}), deepest {:.6} units, {} of {} node-pair tests, {:.1} µs\n\
              force on B {:?}, torque on B {:?} (the pairs found, and any left unrefined as their bounds)",
@@ -450,23 +423,13 @@ fn penetration(
         );
     }
     (
-        json!({
-            "query": "penetration",
-            "distance_is_lower_bound": true,
-            "contact": p.pairs > 0,
-            "distance": p.distance,
-            "volume": p.volume,
-            "pairs": p.pairs,
-            "max_depth": p.max_depth,
-            "normal": v3(p.normal),
-            "force": v3(p.force),
-            "torque": v3(p.torque_b),
-            "torque_a": v3(p.torque_a),
-            "torque_b": v3(p.torque_b),
-            "patches": patches,
-            "visits": p.visits,
-            "seconds": secs,
-        }),
+        answer_json(
+            "penetration",
+            &p,
+            Some(true),
+            secs,
+            json!({ "patches": patches }),
+        ),
         s,
     )
 }

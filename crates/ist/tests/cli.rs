@@ -258,7 +258,7 @@ fn query_refines_the_distance_to_the_meshes() {
     let r = q(&[], 0);
     let d = r["distance"].as_f64().unwrap();
     assert!((d - exact).abs() <= 1e-9, "refined {d}, exact {exact}: {r}");
-    assert!(d < r["sphere_distance"].as_f64().unwrap(), "{r}");
+    assert!(d < r["spheres"]["distance"].as_f64().unwrap(), "{r}");
     assert_eq!(
         (
             r["refined"].clone(),

@@ -166,6 +166,9 @@ class DistanceResult:
     def lower_bound(self) -> float:
         """A proved lower bound on the exact answer (= distance without tolerances)."""
     @property
+    def pair_distance(self) -> float:
+        """|cb − ca| − ra − rb of the reported leaf pair (negative when it overlaps)."""
+    @property
     def leaf_a(self) -> int:
         """A's leaf (node index) of the closest pair."""
     @property
@@ -175,7 +178,8 @@ class DistanceResult:
     def visits(self) -> int:
         """Node pairs whose distance was computed."""
     def to_dict(self) -> Dict[str, Any]:
-        """The fields as a dict (the keys of ``ist query --json``)."""
+        """The answer's serialized form as a dict: the keys and values of ``ist query
+        --json`` (vectors as lists); the attributes are its keys."""
 
 @final
 class PenetrationResult:
@@ -215,8 +219,22 @@ class PenetrationResult:
     @property
     def visits(self) -> int:
         """Node pairs tested."""
+    @property
+    def skipped(self) -> bool:
+        """True when the safe-motion bound answered without a traversal."""
+    @property
+    def patch_count(self) -> int:
+        """Number of contact patches."""
+    @property
+    def area(self) -> float:
+        """Contact area (0 unless the query was asked to linearize)."""
+    @property
+    def stiffness(self) -> Dict[str, _FloatArray]:
+        """The linearised wrench: linear, coupling, angular, each 9 numbers column-major
+        (zeros unless the query was asked to linearize)."""
     def to_dict(self) -> Dict[str, Any]:
-        """The fields as a dict (the keys of ``ist query --json``)."""
+        """The answer's serialized form and its patches as a dict: the keys and values of
+        ``ist query --json`` (vectors as lists); the attributes are its keys."""
 
 @final
 class Pair:
@@ -275,8 +293,10 @@ class Pair:
         *,
         pose_a: Optional[_PoseLike] = None,
     ) -> Dict[str, Any]:
-        """Time-critical penetration volume within budget node-pair tests: a dict of volume,
-        upper_bound, complete, max_depth, normal, force, torque, visits."""
+        """Time-critical penetration volume within budget node-pair tests: the answer's
+        serialized form as a dict (``ist query --json --query penetration-within`` without
+        its budget): volume, upper_bound, visits, complete, max_depth, normal, force,
+        torque_b, area, stiffness."""
     def refined_distance(
         self,
         pose_b: _PoseLike,
@@ -288,9 +308,10 @@ class Pair:
     ) -> Dict[str, Any]:
         """The distance between the meshes, refined from the sphere distance by the exact
         distance of the triangles near its closest points (both trees need their meshes:
-        ``Tree.with_mesh``): a dict of distance, contact, refined, complete, point_a,
-        point_b, triangle_a, triangle_b, sphere_distance, radius, node_pairs,
-        triangle_pairs, visits."""
+        ``Tree.with_mesh``): the answer's serialized form as a dict (``ist query --json --query
+        refined-distance``): distance, contact, refined, complete, point_a, point_b,
+        triangle_a, triangle_b (None unless refined), radius, node_pairs, triangle_pairs,
+        and spheres (the sphere distance refined, as ``DistanceResult.to_dict()``)."""
     def distance_traversal(self, pose_b: _PoseLike, *, pose_a: Optional[_PoseLike] = None) -> bool:
         """The paper's distance traversal: whether the packings overlap."""
     def backtracking(self, pose_b: _PoseLike, *, pose_a: Optional[_PoseLike] = None) -> bool:
@@ -321,9 +342,9 @@ class Pair:
         max_node_pairs: int = 4096,
     ) -> Dict[str, npt.NDArray[Any]]:
         """``refined_distance`` for each pose of B in order (threads and chunks as
-        distance_many; both trees need their meshes): a dict of arrays distance (N,),
-        contact (N,), refined (N,), complete (N,), point_a (N, 3), point_b (N, 3),
-        triangle_a (N,), triangle_b (N,) (−1 unless refined), sphere_distance (N,)."""
+        distance_many; both trees need their meshes): the keys of ``refined_distance``, each a
+        column over the poses: numbers (N,), vectors (N, 3), triangle_a and triangle_b (N,)
+        int64 (−1 unless refined), spheres a dict of such columns."""
     def contact_many(
         self,
         poses: _PosesLike,
@@ -343,9 +364,10 @@ class Pair:
         threads: Optional[int] = None,
         chunk: int = 1024,
     ) -> Dict[str, npt.NDArray[Any]]:
-        """``penetration`` for each pose of B in order: a dict of arrays volume (N,),
-        max_depth (N,), force (N, 3), torque (N, 3) (on B), torque_a (N, 3), normal (N, 3),
-        pairs (N,), contact (N,)."""
+        """``penetration`` for each pose of B in order: the keys of
+        ``PenetrationResult.to_dict()`` but the patches, each a column over the poses:
+        numbers (N,), vectors (N, 3) (torque_b on B, torque_a on A), stiffness a dict of
+        (N, 9) arrays."""
 
 @final
 class Tick:

@@ -271,8 +271,14 @@ def sweep(
         got = len(next(iter(part.values()))) if isinstance(part, dict) else len(part)
         if got != want:
             raise RuntimeError(f"chunk {k} came back with {got} answers for {want} poses")
+    return _concatenate(parts)
+
+
+def _concatenate(parts: List[Any]) -> Any:
+    """The chunks' answers joined in order: arrays end to end, dicts of columns (nested, as a
+    batch's answers are) key by key."""
     if isinstance(parts[0], dict):
-        return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
+        return {key: _concatenate([p[key] for p in parts]) for key in parts[0]}
     return np.concatenate(parts)
 
 

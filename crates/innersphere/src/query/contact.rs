@@ -9,7 +9,12 @@ use super::search::descent::blocked;
 use super::search::front::Front;
 
 /// Result of [`Pair::contact`](crate::Pair::contact) and of the paper's traversals.
+///
+/// Its serde form is the answer every door prints: flat, `contact` a bool and the contact's
+/// `point`, `normal`, `depth`, `leaf_a`, `leaf_b` beside it (null without a contact), then
+/// `distance`, `visits`, `skipped`.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(into = "ContactForm")]
 pub struct ContactResult {
     /// The first overlapping leaf pair found, if any.
     pub contact: Option<Contact>,
@@ -27,6 +32,43 @@ impl ContactResult {
     /// True when the packings overlap.
     pub fn in_contact(&self) -> bool {
         self.contact.is_some()
+    }
+}
+
+/// The serialized form of [`ContactResult`]: one flat record, as scripts read it.
+#[derive(serde::Serialize)]
+struct ContactForm {
+    contact: bool,
+    point: Option<glam::DVec3>,
+    normal: Option<glam::DVec3>,
+    depth: Option<f64>,
+    leaf_a: Option<u32>,
+    leaf_b: Option<u32>,
+    distance: f64,
+    visits: u64,
+    skipped: bool,
+}
+
+impl From<ContactResult> for ContactForm {
+    fn from(r: ContactResult) -> ContactForm {
+        // Destructured whole, so that a new field cannot be left out of the form.
+        let ContactResult {
+            contact,
+            distance,
+            visits,
+            skipped,
+        } = r;
+        ContactForm {
+            contact: contact.is_some(),
+            point: contact.map(|c| c.point),
+            normal: contact.map(|c| c.normal),
+            depth: contact.map(|c| c.depth),
+            leaf_a: contact.map(|c| c.leaf_a),
+            leaf_b: contact.map(|c| c.leaf_b),
+            distance,
+            visits,
+            skipped,
+        }
     }
 }
 

@@ -59,7 +59,10 @@ impl Default for DistanceOptions {
 }
 
 /// Result of [`Pair::distance`](crate::Pair::distance).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+///
+/// Its serde form is the answer every door prints (`ist query --json`, Python's `to_dict`,
+/// the viewer): these fields under these names, `overlapping` as `contact`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct Distance {
     /// Minimum distance between the two inner-sphere packings (the unions of the leaf
     /// spheres): `min |cb − ca| − ra − rb` over all leaf pairs. When the packings overlap it
@@ -70,7 +73,8 @@ pub struct Distance {
     pub pair_distance: f64,
     /// A proved lower bound on the exact answer (equal to `distance` without tolerances).
     pub lower_bound: f64,
-    /// True when the packings overlap.
+    /// True when the packings overlap (serialized as `contact`, the word every answer uses).
+    #[serde(rename = "contact")]
     pub overlapping: bool,
     /// Closest point on A's leaf sphere (world): `ca + ra·n`.
     pub point_a: DVec3,

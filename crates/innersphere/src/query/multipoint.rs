@@ -77,7 +77,11 @@ impl Default for MultipointOptions {
 
 /// Result of [`Pair::multipoint`](crate::Pair::multipoint). The contacts themselves stay in
 /// the pair until its next query: [`Pair::contacts`](crate::Pair::contacts).
+///
+/// Its serde form is the answer every door prints: `contact` (`count > 0`), then these
+/// fields; the doors add the contacts as `contacts`.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(remote = "Self")]
 pub struct Multipoint {
     /// Number of contacts found (at most `k`), at most one per split-depth pair.
     pub count: usize,
@@ -89,6 +93,25 @@ pub struct Multipoint {
     pub visits: u64,
     /// True when the safe-motion bound answered without a traversal.
     pub skipped: bool,
+}
+
+impl serde::Serialize for Multipoint {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        // The derived fields (`remote = "Self"`) after `contact`.
+        #[derive(serde::Serialize)]
+        struct Form {
+            contact: bool,
+            #[serde(flatten, with = "Multipoint")]
+            answer: Multipoint,
+        }
+        serde::Serialize::serialize(
+            &Form {
+                contact: self.count > 0,
+                answer: *self,
+            },
+            s,
+        )
+    }
 }
 
 /// The paper's multipoint traversal (III-C): up to `k` contacts, at most one below each

@@ -84,7 +84,11 @@ impl RefineOptions {
 
 /// Result of [`Pair::refined_distance`](crate::Pair::refined_distance) (points in the world
 /// frame).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+///
+/// Its serde form is the answer every door prints: these fields, `intersecting` as
+/// `contact`, `tri_a`/`tri_b` as `triangle_a`/`triangle_b` (null unless refined) and the
+/// sphere distance nested as `spheres` (a [`Distance`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct RefinedDistance {
     /// Distance between the meshes as refined: the smallest triangle-pair distance found
     /// near the spheres' closest points, or the sphere distance where none was smaller; 0
@@ -96,12 +100,15 @@ pub struct RefinedDistance {
     /// Closest point on B.
     pub point_b: DVec3,
     /// A's triangle that `point_a` lies on (index in A's mesh), `u32::MAX` unless refined.
+    #[serde(rename = "triangle_a", serialize_with = "triangle")]
     pub tri_a: u32,
     /// B's triangle, `u32::MAX` unless refined.
+    #[serde(rename = "triangle_b", serialize_with = "triangle")]
     pub tri_b: u32,
     /// True when a triangle pair nearer than the spheres was found.
     pub refined: bool,
     /// True when the bodies touch: two triangles cross, or the sphere packings overlap.
+    #[serde(rename = "contact")]
     pub intersecting: bool,
     /// True when the local search ended within its budget (the minimum over every triangle
     /// pair near both points).
@@ -114,6 +121,11 @@ pub struct RefinedDistance {
     pub triangle_pairs: u64,
     /// The inner-sphere distance that was refined.
     pub spheres: Distance,
+}
+
+/// A triangle index as serialized: null for `u32::MAX` (none).
+fn triangle<S: serde::Serializer>(t: &u32, s: S) -> Result<S::Ok, S::Error> {
+    serde::Serialize::serialize(&(*t != u32::MAX).then_some(*t), s)
 }
 
 /// The largest budget whose queue is reserved whole: a larger one (a search without a

@@ -20,7 +20,11 @@ pub struct Patch {
 
 /// Result of [`Pair::penetration`](crate::Pair::penetration). The patches themselves stay in
 /// the pair until its next query: [`Pair::patches`](crate::Pair::patches).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+///
+/// Its serde form is the answer every door prints: `contact` (`pairs > 0`), then these
+/// fields; the doors add the patches as `patches`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+#[serde(remote = "Self")]
 pub struct Penetration {
     /// Volume of the intersection of the two inner-sphere unions: the sum of the lens
     /// volumes of all overlapping leaf pairs.
@@ -54,6 +58,25 @@ pub struct Penetration {
     pub visits: u64,
     /// True when the safe-motion bound answered without a traversal.
     pub skipped: bool,
+}
+
+impl serde::Serialize for Penetration {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        // The derived fields (`remote = "Self"`) after `contact`.
+        #[derive(serde::Serialize)]
+        struct Form {
+            contact: bool,
+            #[serde(flatten, with = "Penetration")]
+            answer: Penetration,
+        }
+        serde::Serialize::serialize(
+            &Form {
+                contact: self.pairs > 0,
+                answer: *self,
+            },
+            s,
+        )
+    }
 }
 
 /// The linearised penalty wrench: with `δ` a small translation of B and `θ` a small rotation

@@ -147,7 +147,6 @@ fn within<const L: bool>(
     let com_a = ia.center_of_mass;
     let com_b = ctx.rel.transform_point(ib.center_of_mass);
     let (n, f, _, tb) = sums.wrench(stiffness, com_a, com_b);
-    let r = DMat3::from_quat(ctx.pose_a.rotation);
     BudgetedVolume {
         volume: found,
         upper_bound: if complete {
@@ -158,11 +157,26 @@ fn within<const L: bool>(
         visits,
         complete,
         max_depth: found_depth,
-        normal: r * n,
-        force: r * f,
-        torque_b: r * tb,
+        normal: n,
+        force: f,
+        torque_b: tb,
         area: sums.area,
-        stiffness: sums.stiffness(stiffness, com_b).rotated(r),
+        stiffness: sums.stiffness(stiffness, com_b),
+    }
+}
+
+impl BudgetedVolume {
+    /// This answer, found in A's frame, in the world frame (A at `pose_a`): the vectors and
+    /// the stiffness rotated by A's rotation matrix.
+    pub(crate) fn in_world(self, pose_a: &crate::pose::Pose) -> BudgetedVolume {
+        let r = DMat3::from_quat(pose_a.rotation);
+        BudgetedVolume {
+            normal: r * self.normal,
+            force: r * self.force,
+            torque_b: r * self.torque_b,
+            stiffness: self.stiffness.rotated(r),
+            ..self
+        }
     }
 }
 

@@ -33,6 +33,14 @@ impl ContactResult {
     pub fn in_contact(&self) -> bool {
         self.contact.is_some()
     }
+
+    /// This answer, found in A's frame, in the world frame (A at `pose_a`).
+    pub(crate) fn in_world(self, pose_a: &crate::pose::Pose) -> ContactResult {
+        ContactResult {
+            contact: self.contact.map(|c| c.in_world(pose_a)),
+            ..self
+        }
+    }
 }
 
 /// The serialized form of [`ContactResult`]: one flat record, as scripts read it.
@@ -133,7 +141,7 @@ pub(crate) fn contact(
     };
     match found {
         Some((la, lb, c)) => ContactResult {
-            contact: Some(make_contact(ctx.a, la, ctx.b, lb, c, &ctx.pose_a)),
+            contact: Some(make_contact(ctx.a, la, ctx.b, lb, c)),
             distance: 0.0,
             visits,
             skipped: false,

@@ -7,9 +7,8 @@ use super::kernel::info::{Node, TreeInfo, LANES};
 use super::kernel::lanes;
 #[cfg(target_arch = "x86_64")]
 use super::kernel::nearest::step_avx2;
-use super::kernel::nearest::{block_in_a, step_scalar, Prune};
+use super::kernel::nearest::{block_in_a, leaf_step, step_scalar, Prune};
 use super::kernel::separation::{record, SeparationRecord};
-use super::kernel::simd;
 use super::kernel::{expand_larger, prefetch, Ctx};
 use glam::DVec3;
 
@@ -90,6 +89,18 @@ pub struct Distance {
     pub visits: u64,
 }
 
+impl Distance {
+    /// This answer, found in A's frame, in the world frame (A at `pose_a`).
+    pub(crate) fn in_world(self, pose_a: &crate::pose::Pose) -> Distance {
+        Distance {
+            point_a: pose_a.transform_point(self.point_a),
+            point_b: pose_a.transform_point(self.point_b),
+            normal: pose_a.transform_vector(self.normal),
+            ..self
+        }
+    }
+}
+
 /// Exact minimum distance between the inner-sphere packings of `a` at `pose_a` and `b` at
 /// `pose_b` (world poses), with the closest points and the leaf pair.
 ///
@@ -109,7 +120,6 @@ pub(crate) fn distance(
     s: &mut DistanceScratch,
     opts: &DistanceOptions,
 ) -> Distance {
-    let pose_a = &ctx.pose_a;
     let abs = opts.abs_tolerance.max(0.0) as f32;
     let rel = opts.rel_tolerance.max(0.0) as f32;
     let signed = opts.signed;
@@ -247,9 +257,9 @@ pub(crate) fn distance(
         pair_distance: ub as f64,
         lower_bound: clamp(lower) as f64,
         overlapping,
-        point_a: pose_a.transform_point(ca + n * ra),
-        point_b: pose_a.transform_point(cbd - n * rb),
-        normal: pose_a.transform_vector(n),
+        point_a: ca + n * ra,
+        point_b: cbd - n * rb,
+        normal: n,
         leaf_a: la,
         leaf_b: lb,
         visits,
@@ -290,15 +300,14 @@ pub(crate) fn far_roots(
     let (ra, rb) = (na.r as f64, nb.r as f64);
     let pair = (len - ra - rb).min(f64::MAX);
     s.last = Some((la, lb));
-    let pose_a = &ctx.pose_a;
     Distance {
         distance: pair.max(far.separation),
         pair_distance: pair,
         lower_bound: far.separation,
         overlapping: false,
-        point_a: pose_a.transform_point(ca + n * ra),
-        point_b: pose_a.transform_point(cb - n * rb),
-        normal: pose_a.transform_vector(n),
+        point_a: ca + n * ra,
+        point_b: cb - n * rb,
+        normal: n,
         leaf_a: la,
         leaf_b: lb,
         visits,
@@ -528,21 +537,8 @@ fn depth_first_blocks<const AVX: bool>(
             A_LEAF => {
                 let kb = &bb[e.b as usize];
                 let (bx, by, bz) = block_in_a(ctx, kb);
-                let [px, py, pz, pr] = e.p;
-                let mut d2 = [0.0f32; LANES];
-                let mut sr = [0.0f32; LANES];
-                let mut mask = 0u32;
-                for l in 0..LANES {
-                    let dx = px - bx[l];
-                    let dy = py - by[l];
-                    let dz = pz - bz[l];
-                    d2[l] = dx * dx + dy * dy + dz * dz;
-                    sr[l] = pr + kb.r[l];
-                    if (kb.leaf >> l) & 1 == 0 {
-                        sr[l] += ctx.slack;
-                    }
-                    mask |= (Prune::refine(d2[l], sr[l], t) as u32) << l;
-                }
+                let (d2, sr, mut mask) =
+                    leaf_step(e.p, &bx, &by, &bz, &kb.r, kb.leaf, ctx.slack, t);
                 f.visits += kb.count as u64;
                 while mask != 0 {
                     let l = mask.trailing_zeros() as usize;
@@ -563,21 +559,8 @@ fn depth_first_blocks<const AVX: bool>(
             }
             _ => {
                 let ka = &ba[e.a as usize];
-                let [px, py, pz, pr] = e.p;
-                let mut d2 = [0.0f32; LANES];
-                let mut sr = [0.0f32; LANES];
-                let mut mask = 0u32;
-                for i in 0..LANES {
-                    let dx = ka.x[i] - px;
-                    let dy = ka.y[i] - py;
-                    let dz = ka.z[i] - pz;
-                    d2[i] = dx * dx + dy * dy + dz * dz;
-                    sr[i] = ka.r[i] + pr;
-                    if (ka.leaf >> i) & 1 == 0 {
-                        sr[i] += ctx.slack;
-                    }
-                    mask |= (Prune::refine(d2[i], sr[i], t) as u32) << i;
-                }
+                let (d2, sr, mut mask) =
+                    leaf_step(e.p, &ka.x, &ka.y, &ka.z, &ka.r, ka.leaf, ctx.slack, t);
                 f.visits += ka.count as u64;
                 while mask != 0 {
                     let i = mask.trailing_zeros() as usize;
@@ -612,7 +595,7 @@ fn depth_first_blocks_dispatch(
     f: &mut Found,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if simd::avx2() {
+    if ctx.simd.is_some() {
         #[target_feature(enable = "avx2")]
         fn avx2(
             ctx: &Ctx,
@@ -625,7 +608,7 @@ fn depth_first_blocks_dispatch(
         ) {
             depth_first_blocks::<true>(ctx, ia, ib, root, stack, p, f)
         }
-        // SAFETY: the CPU has AVX2 (checked above).
+        // SAFETY: an `Avx2` token exists only where the CPU has AVX2 (`simd::detect`).
         unsafe { avx2(ctx, ia, ib, root, stack, p, f) };
         return;
     }

@@ -199,8 +199,7 @@ fn multipoint_pick(
             let (ov, _) = ctx.test(la, lb, cb);
             *visits += 1;
             if ov && insert_sorted(&mut s.excluded, split_key(ctx, la, lb, split)) {
-                s.contacts
-                    .push(make_contact(ctx.a, la, ctx.b, lb, cb, &ctx.pose_a));
+                s.contacts.push(make_contact(ctx.a, la, ctx.b, lb, cb));
                 *reused += 1;
             }
         }
@@ -214,8 +213,7 @@ fn multipoint_pick(
             h.split = split;
         }
         if insert_sorted(&mut s.excluded, h.key) {
-            s.contacts
-                .push(make_contact(ctx.a, h.a, ctx.b, h.b, h.c, &ctx.pose_a));
+            s.contacts.push(make_contact(ctx.a, h.a, ctx.b, h.b, h.c));
         }
     }
 }
@@ -252,8 +250,7 @@ fn multipoint_search(
             } else if s.contacts.len() < k
                 && insert_sorted(&mut s.excluded, split_key(ctx, la, lb, split))
             {
-                s.contacts
-                    .push(make_contact(ctx.a, la, ctx.b, lb, cb, &ctx.pose_a));
+                s.contacts.push(make_contact(ctx.a, la, ctx.b, lb, cb));
                 *reused += 1;
             }
         }
@@ -271,16 +268,14 @@ fn multipoint_search(
         let found = climb(ctx, desc, la, lb, split, min_sep, visits);
         insert_sorted(&mut s.excluded, key);
         if let Some(e) = found {
-            s.contacts
-                .push(make_contact(ctx.a, e.a, ctx.b, e.b, e.c, &ctx.pose_a));
+            s.contacts.push(make_contact(ctx.a, e.a, ctx.b, e.b, e.c));
         }
     }
     // (3) Search from the roots for the rest.
     if s.contacts.len() < k && s.excluded.binary_search(&pair_key(0, 0)).is_err() {
         start(ctx, desc, 0, 0, c0, 0);
         while let Some(e) = resume(ctx, desc, &s.excluded, split, NO_PAIR, min_sep, visits) {
-            s.contacts
-                .push(make_contact(ctx.a, e.a, ctx.b, e.b, e.c, &ctx.pose_a));
+            s.contacts.push(make_contact(ctx.a, e.a, ctx.b, e.b, e.c));
             insert_sorted(&mut s.excluded, split_key(ctx, e.a, e.b, split));
             if s.contacts.len() >= k {
                 break;

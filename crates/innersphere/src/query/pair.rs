@@ -246,13 +246,9 @@ impl Pair {
         let mut opts = *opts;
         if let Some(f) = far(&self.a.info, &self.b.info, &ctx.rel) {
             if f.roots_only {
-                return distance::far_roots(
-                    &ctx,
-                    &self.a.info,
-                    &self.b.info,
-                    &f,
-                    &mut self.distance,
-                );
+                let d =
+                    distance::far_roots(&ctx, &self.a.info, &self.b.info, &f, &mut self.distance);
+                return d.in_world(pose_a);
             }
             opts.abs_tolerance = opts.abs_tolerance.max(f.tolerance);
         }
@@ -265,6 +261,7 @@ impl Pair {
             &mut self.distance,
             &opts,
         )
+        .in_world(pose_a)
     }
 
     /// The distance between the two meshes, refined from the sphere distance (ours): the
@@ -321,7 +318,7 @@ impl Pair {
         if let Some(f) = far(&self.a.info, &self.b.info, &ctx.rel) {
             return contact::separated(f.separation);
         }
-        contact::contact(&ctx, &self.b.info, &mut self.front, &mut self.bfront)
+        contact::contact(&ctx, &self.b.info, &mut self.front, &mut self.bfront).in_world(pose_a)
     }
 
     /// Up to `opts.k` contacts, at most one below each node pair at the split depth (the
@@ -338,7 +335,7 @@ impl Pair {
         if let Some(f) = far(&self.a.info, &self.b.info, &ctx.rel) {
             return multipoint::separated(&mut self.multipoint, f.separation);
         }
-        multipoint::multipoint(
+        let m = multipoint::multipoint(
             &ctx,
             &self.a.info,
             &self.b.info,
@@ -347,7 +344,11 @@ impl Pair {
             &mut self.sep,
             &mut self.multipoint,
             opts,
-        )
+        );
+        for c in &mut self.multipoint.contacts {
+            *c = c.in_world(pose_a);
+        }
+        m
     }
 
     /// The contacts found by the last [`Pair::multipoint`] (world frame), reused ones first;
@@ -375,7 +376,7 @@ impl Pair {
         if let Some(f) = far(&self.a.info, &self.b.info, &ctx.rel) {
             return penetration::separated(&mut self.penetration, f.separation);
         }
-        penetration::penetration(
+        let p = penetration::penetration(
             &ctx,
             &self.a.info,
             &self.b.info,
@@ -384,7 +385,17 @@ impl Pair {
             &mut self.sep,
             &mut self.penetration,
             opts,
-        )
+        );
+        self.penetration_in_world(p, pose_a)
+    }
+
+    /// A penetration answer and the patches of the pair, found in A's frame, in the world
+    /// frame: the one place the penetration queries' answers change frame.
+    fn penetration_in_world(&mut self, p: Penetration, pose_a: &Pose) -> Penetration {
+        for q in &mut self.penetration.patches {
+            *q = q.in_world(pose_a);
+        }
+        p.in_world(pose_a)
     }
 
     /// The contact patches of the last [`Pair::penetration`] (world frame); other query
@@ -441,7 +452,7 @@ impl Pair {
             opts,
         );
         s.floor = hits;
-        p
+        Ok(self.penetration_in_world(p?, pose_a))
     }
 
     /// Time-critical penetration volume: the volume found within `budget` node-pair tests
@@ -478,6 +489,7 @@ impl Pair {
             opts.stiffness,
             opts.linearize,
         )
+        .in_world(pose_a)
     }
 
     /// The paper's traversals on this pair (its baselines: same contact answers as
@@ -552,6 +564,7 @@ impl Paper<'_> {
             return contact::separated(f.separation);
         }
         paper::distance_traversal(&ctx, &p.a.info, &p.b.info, &mut p.descent, &mut p.sep, opts)
+            .in_world(pose_a)
     }
 
     /// The paper's backtracking traversal (III-B, Algorithms 1–2): restart from the previous
@@ -579,6 +592,7 @@ impl Paper<'_> {
             &mut p.backtrack,
             opts,
         )
+        .in_world(pose_a)
     }
 }
 
@@ -596,10 +610,10 @@ fn ctx<'t>(ia: &'t TreeInfo, ib: &'t TreeInfo, pose_a: &Pose, pose_b: &Pose) -> 
         blocks_b: &ib.blocks,
         block_of_a: &ia.block_of,
         block_of_b: &ib.block_of,
-        pose_a: *pose_a,
         rel,
         rel32,
         slack,
+        simd: super::kernel::simd::detect(),
     }
 }
 

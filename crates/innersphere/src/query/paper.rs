@@ -56,7 +56,7 @@ fn finish(
         Some(e) => {
             *sep = None;
             ContactResult {
-                contact: Some(make_contact(ctx.a, e.a, ctx.b, e.b, e.c, &ctx.pose_a)),
+                contact: Some(make_contact(ctx.a, e.a, ctx.b, e.b, e.c)),
                 distance: 0.0,
                 visits,
                 skipped: false,

@@ -124,8 +124,8 @@ pub(crate) fn block_step(
     let ll = lanes::leaf_pairs_mask(sb.leaf, sa.leaf);
     let valid = lanes::valid_mask(sb.count, sa.count);
     #[cfg(target_arch = "x86_64")]
-    let (over, mut near) = if simd::avx2() {
-        // SAFETY: the CPU has AVX2 (checked just above; the check is a cached load).
+    let (over, mut near) = if ctx.simd.is_some() {
+        // SAFETY: an `Avx2` token exists only where the CPU has AVX2 (`simd::detect`).
         unsafe { overlap_masks_avx2(&sb, &sa, ll, valid, ctx.slack, m, &mut d2, &mut sr) }
     } else {
         overlap_masks(&sb, &sa, ll, valid, ctx.slack, m, &mut d2, &mut sr)
@@ -173,7 +173,14 @@ pub(crate) fn block_gaps(ctx: &Ctx, e: &TItem, visits: &mut u64) -> (u32, u32, f
     let ll = lanes::leaf_pairs_mask(sb.leaf, sa.leaf);
     let valid = lanes::valid_mask(sb.count, sa.count);
     let rows = [&sb.x, &sb.y, &sb.z, &sb.r];
-    let (over, m) = gap_kernel(rows, [&sa.x, &sa.y, &sa.z, &sa.r], ll, valid, ctx.slack);
+    let (over, m) = gap_kernel(
+        ctx.simd,
+        rows,
+        [&sa.x, &sa.y, &sa.z, &sa.r],
+        ll,
+        valid,
+        ctx.slack,
+    );
     *visits += (sa.count * sb.count) as u64;
     (over, ll & valid, m)
 }
@@ -190,6 +197,7 @@ pub(crate) fn inner_gaps(ctx: &Ctx, ba: u32, bb: u32, visits: &mut u64) -> (u32,
     let ll = lanes::leaf_pairs_mask(kb.leaf, ka.leaf);
     let valid = lanes::valid_mask(kb.count, ka.count);
     let (over, m) = gap_kernel(
+        ctx.simd,
         [&x, &y, &z, &kb.r],
         [&ka.x, &ka.y, &ka.z, &ka.r],
         ll,
@@ -205,10 +213,17 @@ type Lanes4<'a> = [&'a [f32; LANES]; 4];
 
 /// [`overlap_gap_avx2`] where the CPU has AVX2, else [`overlap_gap`].
 #[inline(always)]
-fn gap_kernel(r: Lanes4, c: Lanes4, ll: u32, valid: u32, slack: f32) -> (u32, f32) {
+fn gap_kernel(
+    simd: Option<simd::Avx2>,
+    r: Lanes4,
+    c: Lanes4,
+    ll: u32,
+    valid: u32,
+    slack: f32,
+) -> (u32, f32) {
     #[cfg(target_arch = "x86_64")]
-    if simd::avx2() {
-        // SAFETY: the CPU has AVX2 (checked just above; the check is a cached load).
+    if simd.is_some() {
+        // SAFETY: an `Avx2` token exists only where the CPU has AVX2 (`simd::detect`).
         return unsafe { overlap_gap_avx2(r, c, ll, valid, slack) };
     }
     overlap_gap(r, c, ll, valid, slack)
@@ -413,7 +428,7 @@ mod lane_tests {
             m in prop_oneof![Just(f32::INFINITY), 0.0f32..10.0],
         ) {
             #[cfg(target_arch = "x86_64")]
-            if simd::avx2() {
+            if simd::detect().is_some() {
                 let (r, c) = (side(&vr, lr, nr), side(&vc, lc, nc));
                 let ll = lanes::leaf_pairs_mask(r.leaf, c.leaf);
                 let valid = lanes::valid_mask(r.count, c.count);
@@ -451,7 +466,7 @@ mod lane_tests {
                 .fold(f32::INFINITY, f32::min);
             prop_assert_eq!(g1.to_bits(), want.to_bits());
             #[cfg(target_arch = "x86_64")]
-            if simd::avx2() {
+            if simd::detect().is_some() {
                 // SAFETY: the CPU has AVX2 (checked above).
                 let (o2, g2) = unsafe { overlap_gap_avx2(rl, cl, ll, valid, 1e-4) };
                 prop_assert_eq!(o1, o2);

@@ -2,7 +2,6 @@
 //! ≤ the motion so far), chunk by chunk in a given order; portable and AVX2 twins, the same
 //! answers.
 
-#[cfg(target_arch = "x86_64")]
 use super::simd;
 
 /// Slots per chunk: one depth key per chunk, and a vector's worth of expiries per branch of
@@ -12,10 +11,16 @@ pub(crate) const CHUNK: usize = 8;
 /// Sets `due` to the slots of `chunks` (in that order, each chunk's in slot order) whose
 /// expiry is ≤ `moved`. Runs over every slot every frame, and nearly all are not due.
 #[inline(always)]
-pub(crate) fn due_entries(expiry: &[f64], chunks: &[u32], moved: f64, due: &mut Vec<u32>) {
+pub(crate) fn due_entries(
+    simd: Option<simd::Avx2>,
+    expiry: &[f64],
+    chunks: &[u32],
+    moved: f64,
+    due: &mut Vec<u32>,
+) {
     #[cfg(target_arch = "x86_64")]
-    if simd::avx2() {
-        // SAFETY: the CPU has AVX2 (checked just above).
+    if simd.is_some() {
+        // SAFETY: an `Avx2` token exists only where the CPU has AVX2 (`simd::detect`).
         unsafe { due_entries_avx2(expiry, chunks, moved, due) };
         return;
     }
@@ -127,7 +132,7 @@ mod tests {
             due_entries_portable(&v, &chunks, moved, &mut p);
             prop_assert_eq!(&p, &want);
             #[cfg(target_arch = "x86_64")]
-            if simd::avx2() {
+            if simd::detect().is_some() {
                 let mut a = vec![7];
                 // SAFETY: the CPU has AVX2 (checked just above).
                 unsafe { due_entries_avx2(&v, &chunks, moved, &mut a) };

@@ -153,15 +153,9 @@ pub(crate) fn direction(ca: DVec3, cb: DVec3) -> (DVec3, f64) {
     }
 }
 
-/// The world contact of an (overlapping) leaf pair.
-pub(crate) fn make_contact(
-    a: &[Node],
-    la: u32,
-    b: &[Node],
-    lb: u32,
-    cb: [f32; 3],
-    pose_a: &Pose,
-) -> Contact {
+/// The contact of an (overlapping) leaf pair, in A's frame ([`Contact::in_world`] at the
+/// `Pair` door).
+pub(crate) fn make_contact(a: &[Node], la: u32, b: &[Node], lb: u32, cb: [f32; 3]) -> Contact {
     let (ca, ra, cb, rb) = leaf_pair(&a[la as usize], &b[lb as usize], cb);
     let (u, d) = direction(ca, cb);
     let depth = ra + rb - d;
@@ -169,9 +163,20 @@ pub(crate) fn make_contact(
     Contact {
         leaf_a: la,
         leaf_b: lb,
-        point: pose_a.transform_point(p),
-        normal: pose_a.transform_vector(u),
+        point: p,
+        normal: u,
         depth,
+    }
+}
+
+impl Contact {
+    /// This contact, found in A's frame, in the world frame (A at `pose_a`).
+    pub(crate) fn in_world(self, pose_a: &Pose) -> Contact {
+        Contact {
+            point: pose_a.transform_point(self.point),
+            normal: pose_a.transform_vector(self.normal),
+            ..self
+        }
     }
 }
 

@@ -40,10 +40,12 @@ pub(crate) struct Ctx<'t> {
     pub blocks_b: &'t [Block],
     pub block_of_a: &'t [u32],
     pub block_of_b: &'t [u32],
-    pub pose_a: Pose,
     pub rel: Pose,
     pub rel32: Rel32,
     pub slack: f32,
+    /// The query's one CPU-dispatch decision ([`simd::detect`], made at the `Pair` door):
+    /// the AVX2 kernels run when it holds the token.
+    pub simd: Option<simd::Avx2>,
 }
 
 impl Ctx<'_> {

@@ -64,6 +64,41 @@ pub(crate) fn block_in_a(ctx: &Ctx, k: &Block) -> ([f32; LANES], [f32; LANES], [
     (x, y, z)
 }
 
+/// A leaf sphere `p` (`[x, y, z, r]`, A's frame) against one block's four lanes (centres
+/// `x`, `y`, `z` in A's frame, radii `r`): each lane's squared centre distance and radius sum
+/// (+ the rounding slack unless the lane is a leaf, bit `l` of `leaf`), and the mask of lanes
+/// to refine under threshold `t` (bit `l`). Serves a leaf of A against B's block and a leaf
+/// of B against A's alike: the squares and the sums do not depend on the order, bit for bit.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn leaf_step(
+    p: [f32; 4],
+    x: &[f32; LANES],
+    y: &[f32; LANES],
+    z: &[f32; LANES],
+    r: &[f32; LANES],
+    leaf: u32,
+    slack: f32,
+    t: f32,
+) -> ([f32; LANES], [f32; LANES], u32) {
+    let [px, py, pz, pr] = p;
+    let mut d2 = [0.0f32; LANES];
+    let mut sr = [0.0f32; LANES];
+    let mut mask = 0u32;
+    for l in 0..LANES {
+        let dx = px - x[l];
+        let dy = py - y[l];
+        let dz = pz - z[l];
+        d2[l] = dx * dx + dy * dy + dz * dz;
+        sr[l] = pr + r[l];
+        if (leaf >> l) & 1 == 0 {
+            sr[l] += slack;
+        }
+        mask |= (Prune::refine(d2[l], sr[l], t) as u32) << l;
+    }
+    (d2, sr, mask)
+}
+
 /// The 4×4 step, portable: B's children into A's frame (`bxyz`), every child pair's squared
 /// centre distance and radius sum (+ the rounding slack unless both are leaves, `ll`), and
 /// the mask of pairs to refine under threshold `t` (bit `4i + l`).
@@ -175,7 +210,7 @@ mod tests {
             t in -5.0f32..30.0,
         ) {
             #[cfg(target_arch = "x86_64")]
-            if simd::avx2() {
+            if simd::detect().is_some() {
                 let (ka, kb) = (Block::from_spheres(&va, la, na), Block::from_spheres(&vb, lb, nb));
                 let rot = DQuat::from_xyzw(q[0], q[1], q[2], q[3] + 1.5).normalize();
                 let rel = Pose::new(DVec3::from_array(tr), rot).unwrap();
@@ -187,10 +222,10 @@ mod tests {
                     blocks_b: &[],
                     block_of_a: &[],
                     block_of_b: &[],
-                    pose_a: Pose::IDENTITY,
                     rel,
                     rel32,
                     slack: 1e-4,
+                    simd: simd::detect(),
                 };
                 let ll = lanes::leaf_pairs_mask(ka.leaf, kb.leaf);
                 let (mut x1, mut d1, mut s1) = ([[0.0; LANES]; 3], [0.0; 16], [0.0; 16]);

@@ -60,6 +60,33 @@ pub struct Penetration {
     pub skipped: bool,
 }
 
+impl Patch {
+    /// This patch, found in A's frame, in the world frame (A at `pose_a`).
+    pub(crate) fn in_world(self, pose_a: &crate::pose::Pose) -> Patch {
+        Patch {
+            point: pose_a.transform_point(self.point),
+            normal: pose_a.transform_vector(self.normal),
+            ..self
+        }
+    }
+}
+
+impl Penetration {
+    /// This answer, found in A's frame, in the world frame (A at `pose_a`): the vectors
+    /// rotated, the stiffness `R K Rᵀ`.
+    pub(crate) fn in_world(self, pose_a: &crate::pose::Pose) -> Penetration {
+        let rot = |v: DVec3| pose_a.transform_vector(v);
+        Penetration {
+            normal: rot(self.normal),
+            force: rot(self.force),
+            torque_a: rot(self.torque_a),
+            torque_b: rot(self.torque_b),
+            stiffness: self.stiffness.rotated(DMat3::from_quat(pose_a.rotation)),
+            ..self
+        }
+    }
+}
+
 impl serde::Serialize for Penetration {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         // The derived fields (`remote = "Self"`) after `contact`.

@@ -80,6 +80,6 @@ fn sum<const L: bool>(
         sums: &mut sums,
         patches: &mut s.acc,
     };
-    add_hits(hits, ctx.a, ctx.b, &mut to);
+    add_hits(ctx.simd, hits, ctx.a, ctx.b, &mut to);
     answer(ctx, ia, ib, &mut sums, s, opts, 0.0)
 }

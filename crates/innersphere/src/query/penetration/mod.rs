@@ -21,7 +21,7 @@ use crate::query::kernel::separation::{record, safe_separation, SeparationRecord
 use crate::query::kernel::{expand_larger, Ctx, Item};
 use crate::query::search::descent::{blocked, overlap_pairs_dispatch, Descent};
 use crate::query::search::front::Front;
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 use sums::{add_hits, LeafBatch, Sink};
 
 /// Penetration volume of `a` at `pose_a` and `b` at `pose_b` (world poses), with the contact
@@ -85,7 +85,7 @@ fn penetration_sums<const L: bool>(
         let (na, nb) = (ctx.a, ctx.b);
         if use_front {
             visits = front.update(ctx, ib);
-            add_hits(&front.hits, na, nb, &mut to);
+            add_hits(ctx.simd, &front.hits, na, nb, &mut to);
             if front.hits.is_empty() {
                 min_sep = front.margin().max(0.0) as f32;
             }
@@ -198,24 +198,20 @@ fn answer<const L: bool>(
     opts: &PenetrationOptions,
     distance: f64,
 ) -> Penetration {
-    let pose_a = &ctx.pose_a;
     sums.settle();
     let com_a = ia.center_of_mass;
     let com_b = ctx.rel.transform_point(ib.center_of_mass);
     let (n, f, ta, tb) = sums.wrench(opts.stiffness, com_a, com_b);
-    let stiffness = sums
-        .stiffness(opts.stiffness, com_b)
-        .rotated(DMat3::from_quat(pose_a.rotation));
-    let rot = |v: DVec3| pose_a.transform_vector(v);
-    s.acc.finish(pose_a, &mut s.patches);
+    let stiffness = sums.stiffness(opts.stiffness, com_b);
+    s.acc.finish(&mut s.patches);
     Penetration {
         volume: sums.volume,
         pairs: sums.pairs,
         max_depth: sums.max_depth,
-        normal: rot(n),
-        force: rot(f),
-        torque_a: rot(ta),
-        torque_b: rot(tb),
+        normal: n,
+        force: f,
+        torque_a: ta,
+        torque_b: tb,
         patch_count: s.patches.len(),
         area: sums.area,
         stiffness,

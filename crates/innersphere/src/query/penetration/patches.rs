@@ -2,7 +2,6 @@
 //! patch whose seed (its first pair's lens centroid) is nearest.
 
 use super::answer::Patch;
-use crate::pose::Pose;
 use crate::query::kernel::lenses::{Terms4, W};
 use crate::query::search::front::Hit;
 use glam::DVec3;
@@ -229,15 +228,15 @@ impl Patches {
         self.sums.len() - 1
     }
 
-    /// The finished patches in the world frame (A at `pose_a`).
-    pub(crate) fn finish(&self, pose_a: &Pose, out: &mut Vec<Patch>) {
+    /// The finished patches, in A's frame ([`Patch::in_world`] at the `Pair` door).
+    pub(crate) fn finish(&self, out: &mut Vec<Patch>) {
         out.clear();
         for (i, lanes) in self.sums.iter().enumerate() {
             let seed = DVec3::new(self.sx[i], self.sy[i], self.sz[i]);
             let pa = lanes.total();
             out.push(Patch {
-                point: pose_a.transform_point(if pa.vol > 0.0 { pa.vg / pa.vol } else { seed }),
-                normal: pose_a.transform_vector(pa.vu.normalize_or_zero()),
+                point: if pa.vol > 0.0 { pa.vg / pa.vol } else { seed },
+                normal: pa.vu.normalize_or_zero(),
                 depth: pa.depth,
                 volume: pa.vol,
                 pairs: pa.pairs,
@@ -332,7 +331,7 @@ mod tests {
                 p.add_batch(&t, batch.len());
             }
             let mut got = vec![];
-            p.finish(&Pose::IDENTITY, &mut got);
+            p.finish(&mut got);
             prop_assert_eq!(got, reference(&pairs, max, r));
         }
     }

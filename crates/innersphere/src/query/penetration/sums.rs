@@ -321,7 +321,13 @@ fn gather(h: [&Hit; W], na: &[Node], nb: &[Node]) -> Pairs4 {
 
 /// Sums the front's overlapping leaf pairs, compiled for AVX2 when the CPU has it (same
 /// results bit for bit).
-pub(super) fn add_hits<const L: bool>(hits: &[Hit], na: &[Node], nb: &[Node], to: &mut Sink<L>) {
+pub(super) fn add_hits<const L: bool>(
+    simd: Option<simd::Avx2>,
+    hits: &[Hit],
+    na: &[Node],
+    nb: &[Node],
+    to: &mut Sink<L>,
+) {
     #[inline(always)]
     fn run<const L: bool>(hits: &[Hit], na: &[Node], nb: &[Node], to: &mut Sink<L>) {
         // Whole batches are gathered by value, lane by fixed lane, so that the compiler
@@ -344,12 +350,12 @@ pub(super) fn add_hits<const L: bool>(hits: &[Hit], na: &[Node], nb: &[Node], to
         }
     }
     #[cfg(target_arch = "x86_64")]
-    if simd::avx2() {
+    if simd.is_some() {
         #[target_feature(enable = "avx2")]
         fn avx2<const L: bool>(hits: &[Hit], na: &[Node], nb: &[Node], to: &mut Sink<L>) {
             run(hits, na, nb, to)
         }
-        // SAFETY: the CPU has AVX2 (checked above).
+        // SAFETY: an `Avx2` token exists only where the CPU has AVX2 (`simd::detect`).
         unsafe { avx2(hits, na, nb, to) };
         return;
     }

@@ -47,7 +47,6 @@ use crate::query::kernel::block::{block_gaps, inner_gaps, sides, TItem, B_LEAF};
 use crate::query::kernel::expiry::{due_entries, CHUNK};
 use crate::query::kernel::info::{TreeInfo, LANES};
 use crate::query::kernel::separation::motion_bound;
-use crate::query::kernel::simd;
 use crate::query::kernel::Ctx;
 
 const NONE: u32 = u32::MAX;
@@ -267,14 +266,15 @@ impl BlockFront {
     /// has it (the expiry scan and the 4×4 steps are vectorised).
     fn run(&mut self, ctx: &Ctx, deepest_first: bool, stop: bool, budget: usize) -> u64 {
         #[cfg(target_arch = "x86_64")]
-        if simd::avx2() {
+        if ctx.simd.is_some() {
             // With `popcnt` and `bmi1` the bit counts of the masks are one instruction each
             // (without, `count_ones` was ≈ a tenth of a step's instructions under cachegrind).
             #[target_feature(enable = "avx2,popcnt,bmi1")]
             fn avx2(f: &mut BlockFront, ctx: &Ctx, deep: bool, stop: bool, budget: usize) -> u64 {
                 f.run_impl(ctx, deep, stop, budget)
             }
-            // SAFETY: the CPU has AVX2, POPCNT and BMI1 (checked above).
+            // SAFETY: an `Avx2` token exists only where the CPU has AVX2, POPCNT and BMI1
+            // (`simd::detect`).
             return unsafe { avx2(self, ctx, deepest_first, stop, budget) };
         }
         self.run_impl(ctx, deepest_first, stop, budget)
@@ -311,7 +311,7 @@ impl BlockFront {
             order_chunks(&self.chunk_depth, &mut self.chunks);
             self.chunks_stale = false;
         }
-        due_entries(&self.expiry, &self.chunks, moved, &mut self.due);
+        due_entries(ctx.simd, &self.expiry, &self.chunks, moved, &mut self.due);
         if deepest_first {
             self.due.reverse();
         }

@@ -6,7 +6,6 @@
 
 use crate::query::kernel::block::{block_step, TItem};
 use crate::query::kernel::info::{Node, LANES};
-use crate::query::kernel::simd;
 use crate::query::kernel::{pair_key, Ctx, Item};
 use crate::tree::NO_PARENT;
 
@@ -186,7 +185,7 @@ fn dfs_blocks_dispatch(
     visits: &mut u64,
 ) -> Option<Item> {
     #[cfg(target_arch = "x86_64")]
-    if simd::avx2() {
+    if ctx.simd.is_some() {
         #[target_feature(enable = "avx2")]
         #[allow(clippy::too_many_arguments)]
         fn avx2(
@@ -200,7 +199,7 @@ fn dfs_blocks_dispatch(
         ) -> Option<Item> {
             dfs_blocks(ctx, stack, excl, split, skip, min_sep, visits)
         }
-        // SAFETY: the CPU has AVX2 (checked above).
+        // SAFETY: an `Avx2` token exists only where the CPU has AVX2 (`simd::detect`).
         return unsafe { avx2(ctx, stack, excl, split, skip, min_sep, visits) };
     }
     dfs_blocks(ctx, stack, excl, split, skip, min_sep, visits)
@@ -246,7 +245,7 @@ pub(crate) fn overlap_pairs_dispatch(
     leaf: &mut dyn FnMut(u32, u32, [f32; 3]),
 ) {
     #[cfg(target_arch = "x86_64")]
-    if simd::avx2() {
+    if ctx.simd.is_some() {
         #[target_feature(enable = "avx2")]
         fn avx2(
             ctx: &Ctx,
@@ -257,7 +256,7 @@ pub(crate) fn overlap_pairs_dispatch(
         ) {
             overlap_pairs(ctx, stack, min_sep, visits, leaf)
         }
-        // SAFETY: the CPU has AVX2 (checked above).
+        // SAFETY: an `Avx2` token exists only where the CPU has AVX2 (`simd::detect`).
         unsafe { avx2(ctx, stack, min_sep, visits, leaf) };
         return;
     }

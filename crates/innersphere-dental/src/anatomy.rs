@@ -61,6 +61,9 @@ impl AnatomicalFrame {
 
     /// The frame from points of each body (vertices, or the centres of a tree's leaf
     /// spheres when no mesh is at hand); the same method as [`from_meshes`](Self::from_meshes).
+    // Over 120 lines: one derivation (centroids, covariance, up, the principal axes across
+    // it, which of them is anterior, the scale), each step a few lines reading the last's
+    // vectors; split, each piece would take and return most of them.
     pub fn from_points(a: &[DVec3], b: &[DVec3]) -> Result<AnatomicalFrame> {
         if a.is_empty() || b.is_empty() {
             return Err(Error::InvalidMesh(

@@ -130,6 +130,8 @@ pub const MAX_KEPT_TICKS: usize = 2_000_000;
 /// `opts.rate`, starting with the tool at the first device pose, as `session` says. The
 /// figures are gathered as the ticks go (constant memory); the ticks themselves are kept
 /// only with `session.keep_ticks`, at most [`MAX_KEPT_TICKS`] of them.
+// Over 120 lines: the session's loop and what it gathers per tick share the clock, the
+// collision thread and the running figures; the per-tick work itself is the library's.
 pub fn run(
     pair: Pair,
     device: &Motion,

@@ -243,6 +243,8 @@ pub struct PaperSummary {
 
 /// Figs. 6 and 9: query time and distance error against the leaf count, one tree pair per
 /// voxel size of `opts`; the voxel sizes and leaf counts built, for the fan-out figure.
+// Over 120 lines: one loop over the voxel sizes whose build, timings and accuracy feed two
+// figures (Figs. 6 and 9) row by row.
 fn leaf_sweep(
     mesh_a: &Mesh,
     mesh_b: &Mesh,
@@ -517,6 +519,76 @@ fn multipoint_figure(
 }
 
 /// Runs the whole evaluation of the pair (`mesh_a` fixed, `mesh_b` moved by `motion`) and
+/// The distribution of `v` as a series: (percentile, value), values floored at 0.01 for the
+/// log axis.
+fn cdf(name: &str, v: &[f64]) -> Series {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len().max(1) as f64;
+    Series {
+        name: name.to_string(),
+        points: s
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| (100.0 * (i + 1) as f64 / n, t.max(0.01)))
+            .collect(),
+    }
+}
+
+/// The backtracking figure on the main trees: the paper's full distance traversal and its
+/// backtracking timed along the motion, compared on the frames in contact
+/// (`backtracking.csv`, `backtracking.png`). Returns both timings and their statistics on
+/// those frames.
+fn backtracking_figure(
+    ta: &SharedTree,
+    tb: &SharedTree,
+    motion: &Motion,
+    out: &mut Out,
+    log: &mut dyn FnMut(&str),
+) -> Result<(Timed, Timed, [f64; 4], [f64; 4])> {
+    let full = time_kind(ta, tb, motion, "paper distance traversal");
+    let back = time_kind(ta, tb, motion, "paper backtracking");
+    let in_contact: Vec<usize> = (0..motion.frames.len())
+        .filter(|&i| full.contact[i])
+        .collect();
+    let pick = |t: &Timed| -> Vec<f64> { in_contact.iter().map(|&i| t.us[i]).collect() };
+    let (fc, bc) = (pick(&full), pick(&back));
+    let (sf, sbk) = (stats(&fc), stats(&bc));
+    let mut bt = String::from("query,contact_frames,p50_us,p99_us,max_us,mean_us\n");
+    for (name, s) in [("full distance traversal", sf), ("backtracking", sbk)] {
+        let _ = writeln!(
+            bt,
+            "{name},{},{:.3},{:.3},{:.3},{:.3}",
+            in_contact.len(),
+            s[0],
+            s[1],
+            s[2],
+            s[3]
+        );
+    }
+    out.csv("backtracking.csv", &bt)?;
+    if !in_contact.is_empty() {
+        out.png(
+            "backtracking.png",
+            &Chart {
+                title: "Backtracking against the full traversal, frames in contact",
+                x_label: "percentile of contact frames",
+                y_label: "time per frame (µs)",
+                log_x: false,
+                log_y: true,
+            },
+            &[
+                cdf("paper distance traversal (full)", &fc),
+                cdf("paper backtracking", &bc),
+            ],
+        )?;
+    } else {
+        log("no frame in contact: no backtracking chart");
+    }
+
+    Ok((full, back, sf, sbk))
+}
+
 /// writes CSV files and PNG charts into `out`; `log` receives one line per step.
 pub fn run(
     mesh_a: &Mesh,
@@ -554,59 +626,7 @@ pub fn run(
         tb.leaf_count(),
         sa + sb
     ));
-    let full = time_kind(&ta, &tb, motion, "paper distance traversal");
-    let back = time_kind(&ta, &tb, motion, "paper backtracking");
-    let in_contact: Vec<usize> = (0..motion.frames.len())
-        .filter(|&i| full.contact[i])
-        .collect();
-    let pick = |t: &Timed| -> Vec<f64> { in_contact.iter().map(|&i| t.us[i]).collect() };
-    let (fc, bc) = (pick(&full), pick(&back));
-    let (sf, sbk) = (stats(&fc), stats(&bc));
-    let mut bt = String::from("query,contact_frames,p50_us,p99_us,max_us,mean_us\n");
-    for (name, s) in [("full distance traversal", sf), ("backtracking", sbk)] {
-        let _ = writeln!(
-            bt,
-            "{name},{},{:.3},{:.3},{:.3},{:.3}",
-            in_contact.len(),
-            s[0],
-            s[1],
-            s[2],
-            s[3]
-        );
-    }
-    out.csv("backtracking.csv", &bt)?;
-    let cdf = |name: &str, v: &[f64]| {
-        let mut s = v.to_vec();
-        s.sort_by(f64::total_cmp);
-        let n = s.len().max(1) as f64;
-        Series {
-            name: name.to_string(),
-            points: s
-                .iter()
-                .enumerate()
-                .map(|(i, &t)| (100.0 * (i + 1) as f64 / n, t.max(0.01)))
-                .collect(),
-        }
-    };
-    if !in_contact.is_empty() {
-        out.png(
-            "backtracking.png",
-            &Chart {
-                title: "Backtracking against the full traversal, frames in contact",
-                x_label: "percentile of contact frames",
-                y_label: "time per frame (µs)",
-                log_x: false,
-                log_y: true,
-            },
-            &[
-                cdf("paper distance traversal (full)", &fc),
-                cdf("paper backtracking", &bc),
-            ],
-        )?;
-    } else {
-        log("no frame in contact: no backtracking chart");
-    }
-
+    let (full, back, sf, sbk) = backtracking_figure(&ta, &tb, motion, &mut out, log)?;
     multipoint_figure(&ta, &tb, motion, &opts.ks, &mut out)?;
 
     // Ours beside the paper's traversals and the exact mesh distance, per frame: single pass

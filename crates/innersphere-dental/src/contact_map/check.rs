@@ -225,6 +225,8 @@ impl Teeth {
     /// regions ([`Teeth::regions`]) it computed on the way. About 25 ms on a 220k-vertex arch
     /// with 16 teeth (two cores), plus a winding number per centre when the opposing arch is
     /// given.
+    // Over 120 lines: the checks run in the order their refusals are worded (arch, box,
+    // winding, regions), most of the length is the refusals' text.
     pub fn check_against(&self, ctx: &ArchContext) -> Result<TeethFit> {
         let jaw = self.jaw()?;
         if let Some(want) = ctx.jaw.filter(|&w| w != jaw) {

@@ -197,6 +197,8 @@ fn light_bite(
 }
 
 /// [`generate`] with options, returning the labels and the plan's anchors too.
+// Over 120 lines: the motion is planned, sampled and given its tremor in one pass over the
+// frames; the plan's anchors, the hinge and the random stream are shared by every step.
 pub fn generate_with(
     scenario: Scenario,
     seconds: f64,

@@ -5,6 +5,7 @@
 
 use super::info::{Block, LANES};
 use super::lanes;
+#[cfg(all(test, target_arch = "x86_64"))]
 use super::simd;
 use super::{prefetch_at, Ctx};
 
@@ -109,8 +110,10 @@ impl Side {
 /// One blocked step of the overlap traversals: all child pairs of `e` tested side by side
 /// (4×4, or 1×4 when a side is a leaf). Returns both sides and the mask of overlapping
 /// pairs (bit `l·4 + i`: A's lane `i` against B's lane `l`); separated pairs lower `min_sep`.
+/// `AVX`: the AVX2 twin, set only within the `#[target_feature]` code a dispatcher runs when
+/// the query's token (`Ctx::simd`) says the CPU has AVX2.
 #[inline(always)]
-pub(crate) fn block_step(
+pub(crate) fn block_step<const AVX: bool>(
     ctx: &Ctx,
     e: &TItem,
     min_sep: &mut f32,
@@ -124,8 +127,8 @@ pub(crate) fn block_step(
     let ll = lanes::leaf_pairs_mask(sb.leaf, sa.leaf);
     let valid = lanes::valid_mask(sb.count, sa.count);
     #[cfg(target_arch = "x86_64")]
-    let (over, mut near) = if ctx.simd.is_some() {
-        // SAFETY: an `Avx2` token exists only where the CPU has AVX2 (`simd::detect`).
+    let (over, mut near) = if AVX {
+        // SAFETY: `AVX` is set only where the query's `Avx2` token proved the CPU has it.
         unsafe { overlap_masks_avx2(&sb, &sa, ll, valid, ctx.slack, m, &mut d2, &mut sr) }
     } else {
         overlap_masks(&sb, &sa, ll, valid, ctx.slack, m, &mut d2, &mut sr)
@@ -166,21 +169,19 @@ pub(crate) fn sides(ctx: &Ctx, e: &TItem) -> (Side, Side) {
 /// and how far the step is from changing its outcome: the smallest `|√d2 − sr|` (a
 /// separation, or a leaf pair's overlap depth; the pruning slack is in `sr` for inner pairs)
 /// over all pairs except the overlapping inner ones (+∞ when there are none). Any kind of
-/// pair; [`inner_gaps`] is the same for two inner nodes without building the sides.
+/// pair; [`inner_gaps`] is the same for two inner nodes without building the sides. `AVX`
+/// as in [`block_step`].
 #[inline(always)]
-pub(crate) fn block_gaps(ctx: &Ctx, e: &TItem, visits: &mut u64) -> (u32, u32, f32) {
+pub(crate) fn block_gaps<const AVX: bool>(
+    ctx: &Ctx,
+    e: &TItem,
+    visits: &mut u64,
+) -> (u32, u32, f32) {
     let (sa, sb) = sides(ctx, e);
     let ll = lanes::leaf_pairs_mask(sb.leaf, sa.leaf);
     let valid = lanes::valid_mask(sb.count, sa.count);
     let rows = [&sb.x, &sb.y, &sb.z, &sb.r];
-    let (over, m) = gap_kernel(
-        ctx.simd,
-        rows,
-        [&sa.x, &sa.y, &sa.z, &sa.r],
-        ll,
-        valid,
-        ctx.slack,
-    );
+    let (over, m) = gap_kernel::<AVX>(rows, [&sa.x, &sa.y, &sa.z, &sa.r], ll, valid, ctx.slack);
     *visits += (sa.count * sb.count) as u64;
     (over, ll & valid, m)
 }
@@ -188,16 +189,20 @@ pub(crate) fn block_gaps(ctx: &Ctx, e: &TItem, visits: &mut u64) -> (u32, u32, f
 /// [`block_gaps`] of a pair of inner nodes (blocks `ba` of A and `bb` of B) without building
 /// the sides. The block front's common step, which needs the sides only when its outcome
 /// changed (cachegrind: building and returning
-/// them was ≈ a quarter of a step's instructions).
+/// them was ≈ a quarter of a step's instructions). `AVX` as in [`block_step`].
 #[inline(always)]
-pub(crate) fn inner_gaps(ctx: &Ctx, ba: u32, bb: u32, visits: &mut u64) -> (u32, u32, f32) {
+pub(crate) fn inner_gaps<const AVX: bool>(
+    ctx: &Ctx,
+    ba: u32,
+    bb: u32,
+    visits: &mut u64,
+) -> (u32, u32, f32) {
     let ka = &ctx.blocks_a[ba as usize];
     let kb = &ctx.blocks_b[bb as usize];
     let (x, y, z) = ctx.rel32.apply4(&kb.x, &kb.y, &kb.z);
     let ll = lanes::leaf_pairs_mask(kb.leaf, ka.leaf);
     let valid = lanes::valid_mask(kb.count, ka.count);
-    let (over, m) = gap_kernel(
-        ctx.simd,
+    let (over, m) = gap_kernel::<AVX>(
         [&x, &y, &z, &kb.r],
         [&ka.x, &ka.y, &ka.z, &ka.r],
         ll,
@@ -211,10 +216,9 @@ pub(crate) fn inner_gaps(ctx: &Ctx, ba: u32, bb: u32, visits: &mut u64) -> (u32,
 /// Four lanes of `[x, y, z, r]`: one side of a 4×4 step.
 type Lanes4<'a> = [&'a [f32; LANES]; 4];
 
-/// [`overlap_gap_avx2`] where the CPU has AVX2, else [`overlap_gap`].
+/// [`overlap_gap_avx2`] with `AVX` (as in [`block_step`]), else [`overlap_gap`].
 #[inline(always)]
-fn gap_kernel(
-    simd: Option<simd::Avx2>,
+fn gap_kernel<const AVX: bool>(
     r: Lanes4,
     c: Lanes4,
     ll: u32,
@@ -222,8 +226,8 @@ fn gap_kernel(
     slack: f32,
 ) -> (u32, f32) {
     #[cfg(target_arch = "x86_64")]
-    if simd.is_some() {
-        // SAFETY: an `Avx2` token exists only where the CPU has AVX2 (`simd::detect`).
+    if AVX {
+        // SAFETY: `AVX` is set only where the query's `Avx2` token proved the CPU has it.
         return unsafe { overlap_gap_avx2(r, c, ll, valid, slack) };
     }
     overlap_gap(r, c, ll, valid, slack)

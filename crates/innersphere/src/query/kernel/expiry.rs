@@ -2,6 +2,7 @@
 //! ≤ the motion so far), chunk by chunk in a given order; portable and AVX2 twins, the same
 //! answers.
 
+#[cfg(all(test, target_arch = "x86_64"))]
 use super::simd;
 
 /// Slots per chunk: one depth key per chunk, and a vector's worth of expiries per branch of
@@ -11,16 +12,17 @@ pub(crate) const CHUNK: usize = 8;
 /// Sets `due` to the slots of `chunks` (in that order, each chunk's in slot order) whose
 /// expiry is ≤ `moved`. Runs over every slot every frame, and nearly all are not due.
 #[inline(always)]
-pub(crate) fn due_entries(
-    simd: Option<simd::Avx2>,
+/// `AVX`: the AVX2 twin, set only within the `#[target_feature]` code a dispatcher runs when
+/// the query's token (`Ctx::simd`) says the CPU has AVX2.
+pub(crate) fn due_entries<const AVX: bool>(
     expiry: &[f64],
     chunks: &[u32],
     moved: f64,
     due: &mut Vec<u32>,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if simd.is_some() {
-        // SAFETY: an `Avx2` token exists only where the CPU has AVX2 (`simd::detect`).
+    if AVX {
+        // SAFETY: `AVX` is set only where the query's `Avx2` token proved the CPU has it.
         unsafe { due_entries_avx2(expiry, chunks, moved, due) };
         return;
     }

@@ -271,17 +271,23 @@ impl BlockFront {
             // (without, `count_ones` was ≈ a tenth of a step's instructions under cachegrind).
             #[target_feature(enable = "avx2,popcnt,bmi1")]
             fn avx2(f: &mut BlockFront, ctx: &Ctx, deep: bool, stop: bool, budget: usize) -> u64 {
-                f.run_impl(ctx, deep, stop, budget)
+                f.run_impl::<true>(ctx, deep, stop, budget)
             }
             // SAFETY: an `Avx2` token exists only where the CPU has AVX2, POPCNT and BMI1
             // (`simd::detect`).
             return unsafe { avx2(self, ctx, deepest_first, stop, budget) };
         }
-        self.run_impl(ctx, deepest_first, stop, budget)
+        self.run_impl::<false>(ctx, deepest_first, stop, budget)
     }
 
     #[inline(always)]
-    fn run_impl(&mut self, ctx: &Ctx, deepest_first: bool, stop: bool, budget: usize) -> u64 {
+    fn run_impl<const AVX: bool>(
+        &mut self,
+        ctx: &Ctx,
+        deepest_first: bool,
+        stop: bool,
+        budget: usize,
+    ) -> u64 {
         self.found = None;
         let slack2 = 2.0 * ctx.slack as f64;
         let moved = self.moved;
@@ -297,7 +303,7 @@ impl BlockFront {
                 let s = [r.x, r.y, r.z];
                 self.root = self.alloc(TItem::new(ctx, 0, 0, c0, 0), s, NONE, 0);
                 self.work.push(self.root);
-                tests += self.drain(ctx, slack2, stop, &mut left);
+                tests += self.drain::<AVX>(ctx, slack2, stop, &mut left);
             } else if !ov && self.root != NONE {
                 self.drop_subtree(self.root);
                 self.root = NONE;
@@ -311,7 +317,7 @@ impl BlockFront {
             order_chunks(&self.chunk_depth, &mut self.chunks);
             self.chunks_stale = false;
         }
-        due_entries(ctx.simd, &self.expiry, &self.chunks, moved, &mut self.due);
+        due_entries::<AVX>(&self.expiry, &self.chunks, moved, &mut self.due);
         if deepest_first {
             self.due.reverse();
         }
@@ -324,9 +330,9 @@ impl BlockFront {
             }
             let e = self.due[k];
             if self.ent[e as usize].live && self.expiry[e as usize] <= moved {
-                tests += self.step(ctx, e, slack2);
+                tests += self.step::<AVX>(ctx, e, slack2);
                 left -= 1;
-                tests += self.drain(ctx, slack2, stop, &mut left);
+                tests += self.drain::<AVX>(ctx, slack2, stop, &mut left);
             }
             k += 1;
         }
@@ -372,11 +378,17 @@ impl BlockFront {
     /// while steps are `left`; with `stop`, stops at the first hit (the rest keep their
     /// expiry of −∞).
     #[inline(always)]
-    fn drain(&mut self, ctx: &Ctx, slack2: f64, stop: bool, left: &mut usize) -> u64 {
+    fn drain<const AVX: bool>(
+        &mut self,
+        ctx: &Ctx,
+        slack2: f64,
+        stop: bool,
+        left: &mut usize,
+    ) -> u64 {
         let mut tests = 0;
         while *left > 0 && !(stop && self.found.is_some()) {
             let Some(e) = self.work.pop() else { break };
-            tests += self.step(ctx, e, slack2);
+            tests += self.step::<AVX>(ctx, e, slack2);
             *left -= 1;
         }
         tests
@@ -492,7 +504,7 @@ impl BlockFront {
     /// Re-runs the step of entry `e` at the current pose: new overlapping inner children get
     /// entries (queued on the work stack), separated ones lose theirs; sets its expiry.
     #[inline(always)]
-    fn step(&mut self, ctx: &Ctx, e: u32, slack2: f64) -> u64 {
+    fn step<const AVX: bool>(&mut self, ctx: &Ctx, e: u32, slack2: f64) -> u64 {
         let old = self.ent[e as usize];
         let (mut item, own) = (old.item, old.bc);
         if item.kind == B_LEAF {
@@ -500,9 +512,9 @@ impl BlockFront {
         }
         let mut tests = 0;
         let (over, ll, m) = if item.inner() {
-            inner_gaps(ctx, item.ba, item.bb, &mut tests)
+            inner_gaps::<AVX>(ctx, item.ba, item.bb, &mut tests)
         } else {
-            block_gaps(ctx, &item, &mut tests)
+            block_gaps::<AVX>(ctx, &item, &mut tests)
         };
         // The common step: nothing but the expiry changes.
         if over & !ll == old.expanded as u32 && over & ll == 0 && old.hits == 0 {

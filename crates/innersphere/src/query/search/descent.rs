@@ -119,7 +119,7 @@ fn dfs_sim(
 /// that they pop in child order), with the same exclusions.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn expand_blocks(
+fn expand_blocks<const AVX: bool>(
     ctx: &Ctx,
     stack: &mut Vec<TItem>,
     excl: &[u64],
@@ -129,7 +129,7 @@ fn expand_blocks(
     min_sep: &mut f32,
     visits: &mut u64,
 ) {
-    let (sa, sb, mut over) = block_step(ctx, &e, min_sep, visits);
+    let (sa, sb, mut over) = block_step::<AVX>(ctx, &e, min_sep, visits);
     let depth = e.depth() + 1;
     let check = depth <= split && !excl.is_empty();
     while over != 0 {
@@ -149,7 +149,7 @@ fn expand_blocks(
 /// [`dfs_sim`] on blocks.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn dfs_blocks(
+fn dfs_blocks<const AVX: bool>(
     ctx: &Ctx,
     stack: &mut Vec<TItem>,
     excl: &[u64],
@@ -167,7 +167,7 @@ fn dfs_blocks(
                 depth: e.depth(),
             });
         }
-        expand_blocks(ctx, stack, excl, split, skip, e, min_sep, visits);
+        expand_blocks::<AVX>(ctx, stack, excl, split, skip, e, min_sep, visits);
     }
     None
 }
@@ -197,19 +197,19 @@ fn dfs_blocks_dispatch(
             min_sep: &mut f32,
             visits: &mut u64,
         ) -> Option<Item> {
-            dfs_blocks(ctx, stack, excl, split, skip, min_sep, visits)
+            dfs_blocks::<true>(ctx, stack, excl, split, skip, min_sep, visits)
         }
         // SAFETY: an `Avx2` token exists only where the CPU has AVX2 (`simd::detect`).
         return unsafe { avx2(ctx, stack, excl, split, skip, min_sep, visits) };
     }
-    dfs_blocks(ctx, stack, excl, split, skip, min_sep, visits)
+    dfs_blocks::<false>(ctx, stack, excl, split, skip, min_sep, visits)
 }
 
 /// Every overlapping leaf pair below the pairs on `stack` (all of them, no order), by
 /// blocked steps: `leaf(a, b, B's centre in A's frame)` for each; separated pairs lower
 /// `min_sep`. The enumeration of the penetration query.
 #[inline(always)]
-fn overlap_pairs<F: FnMut(u32, u32, [f32; 3])>(
+fn overlap_pairs<const AVX: bool, F: FnMut(u32, u32, [f32; 3])>(
     ctx: &Ctx,
     stack: &mut Vec<TItem>,
     min_sep: &mut f32,
@@ -221,7 +221,7 @@ fn overlap_pairs<F: FnMut(u32, u32, [f32; 3])>(
             leaf(e.na, e.nb, e.c);
             continue;
         }
-        let (sa, sb, mut over) = block_step(ctx, &e, min_sep, visits);
+        let (sa, sb, mut over) = block_step::<AVX>(ctx, &e, min_sep, visits);
         while over != 0 {
             let q = over.trailing_zeros() as usize;
             over &= over - 1;
@@ -254,13 +254,13 @@ pub(crate) fn overlap_pairs_dispatch(
             visits: &mut u64,
             leaf: &mut dyn FnMut(u32, u32, [f32; 3]),
         ) {
-            overlap_pairs(ctx, stack, min_sep, visits, leaf)
+            overlap_pairs::<true, _>(ctx, stack, min_sep, visits, leaf)
         }
         // SAFETY: an `Avx2` token exists only where the CPU has AVX2 (`simd::detect`).
         unsafe { avx2(ctx, stack, min_sep, visits, leaf) };
         return;
     }
-    overlap_pairs(ctx, stack, min_sep, visits, leaf)
+    overlap_pairs::<false, _>(ctx, stack, min_sep, visits, leaf)
 }
 
 /// True when both trees have blocks (fan-out ≤ 4): the traversals then run on them.

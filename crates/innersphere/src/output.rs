@@ -32,7 +32,7 @@ use std::path::{Path, PathBuf};
 /// True when `a` and `b` name the same existing file: the same device and inode on Unix (a
 /// hard link, a symbolic link, `./x` and `x` are all caught), else the same canonical path.
 /// False when either does not exist.
-pub fn same_file(a: &Path, b: &Path) -> bool {
+pub(crate) fn same_file(a: &Path, b: &Path) -> bool {
     let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) else {
         return false;
     };

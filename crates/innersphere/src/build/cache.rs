@@ -235,7 +235,7 @@ impl BuildCache {
     /// `keep`, and the cache's own temporary files left by interrupted writes. Only the
     /// cache's own names in its own subfolder are considered; entries another process
     /// removes at the same time are skipped.
-    pub fn evict(&self, keep: &Path) {
+    pub(crate) fn evict(&self, keep: &Path) {
         let Ok(list) = std::fs::read_dir(self.entries_dir()) else {
             return;
         };

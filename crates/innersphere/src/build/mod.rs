@@ -32,13 +32,6 @@ pub use pipeline::{build_tree, BuildReport, StageSeconds, MIN_EXTENT};
 #[doc(hidden)]
 pub use pipeline::tree_of_spheres;
 pub use preset::Preset;
-// The presets' numbers, documented on `Preset`: public for the tools that print them.
-#[doc(hidden)]
-pub use preset::{
-    CALIBRATED_MIN_RADIUS_PER_VOXEL, CALIBRATED_REFINE_STEPS, FAST_CELLS, FINE_CELLS,
-    JAW_PRESET_SIZE_MM, JAW_THICK_LATTICE_MM, JAW_THICK_MARGIN_MM, JAW_THICK_MIN_RADIUS_MM,
-    JAW_THICK_RADIUS_MM,
-};
 pub use verdict::MeshVerdict;
 
 #[cfg(doc)]

@@ -103,36 +103,36 @@ impl std::str::FromStr for Preset {
 }
 
 /// Cells along the longest side of the bounding box for [`Preset::Fast`].
-pub const FAST_CELLS: u32 = 64;
+pub(crate) const FAST_CELLS: u32 = 64;
 /// Voxel size of [`Preset::Fine`] = longest side of the bounding box / this.
-pub const FINE_CELLS: u32 = 384;
+pub(crate) const FINE_CELLS: u32 = 384;
 /// Minimum radius of the calibrated packing as a fraction of the voxel size (0.05 mm at
 /// 0.1 mm voxels in `docs/RESULTS.md`).
-pub const CALIBRATED_MIN_RADIUS_PER_VOXEL: f64 = 0.5;
+pub(crate) const CALIBRATED_MIN_RADIUS_PER_VOXEL: f64 = 0.5;
 /// Off-grid refinement steps of the calibrated packing (`docs/RESULTS.md`: 16 steps gain
 /// little over 8 for twice the packing time).
-pub const CALIBRATED_REFINE_STEPS: u32 = 8;
+pub(crate) const CALIBRATED_REFINE_STEPS: u32 = 8;
 /// The jaw presets' thick parts (millimetres): where a body holds a ball of this radius it is
 /// bone, not tooth (the widest human molar crown is about 11.5 mm across, so no tooth holds a
 /// 12 mm ball), and never within reach of the other arch's teeth: packed from a coarse lattice
 /// ([`JAW_THICK_LATTICE_MM`], [`JAW_THICK_MIN_RADIUS_MM`]) so that an arch modelled with its
 /// bone builds at the cost of its teeth and its surface, not of its volume.
-pub const JAW_THICK_RADIUS_MM: f64 = 6.0;
+pub(crate) const JAW_THICK_RADIUS_MM: f64 = 6.0;
 /// How far (mm) the jaw presets' thick parts reach beyond their balls: into the bone's edges
 /// and the creases too narrow for a 6 mm ball, and up to 2 mm onto the teeth standing in it.
 /// What stays fine is every part thinner than 12 mm that stands more than 2 mm out of the
 /// bone: the crowns, whose occlusal surfaces (the only ones within reach of the other arch)
 /// stand 5–9 mm above the bone in a human jaw.
-pub const JAW_THICK_MARGIN_MM: f64 = 2.0;
+pub(crate) const JAW_THICK_MARGIN_MM: f64 = 2.0;
 /// The spacing (mm) of the coarse lattice of voxels in thick parts, rounded to a whole number
 /// of voxels: 4 voxels at the jaw preset's 0.1 mm (a 64th of the voxels).
-pub const JAW_THICK_LATTICE_MM: f64 = 0.4;
+pub(crate) const JAW_THICK_LATTICE_MM: f64 = 0.4;
 /// The smallest sphere (mm) in thick parts: half the lattice spacing, the calibrated ratio of
 /// minimum radius to voxel ([`CALIBRATED_MIN_RADIUS_PER_VOXEL`]).
-pub const JAW_THICK_MIN_RADIUS_MM: f64 = 0.2;
+pub(crate) const JAW_THICK_MIN_RADIUS_MM: f64 = 0.2;
 /// Longest bounding-box sides (mm) the jaw presets accept: a single tooth crown to a skull.
 /// Outside it the mesh is almost certainly not in millimetres.
-pub const JAW_PRESET_SIZE_MM: std::ops::RangeInclusive<f64> = 1.0..=500.0;
+pub(crate) const JAW_PRESET_SIZE_MM: std::ops::RangeInclusive<f64> = 1.0..=500.0;
 
 /// Longest side of the mesh's bounding box, or an error for a mesh without extent.
 fn longest_side(mesh: &Mesh) -> Result<f64> {

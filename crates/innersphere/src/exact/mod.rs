@@ -64,8 +64,8 @@ pub use penetration::{penetration, penetration_depth, Body, ExactPenetration};
 pub use scratch::{ExactScratch, ExactStats};
 #[doc(hidden)]
 pub use tri_tri::{
-    segment_segment_closest, segment_triangle_intersect, segments_intersect, triangle_distance,
-    triangles_intersect, TriDistance,
+    segment_segment_closest, segment_triangle_intersect, triangle_distance, triangles_intersect,
+    TriDistance,
 };
 
 #[cfg(doc)]

@@ -118,7 +118,7 @@ fn segment_triangle_2d(
 /// Non-coplanar segments never meet. Coplanar point sets meet in space if and only if they
 /// meet in all three coordinate projections: every projection keeps an intersection, and at
 /// least one projection is one-to-one on their plane (or line).
-pub fn segments_intersect(p: DVec3, q: DVec3, r: DVec3, s: DVec3) -> bool {
+pub(crate) fn segments_intersect(p: DVec3, q: DVec3, r: DVec3, s: DVec3) -> bool {
     if o3(p, q, r, s) != 0.0 {
         return false;
     }
@@ -334,7 +334,7 @@ pub fn triangles_intersect(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
 
 /// A common point of the closed triangles (approximate position), or `None` when they are
 /// disjoint (exact decision).
-pub fn intersection_point(a: &[DVec3; 3], b: &[DVec3; 3]) -> Option<DVec3> {
+pub(crate) fn intersection_point(a: &[DVec3; 3], b: &[DVec3; 3]) -> Option<DVec3> {
     if plane_separates(a, b) || plane_separates(b, a) {
         return None;
     }

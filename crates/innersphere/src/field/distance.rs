@@ -166,7 +166,7 @@ pub fn bounds(
 // Kept whole (over 120 lines): its passes (the inside cells, the coarse lattice's nodes and
 // their nearest triangles, every voxel's bound from its node) share the lattice's indexing
 // closures, which a split would hand from function to function.
-pub fn bounds_where(
+pub(crate) fn bounds_where(
     mesh: &Mesh,
     bvh: &TriangleBvh,
     grid: VoxelGrid,

@@ -48,7 +48,7 @@ pub type Keep<'a> = &'a (dyn Fn(u32, u32, u32) -> u32 + Sync);
 
 /// [`classify`], keeping only the inside cells for which `keep` holds (all without it): the
 /// others are dropped row by row, so that the full list is never held.
-pub fn classify_where(
+pub(crate) fn classify_where(
     mesh: &Mesh,
     grid: &VoxelGrid,
     keep: Option<Keep<'_>>,
@@ -77,7 +77,7 @@ pub fn classify_where(
 
 /// How the edges of a mesh are used.
 #[derive(Debug, Clone, Default)]
-pub struct EdgeSummary {
+pub(crate) struct EdgeSummary {
     /// Number of distinct undirected edges (degenerate ones, from repeated indices, ignored).
     pub edges: usize,
     /// Edges used by exactly one triangle.
@@ -123,7 +123,7 @@ impl EdgeSummary {
     }
 
     /// Most edges belong to a single triangle: a soup that encloses no volume.
-    pub fn is_soup(&self) -> bool {
+    pub(crate) fn is_soup(&self) -> bool {
         self.single_use * 2 > self.edges
     }
 }

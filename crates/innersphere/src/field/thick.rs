@@ -171,7 +171,7 @@ impl ThickSet {
     /// nearest node is the same covered one, up to the next node on the lattice), so that an
     /// inside test skips them without looking at each.
     #[inline]
-    pub fn next_kept(&self, i: u32, j: u32, k: u32) -> u32 {
+    pub(crate) fn next_kept(&self, i: u32, j: u32, k: u32) -> u32 {
         let (covered, node) = self.lookup(i, j, k);
         if !covered || node {
             return k;
@@ -188,7 +188,7 @@ impl ThickSet {
 
     /// Whether voxel `(i, j, k)` is a coarse one: a covered node.
     #[inline]
-    pub fn is_coarse(&self, i: u32, j: u32, k: u32) -> bool {
+    pub(crate) fn is_coarse(&self, i: u32, j: u32, k: u32) -> bool {
         let (covered, node) = self.lookup(i, j, k);
         covered && node
     }

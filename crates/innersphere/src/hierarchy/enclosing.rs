@@ -211,7 +211,7 @@ pub fn enclose(balls: &[Ball]) -> Ball {
 
 /// Exact minimal enclosing ball by enumerating every subset of at most four balls
 /// (O(n⁵)): the reference against which [`enclose`] is measured. Use for n ≤ 12.
-pub fn enclose_brute_force(balls: &[Ball]) -> Ball {
+pub(crate) fn enclose_brute_force(balls: &[Ball]) -> Ball {
     let mut scratch = Vec::new();
     smallest_over_subsets(balls, &mut scratch).0
 }

@@ -14,9 +14,9 @@ use glam::DVec3;
 
 /// Most triangles in a leaf of [`TriangleBvh::new`]'s trees (the exact mesh queries' buffers
 /// are this long).
-pub const LEAF_SIZE: usize = 4;
+pub(crate) const LEAF_SIZE: usize = 4;
 /// Most triangles in a leaf of any tree ([`TriangleBvh::with_leaf_size`]).
-pub const MAX_LEAF_SIZE: usize = 16;
+pub(crate) const MAX_LEAF_SIZE: usize = 16;
 /// Number of SAH bins per axis.
 const BINS: usize = 16;
 /// Subtrees with more triangles than this are built in parallel.
@@ -28,7 +28,7 @@ const MEDIAN_DEPTH: u32 = 40;
 /// the slab through their box corners (keeps the build O(n log SLAB_EXACT)).
 const SLAB_EXACT: usize = 1024;
 /// Upper bound of the tree depth (sizes the traversal stacks).
-pub const MAX_DEPTH: usize = MEDIAN_DEPTH as usize + 34;
+pub(crate) const MAX_DEPTH: usize = MEDIAN_DEPTH as usize + 34;
 
 /// One node of a [`TriangleBvh`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -111,7 +111,7 @@ pub struct Near {
 
 impl Near {
     /// No margin: the nearest triangle's distance.
-    pub const EXACT: Near = Near { abs: 0.0, rel: 0.0 };
+    pub(crate) const EXACT: Near = Near { abs: 0.0, rel: 0.0 };
 
     /// The squared distance below which something must lie to beat a triangle at squared
     /// distance `best` by the margin.
@@ -176,7 +176,7 @@ impl TriangleBvh {
     /// surface (the build's distance bounds and exact distances), small ones the mesh–mesh
     /// queries (leaves of 8 there: exact jaw distance p99 1.02–1.03×, worst frame
     /// 1.07–1.11×).
-    pub fn with_leaf_size(mesh: &Mesh, leaf: usize) -> Self {
+    pub(crate) fn with_leaf_size(mesh: &Mesh, leaf: usize) -> Self {
         use rayon::prelude::*;
         let tris: Vec<[DVec3; 3]> = (0..mesh.triangles.len())
             .into_par_iter()
@@ -236,12 +236,6 @@ impl TriangleBvh {
     /// Bounding box `(lo, hi)` of all triangles (`None` when empty).
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
         self.nodes.first().map(|n| (n.lo, n.hi))
-    }
-
-    /// The corners of the triangle in BVH slot `slot` (its mesh index is `order[slot]`).
-    #[inline]
-    pub fn slot_triangle(&self, slot: usize) -> [DVec3; 3] {
-        self.tris[slot]
     }
 
     /// The nearest surface point to `p` whose squared distance is at most `upper_bound_sq`
@@ -368,14 +362,8 @@ impl TriangleBvh {
         }
     }
 
-    /// A lower bound of the squared distance from `p` to the triangles below node `i`: the
-    /// larger of the box and slab bounds.
-    #[inline]
-    pub fn lower_bound_sq(&self, i: usize, p: DVec3) -> f64 {
-        self.bound_above(i, p, f64::INFINITY)
-    }
-
-    /// [`lower_bound_sq`](Self::lower_bound_sq), or only the box's bound where that is
+    /// A lower bound of the squared distance from `p` to the triangles below node `i` (the
+    /// larger of the box and slab bounds), or only the box's bound where that is
     /// already above `cut` (the node is pruned either way; the slab is not read).
     #[inline]
     fn bound_above(&self, i: usize, p: DVec3, cut: f64) -> f64 {
@@ -400,7 +388,7 @@ impl TriangleBvh {
     /// Like [`closest_point`](Self::closest_point) with the bound taken from the triangle in
     /// `hint_slot` (typically the answer for a nearby point): always finds the nearest triangle,
     /// but prunes most of the tree from the start.
-    pub fn closest_point_from(&self, p: DVec3, hint_slot: u32) -> Option<Closest> {
+    pub(crate) fn closest_point_from(&self, p: DVec3, hint_slot: u32) -> Option<Closest> {
         self.closest_point(p, self.slot_distance_sq(p, hint_slot))
     }
 

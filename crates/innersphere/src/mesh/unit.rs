@@ -52,7 +52,7 @@ impl Unit {
 
     /// True for millimetres (kept out of the tree file's meta, so that trees of millimetre
     /// meshes keep their bytes).
-    pub fn is_mm(&self) -> bool {
+    pub(crate) fn is_mm(&self) -> bool {
         *self == Unit::Mm
     }
 }

@@ -16,10 +16,10 @@ use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
 
 /// Default accuracy parameter β: nodes farther than β·radius use their far-field expansion.
-pub const DEFAULT_BETA: f64 = 2.0;
+pub(crate) const DEFAULT_BETA: f64 = 2.0;
 /// The accuracy assumed of [`FastWinding`] at [`DEFAULT_BETA`] (second order: errors of
 /// about 1e-3, with a margin): how far from ½ a value must be to decide inside or outside.
-pub const WINDING_ACCURACY: f64 = 0.02;
+pub(crate) const WINDING_ACCURACY: f64 = 0.02;
 
 /// Signed solid angle of the triangle `a, b, c` given relative to the viewpoint
 /// (Van Oosterom & Strackee 1983). Positive when the triangle is counter-clockwise seen from
@@ -75,12 +75,12 @@ impl FastWinding {
 
     /// Builds the hierarchy with accuracy parameter `beta` (larger is slower and more exact;
     /// `f64::INFINITY` gives the exact sum).
-    pub fn with_beta(mesh: &Mesh, beta: f64) -> Self {
+    pub(crate) fn with_beta(mesh: &Mesh, beta: f64) -> Self {
         Self::from_bvh(TriangleBvh::new(mesh), beta)
     }
 
     /// Builds the far-field moments on an existing triangle tree.
-    pub fn from_bvh(bvh: TriangleBvh, beta: f64) -> Self {
+    pub(crate) fn from_bvh(bvh: TriangleBvh, beta: f64) -> Self {
         let nodes = &bvh.nodes;
         let mut moments = vec![
             Moment {

@@ -302,7 +302,7 @@ fn arch_places(teeth: usize) -> Vec<ToothPlace> {
 }
 
 /// Tooth numbers (Universal Numbering System) with their crown centres.
-pub type NumberedCentres = Vec<(u32, DVec3)>;
+pub(crate) type NumberedCentres = Vec<(u32, DVec3)>;
 
 /// The crown centres of [`arch_pair`]`(_, teeth)`'s teeth, numbered as a teeth-axes file
 /// numbers them, (upper, lower): each on its tooth's axis, 1.05 mm into the crown from the

@@ -109,7 +109,7 @@ impl Format {
 }
 
 /// Whether a path ends in `.gz` (case-insensitive), i.e. is read and written gzip-compressed.
-pub fn is_gzip(path: &Path) -> bool {
+pub(crate) fn is_gzip(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"))
 }

@@ -80,10 +80,8 @@ impl From<ContactResult> for ContactForm {
     }
 }
 
-/// Steps of the block front per contact frame of [`contact`] (`BlockFront::tend`): ≈ 4 µs.
-/// On the jaw chew, 64 gave the lowest p99 of 0 / 32 / 64 / 128 in the same process (the
-/// frames where contact ends fell from ≈ 22 to 15–18 over 20 µs; 128 made contact frames
-/// themselves slow in the VM's slower phases).
+/// Steps of the block front per contact frame of [`contact`] (`BlockFront::tend`): the
+/// lowest p99 of 0 / 32 / 64 / 128 on the jaw chew (BENCHMARKS.md, "Tried and did not pay")).
 const TEND: usize = 64;
 
 /// First contact from a kinetic front (ours, beyond the paper): the same contact answer as

@@ -437,7 +437,7 @@ fn leaf_pair_found(f: &mut Found, d2: f32, s: f32, i: u32, j: u32) {
 /// both are tested 4×4 in one vectorised step from their [`Block`]s (two cache lines per
 /// node), a pair with a leaf side tests the leaf against the other's 4 children. Twice the
 /// sphere tests of splitting the larger node, but half the stack pops, and a pop is what
-/// costs (≈ 30 ns against ≈ 1 ns per lane test, measured on the jaw chew). `AVX`: the step in AVX2
+/// costs, far more than a lane test (BENCHMARKS.md, "Tried and did not pay")). `AVX`: the step in AVX2
 /// intrinsics (set only after the CPU was checked).
 // Kept whole (over 120 lines): the descent's stack, bound and best pair stay locals of one
 // loop on the hot path; split into calls they would pass by reference through every step.
@@ -531,8 +531,8 @@ fn depth_first_blocks<const AVX: bool>(
                     });
                 }
             }
-            // The leaf-side kinds are ≈ 3 % of the pops. Written with the traversals' `Side`
-            // (one code path for all three kinds) the search measured 25–40 % slower at p99,
+            // The leaf-side kinds are few of the pops. Written with the traversals' `Side`
+            // (one code path for all three kinds) the search was slower (BENCHMARKS.md, "Tried and did not pay"),
             // so the inner-pair step keeps reading the two blocks directly.
             A_LEAF => {
                 let kb = &bb[e.b as usize];

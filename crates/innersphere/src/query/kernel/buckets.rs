@@ -16,10 +16,8 @@ const NIL: u32 = u32::MAX;
 /// kept in the ring, the chunks behind it are full).
 const CHUNK: usize = 31;
 /// Buckets in the ring (a power of two; 128 KiB of chain heads). A single level on purpose:
-/// a two-level queue (32 fine buckets, coarse buckets of 32 each) moved a whole coarse bucket
-/// into the fine level when its block began, and on the jaw chew one coarse bucket held
-/// 15–22k of the front's ≈ 50k pairs: 0.6–0.9 ms in one frame, the worst penetration
-/// frames of the replay.
+/// a two-level queue moved a whole coarse bucket into the fine level when its block began,
+/// a large part of the front in one frame (BENCHMARKS.md, "Tried and did not pay")).
 const RING: i64 = 1 << 15;
 
 /// Non-empty buckets that [`Buckets::with_capacity`] reserves chunks for (a quarter of the

@@ -65,8 +65,7 @@ const COMPRESS: [u64; 256] = {
 /// [`due_entries`] in AVX2 intrinsics, branch-free per chunk: the mask of a chunk's eight
 /// comparisons picks its due slots' positions from [`COMPRESS`], all eight lanes are
 /// stored and the length advances by the mask's popcount. A loop over the mask's bits (one
-/// push each) mispredicted its exit on most chunks: the scan took ≈ 3× as long on the jaw
-/// chew, where a quarter of the slots are due on the busy frames.
+/// push each) mispredicted its exit on most chunks (BENCHMARKS.md, "Tried and did not pay")).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]

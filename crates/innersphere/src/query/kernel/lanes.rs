@@ -1,9 +1,7 @@
 //! The 4×4 sphere-pair step the blocked traversals share: every child of one node against
 //! every child of another, squared centre distances and radius sums, in AVX2 where the CPU has
 //! it. Hand-written intrinsics because the compiler's vectorisation of the portable loops was
-//! measured slower (p99 along the jaw motion, interleaved A/B: proximity −20 to −25 % with
-//! its reworked survivor loop, multipoint k = 16 −17 to −30 %, backtracking −11 to −17 %);
-//! both give bit-for-bit the same numbers (no FMA, the same
+//! slower (BENCHMARKS.md, "Tried and did not pay")); both give bit-for-bit the same numbers (no FMA, the same
 //! operation order, checked by property tests), so the answers do not depend on the CPU.
 
 use super::info::LANES;

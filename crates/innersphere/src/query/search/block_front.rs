@@ -21,23 +21,20 @@
 //! stop at the first hit, the unfinished steps staying due.
 //!
 //! Why blocks and not single pairs ([`front`](super::front)): re-testing one expired pair at
-//! a time cost a cache miss per pair and a bucket-queue push per re-test (≈ 40 ns per test
-//! on the jaw chew); an entry here is one 4×4 step on two blocks, and nothing is queued.
-//! On the jaw chew, on the frames a few microns from contact, it re-runs 250–400 steps where
-//! a traversal needs ≈ 1,750, each ≈ 1.5–2× a traversal step (re-stepping a whole front at
-//! one pose, warm: ≈ 1.1×).
+//! a time cost a cache miss per pair and a bucket-queue push per re-test; an entry here is
+//! one 4×4 step on two blocks, and nothing is queued. Near contact it re-runs a fraction of
+//! the steps a traversal needs, each a little dearer than a traversal's step (BENCHMARKS.md, "Tried and did not pay")).
 //!
 //! Why an expired entry is stepped without first checking whether its step could have
 //! changed: such checks (the B node's own displacement since its step, or the nearest pair's
-//! direction) spare a sixth to 40 % of the steps but make frames slower, up to ≈ 2×: 83 % of
-//! the steps are the common step, the cheapest kind, and a check costs about as much as one at
-//! five checks per saved step (BENCHMARKS.md, "Tried and did not pay").
+//! direction) spare some steps but make frames slower: most steps are the common step, the
+//! cheapest kind, and a check costs about as much as one (BENCHMARKS.md, "Tried and did not pay").
 //!
 //! Keeping every hit up to date through a deep contact costs far more than backtracking, so
 //! `contact` (`query/contact.rs`) answers from recent contact pairs while in contact, and the
 //! front only [tends](BlockFront::tend) its backlog there, a fixed number of steps a frame:
-//! with the scan branch-free and no sort, the backlog of a deep contact costs ≈ 0.5 µs a frame
-//! to scan (a scanned and sorted backlog made such a budget cost more than it saved). When the
+//! with the scan branch-free and no sort, the backlog of a deep contact is cheap to scan (a
+//! scanned and sorted backlog made such a budget cost more than it saved (BENCHMARKS.md, "Tried and did not pay")). When the
 //! recent pairs no longer overlap, the front catches up deepest first: a climb from the newest
 //! pair needed a second slow frame when the contact had ended, and deepest first cut
 //! `contact`'s p99 along the chew by about a third in the same process.

@@ -15,13 +15,10 @@
 //! The front is rebuilt from the roots on the first frame, after a jump (a motion bound above
 //! a quarter of the smaller root radius) and when it has grown to 8 times its size after the
 //! last rebuild and past 2¹⁹ pairs (it refines where contact was and never coarsens). A
-//! rebuild is a full traversal (≈ 20k tests on the jaw pair in light contact, 155k pressed
-//! 1 mm past the bite: the worst frame of the tracked queries); fine pairs far from contact
-//! have large margins and cost nothing per frame, so the floor lets a front grow to several
-//! MB rather than rebuild in the middle of a contact. Measured on the jaw pair (0.1 mm
-//! voxel): with a floor of 2¹⁴ the chew rebuilt as contact began (worst penetration frame
-//! 578 → 342–374 µs in that phase); with 2¹⁷ the 1 mm press rebuilt at 131k pairs (a
-//! 2.9–3.7 ms frame) to a front that grew back to the same 285k pairs.
+//! rebuild is a full traversal (the worst frame of the tracked queries); fine pairs far from
+//! contact have large margins and cost nothing per frame, so the floor lets a front grow to
+//! several MB rather than rebuild in the middle of a contact: lower floors rebuilt as contact
+//! began, or mid-press to a front that grew back to the same size (BENCHMARKS.md, "Tried and did not pay")).
 
 use crate::pose::Pose;
 use crate::query::kernel::buckets::{Buckets, Sep};

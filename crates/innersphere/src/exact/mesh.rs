@@ -33,6 +33,10 @@ pub struct ExactMesh {
     pub(super) shapes: Vec<bound::Shape>,
     /// Unit normal of the triangle in each BVH slot (zero when degenerate).
     pub(super) normals: Vec<DVec3>,
+    /// The triangles (BVH slots) around each vertex (CSR): those of `v` are
+    /// `vslots[vslot_start[v]..vslot_start[v + 1]]`.
+    pub(super) vslot_start: Vec<u32>,
+    pub(super) vslots: Vec<u32>,
 }
 
 impl ExactMesh {
@@ -132,7 +136,10 @@ impl ExactMesh {
                 end: extremes.len() as u32,
             });
         }
+        let (vslot_start, vslots) = vertex_slots(n, &winding, mesh);
         Ok(ExactMesh {
+            vslot_start,
+            vslots,
             mesh: mesh.clone(),
             winding,
             components,
@@ -176,9 +183,39 @@ impl ExactMesh {
         self.adj.get(s..e).unwrap_or(&[])
     }
 
+    /// The triangles (BVH slots) around vertex `v`.
+    pub(super) fn slots_of(&self, v: u32) -> &[u32] {
+        let s = self.vslot_start.get(v as usize).copied().unwrap_or(0) as usize;
+        let e = self.vslot_start.get(v as usize + 1).copied().unwrap_or(0) as usize;
+        self.vslots.get(s..e).unwrap_or(&[])
+    }
+
     /// Vertex indices of the triangle in BVH slot `slot`.
     pub(super) fn slot_vertices(&self, slot: u32) -> [u32; 3] {
         let t = self.bvh().order[slot as usize];
         self.mesh.triangles[t as usize]
     }
+}
+
+/// The BVH slots of the triangles around each vertex of `mesh` (CSR: starts, slots).
+fn vertex_slots(n: usize, winding: &FastWinding, mesh: &Mesh) -> (Vec<u32>, Vec<u32>) {
+    let order = &winding.bvh().order;
+    let mut start = vec![0u32; n + 1];
+    for &t in order.iter() {
+        for &v in &mesh.triangles[t as usize] {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut slots = vec![0u32; start[n] as usize];
+    for (slot, &t) in order.iter().enumerate() {
+        for &v in &mesh.triangles[t as usize] {
+            slots[fill[v as usize] as usize] = slot as u32;
+            fill[v as usize] += 1;
+        }
+    }
+    (start, slots)
 }

@@ -50,6 +50,7 @@ mod intersects;
 pub(crate) mod local;
 mod mesh;
 mod overlap;
+mod overlap_volume;
 mod penetration;
 mod scratch;
 // Triangle–triangle primitives: the kernels of the exact queries, not the API.
@@ -60,6 +61,7 @@ pub use distance::{brute_force_distance, distance, ExactDistance};
 pub use gaps::vertex_gaps;
 pub use intersects::{brute_force_intersects, intersects};
 pub use mesh::ExactMesh;
+pub use overlap_volume::{intersection_volume, MeshOverlap};
 pub use penetration::{penetration, penetration_depth, Body, ExactPenetration};
 pub use scratch::{ExactScratch, ExactStats};
 #[doc(hidden)]

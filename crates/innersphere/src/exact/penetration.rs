@@ -64,7 +64,7 @@ pub(crate) struct PenScratch {
     cross_a: Vec<Crossing>,
     cross_b: Vec<Crossing>,
     /// Merged barrier edges: (key, dir at the crossing nearest lo, dir nearest hi).
-    barrier: Vec<(u64, f64, f64)>,
+    pub(super) barrier: Vec<(u64, f64, f64)>,
     stamp: Vec<u32>,
     generation: u32,
     stack: Vec<u32>,
@@ -72,7 +72,7 @@ pub(crate) struct PenScratch {
 }
 
 #[inline]
-fn edge_key(u: u32, v: u32) -> u64 {
+pub(super) fn edge_key(u: u32, v: u32) -> u64 {
     let (lo, hi) = if u < v { (u, v) } else { (v, u) };
     ((lo as u64) << 32) | hi as u64
 }
@@ -130,14 +130,15 @@ fn merge(cross: &mut [Crossing], out: &mut Vec<(u64, f64, f64)>) {
     }
 }
 
-/// Vertices of `inner` inside `outer`: (depth, deepest vertex and its nearest surface point
-/// in `outer`'s frame, count).
-fn side(
+/// Calls `visit(v)` once for every vertex `v` of `inner` inside `outer` (see the module
+/// docs: regions between the barrier edges `s.barrier`, one winding number per region).
+pub(super) fn flood_inside(
     inner: &ExactMesh,
     outer: &ExactMesh,
     to_outer: &Frame,
     s: &mut PenScratch,
-) -> (f64, DVec3, DVec3, usize) {
+    mut visit: impl FnMut(u32),
+) {
     let n = inner.mesh.vertices.len();
     if s.stamp.len() < n {
         s.stamp.resize(n, 0);
@@ -165,10 +166,6 @@ fn side(
             .binary_search_by_key(&edge_key(u, v), |e| e.0)
             .is_ok()
     };
-    let mut depth_sq = 0.0f64;
-    let mut deepest = (DVec3::ZERO, DVec3::ZERO);
-    let mut count = 0usize;
-    let mut hint = u32::MAX;
     let verts = &inner.mesh.vertices;
     for ci in 0..s.candidates.len() {
         let v = s.candidates[ci];
@@ -182,15 +179,7 @@ fn side(
         s.stack.clear();
         s.stack.push(v);
         while let Some(u) = s.stack.pop() {
-            count += 1;
-            let p = to_outer.point(verts[u as usize]);
-            if let Some(c) = outer.bvh().closest_point_from(p, hint) {
-                hint = c.slot;
-                if c.dist_sq > depth_sq {
-                    depth_sq = c.dist_sq;
-                    deepest = (p, c.point);
-                }
-            }
+            visit(u);
             for &w in inner.neighbours(u) {
                 if s.stamp[w as usize] != g && !is_barrier(u, w) {
                     s.stamp[w as usize] = g;
@@ -199,6 +188,32 @@ fn side(
             }
         }
     }
+}
+
+/// Vertices of `inner` inside `outer`: (depth, deepest vertex and its nearest surface point
+/// in `outer`'s frame, count).
+fn side(
+    inner: &ExactMesh,
+    outer: &ExactMesh,
+    to_outer: &Frame,
+    s: &mut PenScratch,
+) -> (f64, DVec3, DVec3, usize) {
+    let mut depth_sq = 0.0f64;
+    let mut deepest = (DVec3::ZERO, DVec3::ZERO);
+    let mut count = 0usize;
+    let mut hint = u32::MAX;
+    let verts = &inner.mesh.vertices;
+    flood_inside(inner, outer, to_outer, s, |u| {
+        count += 1;
+        let p = to_outer.point(verts[u as usize]);
+        if let Some(c) = outer.bvh().closest_point_from(p, hint) {
+            hint = c.slot;
+            if c.dist_sq > depth_sq {
+                depth_sq = c.dist_sq;
+                deepest = (p, c.point);
+            }
+        }
+    });
     (depth_sq.sqrt(), deepest.0, deepest.1, count)
 }
 

@@ -18,6 +18,7 @@ pub struct ExactScratch {
     pub(super) warm_start: bool,
     pub(super) stats: ExactStats,
     pub(crate) pen: penetration::PenScratch,
+    pub(crate) vol: super::overlap_volume::VolumeScratch,
 }
 
 /// Work counters of the last query run with an [`ExactScratch`].
@@ -51,6 +52,7 @@ impl ExactScratch {
             warm_start: true,
             stats: ExactStats::default(),
             pen: Default::default(),
+            vol: Default::default(),
         }
     }
 

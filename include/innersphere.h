@@ -464,6 +464,40 @@ typedef struct ist_budgeted_result {
 } ist_budgeted_result;
 
 /*
+ Result of ist_mesh_penetration (world frame): the penetration of the meshes themselves.
+ */
+typedef struct ist_mesh_penetration_result {
+  /*
+   1 when the solids overlap, else 0.
+   */
+  int contact;
+  /*
+   Volume of the intersection of the two solids (model units³), exact.
+   */
+  double volume;
+  /*
+   Unit direction B is pushed: the one that loses overlap fastest (zero without contact).
+   */
+  double normal[3];
+  /*
+   Penalty force on B: stiffness × volume × normal (the force on A is its opposite).
+   */
+  double force[3];
+  /*
+   Torque on A about A's centre of mass.
+   */
+  double torque_a[3];
+  /*
+   Torque on B about B's centre of mass.
+   */
+  double torque_b[3];
+  /*
+   Area of B's surface inside A.
+   */
+  double area;
+} ist_mesh_penetration_result;
+
+/*
  One contact patch of the last ist_penetration (world frame).
  */
 typedef struct ist_patch {
@@ -780,6 +814,18 @@ int ist_penetration(struct ist_pair *pair, const struct ist_pose *pose_a, const 
  Every pointer is NULL or valid.
  */
 int ist_penetration_with_stiffness(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, double stiffness, struct ist_penetration_result *out);
+
+/*
+ The penetration of the meshes themselves: the exact volume of the intersection of the two
+ solids, with the force (stiffness × volume along the direction that loses overlap
+ fastest; stiffness from 0 to 1e30, else IST_ERR_INVALID_ARGUMENT) and torques from its
+ exact gradient. Both trees need their meshes (ist_tree_with_mesh), else
+ IST_ERR_INVALID_ARGUMENT.
+
+ # Safety
+ Every pointer is NULL or valid.
+ */
+int ist_mesh_penetration(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, double stiffness, struct ist_mesh_penetration_result *out);
 
 /*
  Patch `i` (< patch_count) of the pair's last ist_penetration.

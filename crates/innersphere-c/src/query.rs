@@ -4,8 +4,8 @@
 use crate::error::{pointer, status, Fail};
 use crate::tree::ist_tree;
 use crate::types::{
-    ist_budgeted_result, ist_contact_point, ist_distance_result, ist_patch, ist_penetration_result,
-    ist_pose, ist_refine_options, ist_refined_distance_result,
+    ist_budgeted_result, ist_contact_point, ist_distance_result, ist_mesh_penetration_result,
+    ist_patch, ist_penetration_result, ist_pose, ist_refine_options, ist_refined_distance_result,
 };
 use crate::{mutable, reference};
 use innersphere::query::{Paper, TraversalOptions};
@@ -279,6 +279,34 @@ pub unsafe extern "C" fn ist_penetration_with_stiffness(
         opts.check()?;
         let p = pair.penetration_with(&a, &b, &opts);
         *out = ist_penetration_result::from(&p);
+        Ok(())
+    })
+}
+
+/// The penetration of the meshes themselves: the exact volume of the intersection of the two
+/// solids, with the force (stiffness × volume along the direction that loses overlap
+/// fastest; stiffness from 0 to 1e30, else IST_ERR_INVALID_ARGUMENT) and torques from its
+/// exact gradient. Both trees need their meshes (ist_tree_with_mesh), else
+/// IST_ERR_INVALID_ARGUMENT.
+///
+/// # Safety
+/// Every pointer is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn ist_mesh_penetration(
+    pair: *mut ist_pair,
+    pose_a: *const ist_pose,
+    pose_b: *const ist_pose,
+    stiffness: f64,
+    out: *mut ist_mesh_penetration_result,
+) -> c_int {
+    status(|| {
+        let (pair, a, b) = unsafe { args(pair, pose_a, pose_b) }?;
+        let out = unsafe { mutable(out, "out") }?;
+        let opts = PenetrationOptions {
+            stiffness,
+            ..Default::default()
+        };
+        *out = ist_mesh_penetration_result::from(&pair.mesh_penetration_with(&a, &b, &opts)?);
         Ok(())
     })
 }

@@ -140,6 +140,40 @@ pub struct ist_penetration_result {
     pub patch_count: usize,
 }
 
+/// Result of ist_mesh_penetration (world frame): the penetration of the meshes themselves.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ist_mesh_penetration_result {
+    /// 1 when the solids overlap, else 0.
+    pub contact: c_int,
+    /// Volume of the intersection of the two solids (model units³), exact.
+    pub volume: f64,
+    /// Unit direction B is pushed: the one that loses overlap fastest (zero without contact).
+    pub normal: [f64; 3],
+    /// Penalty force on B: stiffness × volume × normal (the force on A is its opposite).
+    pub force: [f64; 3],
+    /// Torque on A about A's centre of mass.
+    pub torque_a: [f64; 3],
+    /// Torque on B about B's centre of mass.
+    pub torque_b: [f64; 3],
+    /// Area of B's surface inside A.
+    pub area: f64,
+}
+
+impl From<&innersphere::MeshPenetration> for ist_mesh_penetration_result {
+    fn from(m: &innersphere::MeshPenetration) -> Self {
+        ist_mesh_penetration_result {
+            contact: m.contact as c_int,
+            volume: m.volume,
+            normal: m.normal.to_array(),
+            force: m.force.to_array(),
+            torque_a: m.torque_a.to_array(),
+            torque_b: m.torque_b.to_array(),
+            area: m.area,
+        }
+    }
+}
+
 /// Result of ist_penetration_within (world frame): what a time-critical penetration query
 /// found within its node-pair budget.
 #[repr(C)]

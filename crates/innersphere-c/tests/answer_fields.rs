@@ -136,7 +136,7 @@ fn every_c_result_struct_spells_its_answers_serialized_form() {
 }
 
 #[test]
-fn the_refined_distance_struct_spells_its_answers_serialized_form() {
+fn the_mesh_answers_structs_spell_their_serialized_forms() {
     let opts = BuildOptions {
         resolution: Resolution::Cells(16),
         ..Default::default()
@@ -152,9 +152,22 @@ fn the_refined_distance_struct_spells_its_answers_serialized_form() {
         translation: DVec3::new(0.0, 0.0, 2.0),
         ..Pose::IDENTITY
     };
-    let r = Pair::new(a, b)
-        .refined_distance(&Pose::IDENTITY, &apart)
+    let mut pair = Pair::new(a, b);
+    let r = pair.refined_distance(&Pose::IDENTITY, &apart).unwrap();
+    let touching = Pose {
+        translation: DVec3::new(0.0, 0.0, 1.2),
+        ..Pose::IDENTITY
+    };
+    let m = pair
+        .mesh_penetration_with(&Pose::IDENTITY, &touching, &Default::default())
         .unwrap();
+    assert!(m.contact, "the meshes overlap");
+    assert_spells(
+        "ist_mesh_penetration_result",
+        &keys(&m),
+        &[],
+        &["gradient", "rotation_gradient", "crossing_pairs"],
+    );
     let mut k = keys(&r);
     // C flattens the nested sphere distance to the one number it carries.
     k.insert("spheres.distance".into());

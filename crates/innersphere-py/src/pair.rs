@@ -351,6 +351,34 @@ impl Pair {
         answer_dict(py, &r, &[])
     }
 
+    /// The penetration of the meshes themselves: the exact volume of the intersection of the
+    /// two solids, with the penalty force (stiffness × volume along the direction that loses
+    /// overlap fastest) and the torques from its exact gradient. Both trees need their
+    /// meshes (Tree.with_mesh): ValueError otherwise. Returns the answer's serde form as a
+    /// dict (`ist query --json --query mesh-penetration`): contact, volume, normal, force,
+    /// torque_a, torque_b, gradient, rotation_gradient, area, crossing_pairs.
+    #[pyo3(signature = (pose_b, *, pose_a=None, stiffness=1.0))]
+    fn mesh_penetration<'py>(
+        &self,
+        py: Python<'py>,
+        pose_b: &Bound<'py, PyAny>,
+        pose_a: Option<&Bound<'py, PyAny>>,
+        stiffness: f64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let pb = pose(pose_b, "pose_b")?;
+        let pa = pose_or_identity(pose_a, "pose_a")?;
+        let opts = PenetrationOptions {
+            stiffness: stiffness_arg(stiffness)?,
+            ..Default::default()
+        };
+        let mut guard = self.lock()?;
+        let inner: &mut innersphere::Pair = &mut guard;
+        let m = py
+            .detach(|| inner.mesh_penetration_with(&pa, &pb, &opts))
+            .map_err(error)?;
+        answer_dict(py, &m, &[])
+    }
+
     /// The paper's distance traversal (its first-contact baseline): whether the packings
     /// overlap, as contact() answers.
     #[pyo3(signature = (pose_b, *, pose_a=None))]

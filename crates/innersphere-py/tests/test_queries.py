@@ -261,3 +261,20 @@ def test_refined_distance_needs_the_trees_meshes(trees, meshes):
         innersphere.Pair(am, bm).refined_distance(POSES[0], radius_scale=-1.0)
     r = innersphere.Pair(am, bm).refined_distance(POSES[2])
     assert r["distance"] <= r["spheres"]["distance"] and not r["contact"]
+
+
+@pytest.mark.parametrize("i", range(len(POSES)))
+def test_mesh_penetration_equals_cli(trees, tree_files, mesh_files, ist, i):
+    want = ist.query(*tree_files, POSES[i], "mesh-penetration", "--meshes", *mesh_files, "--stiffness", "2.5")
+    pair = innersphere.Pair(trees[0].with_mesh(str(mesh_files[0])), trees[1].with_mesh(mesh_files[1]))
+    got = pair.mesh_penetration(POSES[i], stiffness=2.5)
+    assert_is_the_cli_answer(got, want)
+    assert got["contact"] == (got["volume"] > 0)
+    if got["contact"]:
+        # The force is the stiffness times the volume, along the unit normal.
+        assert np.allclose(got["force"], 2.5 * got["volume"] * np.asarray(got["normal"]), rtol=1e-12, atol=0)
+
+
+def test_mesh_penetration_needs_the_trees_meshes(trees):
+    with pytest.raises(ValueError, match="with_mesh"):
+        innersphere.Pair(*trees).mesh_penetration(POSES[-1])

@@ -77,8 +77,8 @@ pub use mesh::Mesh;
 pub use pose::{MatrixOrder, Pose, PoseError};
 pub use query::{
     BudgetedVolume, Contact, ContactResult, ContactStiffness, Distance, DistanceOptions,
-    Multipoint, MultipointOptions, Pair, Patch, Penetration, PenetrationOptions, RefineOptions,
-    RefinedDistance, SharedTree, Tracking,
+    MeshPenetration, Multipoint, MultipointOptions, Pair, Patch, Penetration, PenetrationOptions,
+    RefineOptions, RefinedDistance, SharedTree, Tracking,
 };
 pub use tree::SphereTree;
 

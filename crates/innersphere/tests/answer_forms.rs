@@ -4,8 +4,8 @@
 
 use glam::{DMat3, DVec3};
 use innersphere::{
-    BudgetedVolume, Contact, ContactResult, ContactStiffness, Distance, Multipoint, Patch,
-    Penetration, RefinedDistance,
+    BudgetedVolume, Contact, ContactResult, ContactStiffness, Distance, MeshPenetration,
+    Multipoint, Patch, Penetration, RefinedDistance,
 };
 use serde_json::{json, Value};
 
@@ -248,4 +248,23 @@ fn a_budgeted_volume_and_a_patch_keep_their_field_names() {
         pairs: 3,
     };
     keys_are(&form(&q), ["point", "normal", "depth", "volume", "pairs"]);
+}
+
+#[test]
+fn a_mesh_penetration_keeps_its_field_names() {
+    keys_are(
+        &form(&MeshPenetration::default()),
+        [
+            "contact",
+            "volume",
+            "normal",
+            "force",
+            "torque_a",
+            "torque_b",
+            "gradient",
+            "rotation_gradient",
+            "area",
+            "crossing_pairs",
+        ],
+    );
 }

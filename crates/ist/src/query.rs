@@ -31,6 +31,10 @@ pub enum Kind {
     /// of the triangles near its closest points (needs the meshes: a body given as a mesh,
     /// --meshes, or the mesh a tree file names as its source).
     RefinedDistance,
+    /// The penetration of the meshes themselves: the exact volume of the intersection of the
+    /// two solids, the force and torques from its exact gradient (--stiffness as for
+    /// `penetration`); needs the meshes as `refined-distance` does.
+    MeshPenetration,
 }
 
 /// Arguments of `ist query`.
@@ -156,7 +160,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let (a, mesh_a) = crate::bodies::load_body(&args.a, &args.body)?;
     let (b, mesh_b) = crate::bodies::load_body(&args.b, &args.body)?;
     let (mut a, mut b) = (SharedTree::new(a), SharedTree::new(b));
-    if args.query == Kind::RefinedDistance {
+    if matches!(args.query, Kind::RefinedDistance | Kind::MeshPenetration) {
         let given = args.meshes.as_deref().unwrap_or(&[]);
         a = crate::bodies::with_mesh(a, given.first(), mesh_a, "A", args.body.unit.unit)?;
         b = crate::bodies::with_mesh(b, given.get(1), mesh_b, "B", args.body.unit.unit)?;
@@ -166,6 +170,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let (out, summary) = match args.query {
         Kind::Distance => distance(&mut pair, &pose_a, &pose_b, &args),
         Kind::RefinedDistance => refined_distance(&mut pair, &pose_a, &pose_b, &refine)?,
+        Kind::MeshPenetration => mesh_penetration(&mut pair, &pose_a, &pose_b, &args)?,
         Kind::Contact | Kind::DistanceTraversal | Kind::Backtracking => {
             contact_kind(&mut pair, &pose_a, &pose_b, &args)
         }
@@ -244,6 +249,41 @@ fn refined_distance(
             if r.complete { "" } else { ", out of budget" },
             secs * 1e6
         ),
+    ))
+}
+
+/// The meshes' own penetration: exact volume, force and torques.
+fn mesh_penetration(
+    pair: &mut Pair,
+    pose_a: &Pose,
+    pose_b: &Pose,
+    args: &Args,
+) -> anyhow::Result<(serde_json::Value, String)> {
+    let t0 = std::time::Instant::now();
+    let opts = PenetrationOptions {
+        stiffness: args.stiffness,
+        ..Default::default()
+    };
+    let m = pair.mesh_penetration_with(pose_a, pose_b, &opts)?;
+    let secs = t0.elapsed().as_secs_f64();
+    let summary = if m.contact {
+        format!(
+            "the meshes overlap by {:.6e} units³ ({} triangle pairs cross), {:.1} µs\n\
+             force on B {:?}, torque on B {:?}, torque on A {:?} (force = stiffness {} × volume along the direction that loses overlap fastest; torques about each body's centre of mass)",
+            m.volume,
+            m.crossing_pairs,
+            secs * 1e6,
+            v3(m.force),
+            v3(m.torque_b),
+            v3(m.torque_a),
+            args.stiffness
+        )
+    } else {
+        format!("the meshes do not overlap, {:.1} µs", secs * 1e6)
+    };
+    Ok((
+        answer_json("mesh-penetration", &m, None, secs, json!({})),
+        summary,
     ))
 }
 

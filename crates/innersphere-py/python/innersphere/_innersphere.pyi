@@ -312,6 +312,18 @@ class Pair:
         refined-distance``): distance, contact, refined, complete, point_a, point_b,
         triangle_a, triangle_b (None unless refined), radius, node_pairs, triangle_pairs,
         and spheres (the sphere distance refined, as ``DistanceResult.to_dict()``)."""
+    def mesh_penetration(
+        self,
+        pose_b: _PoseLike,
+        *,
+        pose_a: Optional[_PoseLike] = None,
+        stiffness: float = 1.0,
+    ) -> Dict[str, Any]:
+        """The penetration of the meshes themselves (both trees need their meshes:
+        ``Tree.with_mesh``): the exact volume of the intersection of the two solids, the
+        force and torques from its exact gradient, as the answer's serialized form (``ist
+        query --json --query mesh-penetration``): contact, volume, normal, force, torque_a,
+        torque_b, gradient, rotation_gradient, area, crossing_pairs."""
     def distance_traversal(self, pose_b: _PoseLike, *, pose_a: Optional[_PoseLike] = None) -> bool:
         """The paper's distance traversal: whether the packings overlap."""
     def backtracking(self, pose_b: _PoseLike, *, pose_a: Optional[_PoseLike] = None) -> bool:

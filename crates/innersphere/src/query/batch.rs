@@ -136,7 +136,7 @@ pub fn refined_distance_many(
 ) -> Result<Vec<RefinedDistance>> {
     query.check()?;
     if a.mesh().is_none() || b.mesh().is_none() {
-        return Err(missing_meshes());
+        return Err(missing_meshes("the refined distance"));
     }
     map(a, b, poses_a, poses_b, opts, |p, pa, pb| {
         p.refined_distance_with(pa, pb, query)

@@ -39,6 +39,7 @@ pub mod batch;
 mod budgeted;
 mod contact;
 mod distance;
+mod mesh_penetration;
 mod multipoint;
 mod pair;
 mod paper;
@@ -63,6 +64,7 @@ pub use kernel::info::TreeInfo;
 pub use kernel::lenses::lens_volume;
 #[doc(hidden)]
 pub use kernel::separation::SeparationRecord;
+pub use mesh_penetration::MeshPenetration;
 pub use multipoint::{Multipoint, MultipointOptions};
 pub use pair::{Pair, Paper, SharedTree};
 pub use paper::TraversalOptions;

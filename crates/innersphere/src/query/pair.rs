@@ -10,6 +10,7 @@ use super::kernel::heap::PairHeap;
 use super::kernel::info::TreeInfo;
 use super::kernel::separation::{safe_separation, SeparationRecord};
 use super::kernel::Ctx;
+use super::mesh_penetration::{self, MeshPenetration};
 use super::multipoint::{self, Multipoint, MultipointOptions, MultipointScratch};
 use super::paper::{self, TraversalOptions};
 use super::penetration::{self, Patch, Penetration, PenetrationOptions, PenetrationScratch};
@@ -18,7 +19,7 @@ use super::search::block_front::BlockFront;
 use super::search::descent::Descent;
 use super::search::front::Front;
 use crate::error::{Error, Result};
-use crate::exact::ExactMesh;
+use crate::exact::{ExactMesh, ExactScratch};
 use crate::mesh::Mesh;
 use crate::pose::Pose;
 use crate::tree::SphereTree;
@@ -135,6 +136,8 @@ pub struct Pair {
     multipoint: MultipointScratch,
     penetration: PenetrationScratch,
     refine: RefineScratch,
+    /// The exact queries' memory (the meshes' penetration).
+    exact: ExactScratch,
 }
 
 impl Pair {
@@ -207,6 +210,7 @@ impl Pair {
             multipoint: MultipointScratch::new(),
             penetration: PenetrationScratch::new(),
             refine: RefineScratch::new(),
+            exact: ExactScratch::new(),
             a,
             b,
         }
@@ -285,11 +289,11 @@ impl Pair {
     ) -> Result<RefinedDistance> {
         opts.check()?;
         if self.a.mesh.is_none() || self.b.mesh.is_none() {
-            return Err(refined::missing_meshes());
+            return Err(refined::missing_meshes("the refined distance"));
         }
         let spheres = self.distance(pose_a, pose_b);
         let (Some(ma), Some(mb)) = (self.a.mesh.as_deref(), self.b.mesh.as_deref()) else {
-            return Err(refined::missing_meshes());
+            return Err(refined::missing_meshes("the refined distance"));
         };
         let radius = |t: &SphereTree, leaf: u32| t.r.get(leaf as usize).map_or(0.0, |&r| r as f64);
         let (ta, tb) = (&self.a.tree, &self.b.tree);
@@ -306,6 +310,33 @@ impl Pair {
             pose_b,
             opts,
             &mut self.refine,
+        ))
+    }
+
+    /// The penetration of the meshes themselves (ours): the exact volume of the
+    /// intersection of the two solids the trees were built from, with the penalty force
+    /// and torques of [`PenetrationOptions::stiffness`] from its exact gradient
+    /// ([`MeshPenetration`]). Needs both trees' meshes ([`SharedTree::with_mesh`]); an error
+    /// without them. Of the options only the stiffness applies.
+    pub fn mesh_penetration_with(
+        &mut self,
+        pose_a: &Pose,
+        pose_b: &Pose,
+        opts: &PenetrationOptions,
+    ) -> Result<MeshPenetration> {
+        opts.check()?;
+        let (Some(ma), Some(mb)) = (self.a.mesh.as_deref(), self.b.mesh.as_deref()) else {
+            return Err(refined::missing_meshes("the meshes' penetration"));
+        };
+        Ok(mesh_penetration::mesh_penetration(
+            ma,
+            pose_a,
+            mb,
+            pose_b,
+            self.a.info.center_of_mass,
+            self.b.info.center_of_mass,
+            opts.stiffness,
+            &mut self.exact,
         ))
     }
 

@@ -168,10 +168,10 @@ pub(crate) struct Surfaces<'m> {
 }
 
 /// The error of a refined distance asked of trees without their meshes.
-pub(crate) fn missing_meshes() -> crate::error::Error {
-    crate::error::Error::InvalidOption(
-        "the refined distance needs the meshes of both trees (SharedTree::with_mesh)".into(),
-    )
+pub(crate) fn missing_meshes(query: &str) -> crate::error::Error {
+    crate::error::Error::InvalidOption(format!(
+        "{query} needs the meshes of both trees (SharedTree::with_mesh)"
+    ))
 }
 
 /// Refines `spheres` (the sphere distance at world poses `pose_a`, `pose_b`) to the

@@ -48,7 +48,7 @@ pub(crate) fn same_file(a: &Path, b: &Path) -> bool {
     matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
 }
 
-/// An error when `output` is the same file as one of `inputs` ([`same_file`]): writing it
+/// An error when `output` is the same file as one of `inputs` (`same_file`): writing it
 /// would destroy that input. An output that does not exist yet is never an input.
 pub fn ensure_not_input(output: &Path, inputs: &[&Path]) -> Result<()> {
     match inputs.iter().find(|i| same_file(output, i)) {
@@ -81,7 +81,7 @@ fn resolved(path: &Path) -> PathBuf {
 }
 
 /// An error when two of `outputs` are the same path or the same file (one would overwrite
-/// the other within the run): the same existing file ([`same_file`]), or two spellings of
+/// the other within the run): the same existing file (`same_file`), or two spellings of
 /// one path that does not exist yet (`out/q.ply` and `./out/q.ply`).
 pub fn ensure_distinct_outputs(outputs: &[&Path]) -> Result<()> {
     for (i, a) in outputs.iter().enumerate() {

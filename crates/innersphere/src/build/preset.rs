@@ -39,7 +39,7 @@ pub enum Preset {
     /// 0.1 mm voxels, 0.05 mm minimum radius, 8 refinement steps, chosen so that the sphere
     /// distance error stays within the 0.03 mm bar on the real arches (refined to the meshes
     /// by [`Pair::refined_distance`](crate::Pair::refined_distance), far below it). Thick
-    /// parts (where a 12 mm ball fits: bone, [`JAW_THICK_RADIUS_MM`]) are packed from a
+    /// parts (where a 12 mm ball fits: bone, `JAW_THICK_RADIUS_MM`) are packed from a
     /// 0.4 mm lattice with spheres of at least 0.2 mm, so an arch modelled with its bone
     /// builds at about its teeth's cost instead of its volume's.
     Jaw,
@@ -151,7 +151,7 @@ impl BuildOptions {
     /// The options of a named [`Preset`] for this mesh. Lengths are model units; the jaw
     /// presets require the mesh to be in millimetres and fail with
     /// [`Error::InvalidOption`] when its longest side lies outside
-    /// [`JAW_PRESET_SIZE_MM`]. Fails with [`Error::InvalidMesh`] for a mesh without extent
+    /// `JAW_PRESET_SIZE_MM`. Fails with [`Error::InvalidMesh`] for a mesh without extent
     /// (the relative presets need its size). Change any field afterwards to override it
     /// (`ist build --preset` does that with the explicitly given flags).
     pub fn preset(preset: Preset, mesh: &Mesh) -> Result<BuildOptions> {

@@ -41,7 +41,7 @@ pub fn classify(
     classify_where(mesh, grid, None, progress)
 }
 
-/// Which inside cells a classification keeps ([`classify_where`]): given `(i, j, k)`, the
+/// Which inside cells a classification keeps (`classify_where`): given `(i, j, k)`, the
 /// first `k' ≥ k` whose cell `(i, j, k')` it may keep (`k` itself when it keeps that cell;
 /// every cell between is dropped).
 pub type Keep<'a> = &'a (dyn Fn(u32, u32, u32) -> u32 + Sync);
@@ -129,7 +129,7 @@ impl EdgeSummary {
 }
 
 /// True when every undirected edge is used equally often in each direction (see
-/// [`EdgeSummary::is_oriented_closed`]).
+/// `EdgeSummary::is_oriented_closed`).
 pub fn is_oriented_closed(mesh: &Mesh) -> bool {
     EdgeSummary::of(mesh).is_oriented_closed()
 }

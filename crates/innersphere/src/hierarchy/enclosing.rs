@@ -5,7 +5,7 @@
 //! that sticks out farthest, and re-solves the small problem over support ∪ {violator} by
 //! enumerating its subsets; the radius grows strictly, so this ends. The final radius is
 //! taken as the farthest reach over all balls, so the result always encloses them.
-//! [`enclose_brute_force`] enumerates every subset of at most four balls: slow, exact, and
+//! `enclose_brute_force` enumerates every subset of at most four balls: slow, exact, and
 //! used to report how tight [`enclose`] is.
 
 use glam::DVec3;

@@ -6,7 +6,7 @@ use crate::exact::{intersection_volume, ExactMesh, ExactScratch, MeshOverlap};
 use crate::pose::Pose;
 use glam::DVec3;
 
-/// Result of [`Pair::mesh_penetration`](crate::Pair::mesh_penetration) (world frame).
+/// Result of [`Pair::mesh_penetration_with`](crate::Pair::mesh_penetration_with) (world frame).
 ///
 /// The same force law as [`Penetration`](crate::Penetration), on the meshes' exact volume
 /// `V`: the force on B is `stiffness × V` along `normal`, the direction in which moving B

@@ -171,9 +171,11 @@ const ist = {
   spheres: { shown: false, body: null, level: null, count: 0, loading: false },
   screenOfB: () => screenOf(bodyCentreWorld('b')),
   screenOfA: () => screenOf(bodyCentreWorld('a')),
+  /** Sends B's pose; resolves with the contact quantities the page shows for it (the
+   *  answer's sphere distance and penetration, as `contactOfAnswer` reads them). */
   setPose: (p7) => {
     setProxyFromPose(p7);
-    return sendPose(p7);
+    return sendPose(p7).then((a) => a && contactOfAnswer(a));
   },
   /** Contact-map mode: whether it is available and on, the server's latest map (`seq`,
    *  `status`, `rate_hz`, `compute_ms`), the map the meshes show (`shownSeq`, its `pose`,

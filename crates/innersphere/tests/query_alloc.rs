@@ -147,6 +147,43 @@ fn the_refined_distance_allocates_nothing_from_the_first_frame() {
     assert_allocation_free("tooth pair with meshes", &a, &b, &m1, &m2);
 }
 
+/// The meshes' penetration allocates nothing once its scratch has grown: a warm-up pass
+/// along both motions (pressed in and pulled apart), then the same poses again and a second
+/// pass in reverse order, counted.
+#[test]
+fn the_meshes_penetration_allocates_nothing_after_a_warm_up() {
+    let (upper, lower) = innersphere::shapes::tooth_pair(3);
+    let opts = innersphere::BuildOptions {
+        resolution: innersphere::Resolution::Cells(24),
+        ..Default::default()
+    };
+    let tree = |m: &innersphere::Mesh| {
+        SharedTree::new(SphereTree::build(m, &opts).unwrap())
+            .with_mesh(m)
+            .unwrap()
+    };
+    let (a, b) = (tree(&upper), tree(&lower));
+    let [m1, m2] = contact_motions(a.tree(), b.tree());
+    let poses: Vec<(Pose, Pose)> = m1.into_iter().chain(m2).collect();
+    let mut pair = Pair::new(a, b);
+    let p = innersphere::PenetrationOptions::default();
+    let mut touching = 0;
+    for (pa, pb) in &poses {
+        touching += pair.mesh_penetration_with(pa, pb, &p).unwrap().contact as usize;
+    }
+    assert!(
+        touching > poses.len() / 4,
+        "{touching} of {} frames touch",
+        poses.len()
+    );
+    let (n, bytes, _) = counted(|| {
+        for (pa, pb) in poses.iter().chain(poses.iter().rev()) {
+            std::hint::black_box(pair.mesh_penetration_with(pa, pb, &p).unwrap());
+        }
+    });
+    assert_eq!((n, bytes), (0, 0), "allocations after the warm-up");
+}
+
 /// Whether `kind` keeps something whose size a deep overlap, not the trees, decides: the
 /// fronts, the best-first queue and the budgeted queue beyond its reservation.
 fn grows_in_deep_overlap(kind: &Kind) -> bool {

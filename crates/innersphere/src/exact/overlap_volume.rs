@@ -80,6 +80,8 @@ pub(crate) struct VolumeScratch {
     cross_a: Vec<EdgeCrossing>,
     cross_b: Vec<EdgeCrossing>,
     segments: Vec<PairSegment>,
+    /// One triangle pair's crossing points.
+    points: Vec<DVec3>,
     /// Segment indices sorted by A's slot, by B's slot.
     by_a: Vec<u32>,
     by_b: Vec<u32>,
@@ -248,14 +250,18 @@ pub fn intersection_volume(
     s.cross_a.clear();
     s.cross_b.clear();
     s.segments.clear();
-    let mut points = Vec::with_capacity(6);
     let mut pairs = 0usize;
     {
-        let (cross_a, cross_b, segments) = (&mut s.cross_a, &mut s.cross_b, &mut s.segments);
+        let (cross_a, cross_b, segments, points) = (
+            &mut s.cross_a,
+            &mut s.cross_b,
+            &mut s.segments,
+            &mut s.points,
+        );
         overlap_pairs(a, b, &f, &mut scratch.stack, None, |sa, sb, x, y| {
             points.clear();
-            edge_crossings(a.slot_vertices(sa), x, sb, y, cross_a, &mut points);
-            edge_crossings(b.slot_vertices(sb), y, sa, x, cross_b, &mut points);
+            edge_crossings(a.slot_vertices(sa), x, sb, y, cross_a, points);
+            edge_crossings(b.slot_vertices(sb), y, sa, x, cross_b, points);
             if points.len() >= 2 {
                 // The two points farthest apart (two, unless the contact is degenerate).
                 let (mut p, mut q, mut best) = (points[0], points[1], -1.0);

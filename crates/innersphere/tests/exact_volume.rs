@@ -192,3 +192,63 @@ fn the_gradient_is_the_volumes_derivative() {
         );
     }
 }
+
+mod properties {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn bodies() -> &'static (ExactMesh, ExactMesh, f64, f64) {
+        static B: std::sync::OnceLock<(ExactMesh, ExactMesh, f64, f64)> =
+            std::sync::OnceLock::new();
+        B.get_or_init(|| {
+            let ma = shapes::ellipsoid(DVec3::new(1.0, 0.7, 0.5), 3);
+            let mb = shapes::tooth_pair(2).1;
+            let mb = scaled(mb, 0.12);
+            let (va, vb) = (ma.signed_volume(), mb.signed_volume());
+            (
+                ExactMesh::new(&ma).unwrap(),
+                ExactMesh::new(&mb).unwrap(),
+                va,
+                vb,
+            )
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+
+        /// Any rigid pose: V(A,B) = V(B,A), 0 ≤ V ≤ the smaller body's volume, and the
+        /// gradient is zero when the volume is.
+        #[test]
+        fn the_volume_is_bounded_and_symmetric(
+            t in prop::array::uniform3(-1.2f64..1.2),
+            r in prop::array::uniform3(-3.2f64..3.2),
+        ) {
+            let (a, b, va, vb) = bodies();
+            let pb = pose(DVec3::from_array(t), DQuat::from_scaled_axis(DVec3::from_array(r)));
+            let ab = volume(a, &Pose::IDENTITY, b, &pb);
+            let ba = volume(b, &pb, a, &Pose::IDENTITY);
+            prop_assert!(ab.volume >= 0.0 && ab.volume <= va.min(*vb) * (1.0 + 1e-9), "{:?}", ab);
+            prop_assert!((ab.volume - ba.volume).abs() <= 1e-9 * va.min(*vb), "{:?} {:?}", ab, ba);
+            if ab.volume == 0.0 {
+                prop_assert_eq!(ab.gradient, DVec3::ZERO);
+            }
+        }
+
+        /// A cube sunk by any depth, turned by any angle about the vertical, anywhere inside
+        /// a box's top face: V = d.
+        #[test]
+        fn a_sunk_cube_overlaps_by_its_depth_anywhere(
+            d in 0.0005f64..0.99,
+            yaw in 0.01f64..1.5,
+            x in -1.2f64..1.2,
+            y in -1.2f64..1.2,
+        ) {
+            let a = ExactMesh::new(&shapes::cuboid(DVec3::new(2.0, 2.0, 1.0))).unwrap();
+            let b = ExactMesh::new(&shapes::cuboid(DVec3::splat(0.5))).unwrap();
+            let pb = pose(DVec3::new(x, y, 1.5 - d), DQuat::from_rotation_z(yaw));
+            let v = volume(&a, &Pose::IDENTITY, &b, &pb);
+            prop_assert!((v.volume - d).abs() < 1e-9, "d {}: {:?}", d, v);
+        }
+    }
+}

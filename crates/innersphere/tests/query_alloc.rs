@@ -117,11 +117,8 @@ fn queries_allocate_nothing_from_the_first_frame() {
     }
 }
 
-/// The refined distance (the trees with their meshes: the demo's tooth pair) allocates
-/// nothing from the first frame, pressed in and pulled apart, with every option of the
-/// matrix; the other kinds on the same trees too.
-#[test]
-fn the_refined_distance_allocates_nothing_from_the_first_frame() {
+/// The demo's tooth pair at 24 cells, each tree with its mesh.
+fn tooth_pair_with_meshes() -> (SharedTree, SharedTree) {
     let (upper, lower) = innersphere::shapes::tooth_pair(3);
     let opts = innersphere::BuildOptions {
         resolution: innersphere::Resolution::Cells(24),
@@ -132,7 +129,15 @@ fn the_refined_distance_allocates_nothing_from_the_first_frame() {
             .with_mesh(m)
             .unwrap()
     };
-    let (a, b) = (tree(&upper), tree(&lower));
+    (tree(&upper), tree(&lower))
+}
+
+/// The refined distance (the trees with their meshes: the demo's tooth pair) allocates
+/// nothing from the first frame, pressed in and pulled apart, with every option of the
+/// matrix; the other kinds on the same trees too.
+#[test]
+fn the_refined_distance_allocates_nothing_from_the_first_frame() {
+    let (a, b) = tooth_pair_with_meshes();
     let [m1, m2] = contact_motions(a.tree(), b.tree());
     // Apart as well: the local search runs only while the spheres are.
     let apart: Vec<(Pose, Pose)> = (0..200)
@@ -152,17 +157,7 @@ fn the_refined_distance_allocates_nothing_from_the_first_frame() {
 /// pass in reverse order, counted.
 #[test]
 fn the_meshes_penetration_allocates_nothing_after_a_warm_up() {
-    let (upper, lower) = innersphere::shapes::tooth_pair(3);
-    let opts = innersphere::BuildOptions {
-        resolution: innersphere::Resolution::Cells(24),
-        ..Default::default()
-    };
-    let tree = |m: &innersphere::Mesh| {
-        SharedTree::new(SphereTree::build(m, &opts).unwrap())
-            .with_mesh(m)
-            .unwrap()
-    };
-    let (a, b) = (tree(&upper), tree(&lower));
+    let (a, b) = tooth_pair_with_meshes();
     let [m1, m2] = contact_motions(a.tree(), b.tree());
     let poses: Vec<(Pose, Pose)> = m1.into_iter().chain(m2).collect();
     let mut pair = Pair::new(a, b);

@@ -43,6 +43,7 @@
 mod bnb;
 mod bound;
 mod containment;
+mod crossings;
 mod distance;
 mod frame;
 mod gaps;

@@ -25,12 +25,12 @@
 //! (an edge through another edge or vertex, coplanar faces) is resolved per crossing and may
 //! err by the area such a coincidence touches.
 
+use super::crossings::{edge_crossings, edge_key, EdgeCrossing};
 use super::frame::Frame;
 use super::mesh::ExactMesh;
 use super::overlap::overlap_pairs;
-use super::penetration::{edge_key, flood_inside};
+use super::penetration::flood_inside;
 use super::scratch::ExactScratch;
-use super::tri_tri::segment_triangle_intersect;
 use crate::pose::Pose;
 use glam::DVec3;
 
@@ -51,17 +51,6 @@ pub struct MeshOverlap {
     pub area_a: f64,
     /// Triangle pairs that cross.
     pub crossing_pairs: usize,
-}
-
-/// A crossing of an edge of one mesh (`key`: its vertex ids, `lo < hi`) with the other's
-/// triangle in slot `other`, at `t` from `lo` to `hi`; `entering` when walking from `lo`
-/// to `hi` enters the other body there.
-#[derive(Debug, Clone, Copy)]
-struct EdgeCrossing {
-    key: u64,
-    other: u32,
-    t: f64,
-    entering: bool,
 }
 
 /// A segment where triangle `slot_a` of A and `slot_b` of B cross (A's frame), from `p` to
@@ -92,49 +81,6 @@ pub(crate) struct VolumeScratch {
     generation: u32,
 }
 
-/// Where the edges of triangle `t_in` (vertex ids `ids`) cross triangle `t_other` (slot
-/// `other`), as [`EdgeCrossing`]s, with the points in `points`.
-fn edge_crossings(
-    ids: [u32; 3],
-    t_in: &[DVec3; 3],
-    other: u32,
-    t_other: &[DVec3; 3],
-    out: &mut Vec<EdgeCrossing>,
-    points: &mut Vec<DVec3>,
-) {
-    let n = (t_other[1] - t_other[0]).cross(t_other[2] - t_other[0]);
-    for k in 0..3 {
-        let (mut u, mut v) = (ids[k], ids[(k + 1) % 3]);
-        let (mut pu, mut pv) = (t_in[k], t_in[(k + 1) % 3]);
-        if u == v {
-            continue;
-        }
-        if u > v {
-            std::mem::swap(&mut u, &mut v);
-            std::mem::swap(&mut pu, &mut pv);
-        }
-        if !segment_triangle_intersect(pu, pv, t_other[0], t_other[1], t_other[2]) {
-            continue;
-        }
-        let du = n.dot(pu - t_other[0]);
-        let dv = n.dot(pv - t_other[0]);
-        let t = du / (du - dv);
-        let t = if t.is_finite() {
-            t.clamp(0.0, 1.0)
-        } else {
-            0.5
-        };
-        points.push(pu + (pv - pu) * t);
-        out.push(EdgeCrossing {
-            key: edge_key(u, v),
-            other,
-            t,
-            // From lo to hi against the outward normal: into the other body.
-            entering: dv < du,
-        });
-    }
-}
-
 /// Sorts the crossings by edge, then along it, and drops the duplicates: the same edge and
 /// triangle found from both triangles of the edge, and an edge through the shared edge of two
 /// triangles (the same point and direction twice).
@@ -142,7 +88,9 @@ fn settle(cross: &mut Vec<EdgeCrossing>) {
     cross.sort_unstable_by(|x, y| x.key.cmp(&y.key).then(x.other.cmp(&y.other)));
     cross.dedup_by(|x, y| x.key == y.key && x.other == y.other);
     cross.sort_unstable_by(|x, y| x.key.cmp(&y.key).then(x.t.total_cmp(&y.t)));
-    cross.dedup_by(|x, y| x.key == y.key && x.entering == y.entering && (x.t - y.t).abs() <= 1e-12);
+    cross.dedup_by(|x, y| {
+        x.key == y.key && (x.dir < 0.0) == (y.dir < 0.0) && (x.t - y.t).abs() <= 1e-12
+    });
 }
 
 /// The crossings of edge `key` (sorted along it).
@@ -215,7 +163,8 @@ fn part(
             if state {
                 add(from, c.t);
             }
-            state = c.entering;
+            // Walking lo → hi against the crossed face's outward normal: into the body.
+            state = c.dir < 0.0;
             from = c.t;
         }
         if state {
@@ -352,9 +301,7 @@ fn side_parts(
         while j + 1 < cross.len() && cross[j + 1].key == cross[i].key {
             j += 1;
         }
-        let dir = |c: &EdgeCrossing| if c.entering { -1.0 } else { 1.0 };
-        pen.barrier
-            .push((cross[i].key, dir(&cross[i]), dir(&cross[j])));
+        pen.barrier.push((cross[i].key, cross[i].dir, cross[j].dir));
         i = j + 1;
     }
     let n = inner.mesh.vertices.len();

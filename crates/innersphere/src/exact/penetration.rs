@@ -14,11 +14,11 @@
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x < y)` is deliberate: true for NaN too.
 
+use super::crossings::{edge_crossings, edge_key, EdgeCrossing};
 use super::frame::Frame;
 use super::mesh::ExactMesh;
 use super::overlap::overlap_pairs;
 use super::scratch::ExactScratch;
-use super::tri_tri::segment_triangle_intersect;
 use crate::pose::Pose;
 use glam::DVec3;
 
@@ -49,20 +49,13 @@ pub struct ExactPenetration {
     pub a_vertices_in_b: usize,
 }
 
-/// Where barrier edges cross the other surface: per edge `lo < hi` the crossing nearest to
-/// each end, with the sign of `(p_hi − p_lo) · n` there (`n` the crossed face's normal).
-#[derive(Debug, Clone, Copy)]
-struct Crossing {
-    key: u64,
-    t: f64,
-    dir: f64,
-}
-
 /// Scratch memory of [`penetration`].
 #[derive(Debug, Clone, Default)]
 pub(crate) struct PenScratch {
-    cross_a: Vec<Crossing>,
-    cross_b: Vec<Crossing>,
+    cross_a: Vec<EdgeCrossing>,
+    cross_b: Vec<EdgeCrossing>,
+    /// One triangle pair's crossing points (unused here; the shared recorder writes them).
+    points: Vec<DVec3>,
     /// Merged barrier edges: (key, dir at the crossing nearest lo, dir nearest hi).
     pub(super) barrier: Vec<(u64, f64, f64)>,
     stamp: Vec<u32>,
@@ -71,52 +64,9 @@ pub(crate) struct PenScratch {
     candidates: Vec<u32>,
 }
 
-#[inline]
-pub(super) fn edge_key(u: u32, v: u32) -> u64 {
-    let (lo, hi) = if u < v { (u, v) } else { (v, u) };
-    ((lo as u64) << 32) | hi as u64
-}
-
-/// Records where the edges of `t_in` (vertex ids `ids`, points in the common frame) cross the
-/// triangle `t_other` (outward normal from its winding).
-fn record_crossings(
-    ids: [u32; 3],
-    t_in: &[DVec3; 3],
-    t_other: &[DVec3; 3],
-    out: &mut Vec<Crossing>,
-) {
-    let n = (t_other[1] - t_other[0]).cross(t_other[2] - t_other[0]);
-    for k in 0..3 {
-        let (mut u, mut v) = (ids[k], ids[(k + 1) % 3]);
-        let (mut pu, mut pv) = (t_in[k], t_in[(k + 1) % 3]);
-        if u == v {
-            continue;
-        }
-        if u > v {
-            std::mem::swap(&mut u, &mut v);
-            std::mem::swap(&mut pu, &mut pv);
-        }
-        if !segment_triangle_intersect(pu, pv, t_other[0], t_other[1], t_other[2]) {
-            continue;
-        }
-        let du = n.dot(pu - t_other[0]);
-        let dv = n.dot(pv - t_other[0]);
-        let t = du / (du - dv);
-        out.push(Crossing {
-            key: edge_key(u, v),
-            t: if t.is_finite() {
-                t.clamp(0.0, 1.0)
-            } else {
-                0.5
-            },
-            dir: dv - du,
-        });
-    }
-}
-
 /// Sorts the crossings by edge and keeps, per edge, the direction at the crossing nearest
 /// each end.
-fn merge(cross: &mut [Crossing], out: &mut Vec<(u64, f64, f64)>) {
+fn merge(cross: &mut [EdgeCrossing], out: &mut Vec<(u64, f64, f64)>) {
     cross.sort_unstable_by(|x, y| x.key.cmp(&y.key).then(x.t.total_cmp(&y.t)));
     out.clear();
     let mut i = 0;
@@ -246,10 +196,11 @@ pub fn penetration(
     s.cross_a.clear();
     s.cross_b.clear();
     {
-        let (cross_a, cross_b) = (&mut s.cross_a, &mut s.cross_b);
+        let (cross_a, cross_b, points) = (&mut s.cross_a, &mut s.cross_b, &mut s.points);
         overlap_pairs(a, b, &f, &mut scratch.stack, None, |sa, sb, x, y| {
-            record_crossings(b.slot_vertices(sb), y, x, cross_b);
-            record_crossings(a.slot_vertices(sa), x, y, cross_a);
+            points.clear();
+            edge_crossings(b.slot_vertices(sb), y, sa, x, cross_b, points);
+            edge_crossings(a.slot_vertices(sa), x, sb, y, cross_a, points);
             false
         });
     }

@@ -1,0 +1,67 @@
+//! Where the edges of one mesh's triangle cross another triangle: the edge (its vertex ids),
+//! how far along it, and in which direction, from the exact segment–triangle test. What the
+//! penetration depth's flood fill and the intersection volume's boundary both read.
+
+use super::tri_tri::segment_triangle_intersect;
+use glam::DVec3;
+
+/// An edge's key: its vertex ids, the smaller first.
+#[inline]
+pub(super) fn edge_key(u: u32, v: u32) -> u64 {
+    let (lo, hi) = if u < v { (u, v) } else { (v, u) };
+    ((lo as u64) << 32) | hi as u64
+}
+
+/// A crossing of edge `key` (`lo < hi`) with the other mesh's triangle in slot `other`, at
+/// `t` from `lo` to `hi`; `dir` is the sign of `(p_hi − p_lo) · n` there (`n` the crossed
+/// face's outward normal): negative when walking from `lo` to `hi` enters the other body.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct EdgeCrossing {
+    pub(super) key: u64,
+    pub(super) other: u32,
+    pub(super) t: f64,
+    pub(super) dir: f64,
+}
+
+/// Records where the edges of `t_in` (vertex ids `ids`, points in the common frame) cross
+/// the triangle `t_other` (slot `other`, outward normal from its winding), and the crossing
+/// points in `points`.
+pub(super) fn edge_crossings(
+    ids: [u32; 3],
+    t_in: &[DVec3; 3],
+    other: u32,
+    t_other: &[DVec3; 3],
+    out: &mut Vec<EdgeCrossing>,
+    points: &mut Vec<DVec3>,
+) {
+    let n = (t_other[1] - t_other[0]).cross(t_other[2] - t_other[0]);
+    for k in 0..3 {
+        let (mut u, mut v) = (ids[k], ids[(k + 1) % 3]);
+        let (mut pu, mut pv) = (t_in[k], t_in[(k + 1) % 3]);
+        if u == v {
+            continue;
+        }
+        if u > v {
+            std::mem::swap(&mut u, &mut v);
+            std::mem::swap(&mut pu, &mut pv);
+        }
+        if !segment_triangle_intersect(pu, pv, t_other[0], t_other[1], t_other[2]) {
+            continue;
+        }
+        let du = n.dot(pu - t_other[0]);
+        let dv = n.dot(pv - t_other[0]);
+        let t = du / (du - dv);
+        let t = if t.is_finite() {
+            t.clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        points.push(pu + (pv - pu) * t);
+        out.push(EdgeCrossing {
+            key: edge_key(u, v),
+            other,
+            t,
+            dir: dv - du,
+        });
+    }
+}

@@ -46,6 +46,8 @@ def main():
     # the jaw's 50 mm), far below the bars.
     a = manifold(ma)
     rows = list(csv.DictReader(open(args.csv)))
+    spheres = bool(rows and rows[0].get("sphere_volume"))
+    sphere_ratios, sphere_silent = [], 0
     ratios, missed, ghost, worst = [], [], [], (0, None)
     for r in rows:
         ours, ref = float(r["volume"]), overlap(a, mb, matrix(r))
@@ -56,6 +58,10 @@ def main():
         if ref > 0:
             err = abs(ours - ref) / ref if ref >= 5e-3 else abs(ours - ref) / 5e-3
             ratios.append(ours / ref)
+            if spheres:
+                sv = float(r["sphere_volume"])
+                sphere_ratios.append(sv / ref)
+                sphere_silent += ref >= 1e-4 and sv == 0
             if err > worst[0]:
                 worst = (err, r["frame"])
     ratios = np.array(ratios)
@@ -64,10 +70,14 @@ def main():
         within = np.mean(np.abs(ratios - 1) <= 0.02)
         print(f"ours / reference: median {np.median(ratios):.5f}, p5 {np.percentile(ratios, 5):.5f}, "
               f"p95 {np.percentile(ratios, 95):.5f}; within 2 %: {100 * within:.1f} %; worst frame {worst}")
+    if spheres and sphere_ratios:
+        s = np.array(sphere_ratios)
+        print(f"the spheres' volume / reference: median {np.median(s):.4f}, p5 {np.percentile(s, 5):.4f}, "
+              f"p95 {np.percentile(s, 95):.4f}; no contact at all on {sphere_silent} of {len(s)} overlapping frames")
     print(f"contact missed (reference ≥ 1e-4 mm³, ours 0): {missed}")
     print(f"contact invented (ours > 1e-4 mm³, reference 0): {ghost}")
     if args.gradient:
-        h, angles = 1e-3, []
+        h, angles, sphere_angles = 1e-3, [], []
         picked = [r for r in rows if float(r["volume"]) > 1e-3][:: max(1, len(rows) // args.gradient)][: args.gradient]
         for r in picked:
             m = matrix(r)
@@ -80,8 +90,17 @@ def main():
             ours = np.array([float(r[k]) for k in ("gx", "gy", "gz")])
             c = np.dot(ours, g) / (np.linalg.norm(ours) * np.linalg.norm(g) + 1e-300)
             angles.append(math.degrees(math.acos(max(-1, min(1, c)))))
+            if spheres:
+                sn = np.array([float(r[k]) for k in ("snx", "sny", "snz")])
+                if np.linalg.norm(sn) > 0:
+                    # The spheres' normal pushes B out: against the volume's gradient.
+                    c = -np.dot(sn, g) / (np.linalg.norm(sn) * np.linalg.norm(g) + 1e-300)
+                    sphere_angles.append(math.degrees(math.acos(max(-1, min(1, c)))))
         print(f"gradient direction against the reference's central differences (h = {h}): "
               f"median {np.median(angles):.3f}°, max {max(angles):.3f}° over {len(angles)} frames")
+        if sphere_angles:
+            print(f"the spheres' normal against the same: median {np.median(sphere_angles):.2f}°, "
+                  f"max {max(sphere_angles):.2f}° over {len(sphere_angles)} frames")
 
 
 main()

@@ -3,11 +3,14 @@
 //! check (`tools/mesh-volume-check/check.py` recomputes the volumes with manifold3d).
 //!
 //! `cargo run --release -p innersphere-eval --example mesh_volume_replay -- A.stl B.stl
-//! MOTION.csv OUT.csv` with `PASSES` (default 3) and `EVERY` (every Nth frame, default 1).
+//! MOTION.csv OUT.csv` with `PASSES` (default 3) and `EVERY` (every Nth frame, default 1);
+//! `TREES=A.ist,B.ist` adds the sphere packings' penetration volume and normal per frame
+//! (`Pair::penetration` on those trees, a fresh pair per frame) beside it, for the side by
+//! side of docs/RESULTS.md.
 
 use innersphere::exact::{intersection_volume, ExactMesh, ExactScratch};
 use innersphere::glam::DVec3;
-use innersphere::{Mesh, Pose};
+use innersphere::{Mesh, Pair, Pose, SharedTree, SphereTree};
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -43,14 +46,35 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             answers[k] = std::hint::black_box(v);
         }
     }
-    let mut csv =
-        String::from("frame,tx,ty,tz,qw,qx,qy,qz,volume,gx,gy,gz,rx,ry,rz,crossing_pairs,us\n");
+    // The spheres' answers on the same frames, where trees are given.
+    let spheres: Option<Vec<innersphere::Penetration>> = match std::env::var("TREES") {
+        Ok(t) => {
+            let (ta, tb) = t.split_once(',').ok_or("TREES=A.ist,B.ist")?;
+            let (ta, tb) = (
+                SharedTree::new(SphereTree::load(ta)?),
+                SharedTree::new(SphereTree::load(tb)?),
+            );
+            Some(
+                frames
+                    .iter()
+                    .map(|&i| {
+                        let mut pair = Pair::new(ta.clone(), tb.clone());
+                        pair.penetration(&Pose::IDENTITY, &m.frames[i].pose)
+                    })
+                    .collect(),
+            )
+        }
+        Err(_) => None,
+    };
+    let mut csv = String::from(
+        "frame,tx,ty,tz,qw,qx,qy,qz,volume,gx,gy,gz,rx,ry,rz,crossing_pairs,us,sphere_volume,snx,sny,snz\n",
+    );
     for (k, &i) in frames.iter().enumerate() {
         let p = m.frames[i].pose.to_array();
         let v: &innersphere::exact::MeshOverlap = &answers[k];
         let _ = writeln!(
             csv,
-            "{i},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1}",
+            "{i},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1},{}",
             p[0],
             p[1],
             p[2],
@@ -66,7 +90,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             v.rotation_gradient.y,
             v.rotation_gradient.z,
             v.crossing_pairs,
-            best[k]
+            best[k],
+            spheres.as_ref().map_or(",,,".to_string(), |s| {
+                let p = &s[k];
+                format!("{},{},{},{}", p.volume, p.normal.x, p.normal.y, p.normal.z)
+            })
         );
     }
     std::fs::write(out, csv)?;

@@ -23,6 +23,52 @@ pub(super) struct EdgeCrossing {
     pub(super) dir: f64,
 }
 
+/// The barrier edges of a flood fill from crossings sorted by edge and along it: per edge,
+/// its key and `dir` at the crossing nearest each end, into `out`.
+pub(super) fn barriers(cross: &[EdgeCrossing], out: &mut Vec<(u64, f64, f64)>) {
+    out.clear();
+    for run in cross.chunk_by(|x, y| x.key == y.key) {
+        out.push((run[0].key, run[0].dir, run[run.len() - 1].dir));
+    }
+}
+
+/// Marks over a mesh's vertices or triangles, cleared in O(1) per use: a mark is the current
+/// generation's number.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Stamps {
+    stamp: Vec<u32>,
+    generation: u32,
+}
+
+impl Stamps {
+    /// Clears every mark, for `n` items.
+    pub(super) fn begin(&mut self, n: usize) {
+        if self.stamp.len() < n {
+            self.stamp.resize(n, 0);
+        }
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.stamp.iter_mut().for_each(|x| *x = 0);
+            self.generation = 1;
+        }
+    }
+
+    /// True when item `i` is marked.
+    #[inline]
+    pub(super) fn is_marked(&self, i: u32) -> bool {
+        self.stamp[i as usize] == self.generation
+    }
+
+    /// Marks item `i`; true when it was not marked yet.
+    #[inline]
+    pub(super) fn mark(&mut self, i: u32) -> bool {
+        let s = &mut self.stamp[i as usize];
+        let new = *s != self.generation;
+        *s = self.generation;
+        new
+    }
+}
+
 /// Records where the edges of `t_in` (vertex ids `ids`, points in the common frame) cross
 /// the triangle `t_other` (slot `other`, outward normal from its winding), and the crossing
 /// points in `points`.

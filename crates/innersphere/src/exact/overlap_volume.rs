@@ -25,7 +25,7 @@
 //! (an edge through another edge or vertex, coplanar faces) is resolved per crossing and may
 //! err by the area such a coincidence touches.
 
-use super::crossings::{edge_crossings, edge_key, EdgeCrossing};
+use super::crossings::{barriers, edge_crossings, edge_key, EdgeCrossing, Stamps};
 use super::frame::Frame;
 use super::mesh::ExactMesh;
 use super::overlap::overlap_pairs;
@@ -77,8 +77,7 @@ pub(crate) struct VolumeScratch {
     inside: Vec<bool>,
     inside_list: Vec<u32>,
     touched: Vec<u32>,
-    slot_stamp: Vec<u32>,
-    generation: u32,
+    slots: Stamps,
 }
 
 /// Sorts the crossings by edge, then along it, and drops the duplicates: the same edge and
@@ -294,16 +293,7 @@ fn side_parts(
     let cross = if is_a { &s.cross_a } else { &s.cross_b };
     // The barrier edges of the flood fill: the crossing edges, with the direction at the
     // crossing nearest each end (> 0: walking lo → hi leaves the other body there).
-    pen.barrier.clear();
-    let mut i = 0;
-    while i < cross.len() {
-        let mut j = i;
-        while j + 1 < cross.len() && cross[j + 1].key == cross[i].key {
-            j += 1;
-        }
-        pen.barrier.push((cross[i].key, cross[i].dir, cross[j].dir));
-        i = j + 1;
-    }
+    barriers(cross, &mut pen.barrier);
     let n = inner.mesh.vertices.len();
     // Only the vertices marked last time are cleared (no pass over the whole mesh).
     for &v in &s.inside_list {
@@ -323,21 +313,11 @@ fn side_parts(
         });
     }
     // The triangles with a part inside: around an inside vertex, or crossing.
-    let slots = inner.bvh().tris.len();
-    if s.slot_stamp.len() < slots {
-        s.slot_stamp.resize(slots, 0);
-    }
-    s.generation = s.generation.wrapping_add(1);
-    if s.generation == 0 {
-        s.slot_stamp.iter_mut().for_each(|x| *x = 0);
-        s.generation = 1;
-    }
-    let gen = s.generation;
+    s.slots.begin(inner.bvh().tris.len());
     s.touched.clear();
     for &v in &s.inside_list {
         for &t in inner.slots_of(v) {
-            if s.slot_stamp[t as usize] != gen {
-                s.slot_stamp[t as usize] = gen;
+            if s.slots.mark(t) {
                 s.touched.push(t);
             }
         }
@@ -346,8 +326,7 @@ fn side_parts(
     for &k in by {
         let seg = &s.segments[k as usize];
         let t = if is_a { seg.slot_a } else { seg.slot_b };
-        if s.slot_stamp[t as usize] != gen {
-            s.slot_stamp[t as usize] = gen;
+        if s.slots.mark(t) {
             s.touched.push(t);
         }
     }

@@ -14,7 +14,7 @@
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x < y)` is deliberate: true for NaN too.
 
-use super::crossings::{edge_crossings, edge_key, EdgeCrossing};
+use super::crossings::{barriers, edge_crossings, edge_key, EdgeCrossing, Stamps};
 use super::frame::Frame;
 use super::mesh::ExactMesh;
 use super::overlap::overlap_pairs;
@@ -58,8 +58,7 @@ pub(crate) struct PenScratch {
     points: Vec<DVec3>,
     /// Merged barrier edges: (key, dir at the crossing nearest lo, dir nearest hi).
     pub(super) barrier: Vec<(u64, f64, f64)>,
-    stamp: Vec<u32>,
-    generation: u32,
+    stamps: Stamps,
     stack: Vec<u32>,
     candidates: Vec<u32>,
 }
@@ -68,16 +67,7 @@ pub(crate) struct PenScratch {
 /// each end.
 fn merge(cross: &mut [EdgeCrossing], out: &mut Vec<(u64, f64, f64)>) {
     cross.sort_unstable_by(|x, y| x.key.cmp(&y.key).then(x.t.total_cmp(&y.t)));
-    out.clear();
-    let mut i = 0;
-    while i < cross.len() {
-        let mut j = i;
-        while j + 1 < cross.len() && cross[j + 1].key == cross[i].key {
-            j += 1;
-        }
-        out.push((cross[i].key, cross[i].dir, cross[j].dir));
-        i = j + 1;
-    }
+    barriers(cross, out);
 }
 
 /// Calls `visit(v)` once for every vertex `v` of `inner` inside `outer` (see the module
@@ -89,16 +79,7 @@ pub(super) fn flood_inside(
     s: &mut PenScratch,
     mut visit: impl FnMut(u32),
 ) {
-    let n = inner.mesh.vertices.len();
-    if s.stamp.len() < n {
-        s.stamp.resize(n, 0);
-    }
-    s.generation = s.generation.wrapping_add(1);
-    if s.generation == 0 {
-        s.stamp.iter_mut().for_each(|x| *x = 0);
-        s.generation = 1;
-    }
-    let g = s.generation;
+    s.stamps.begin(inner.mesh.vertices.len());
     s.candidates.clear();
     for &(key, dir_lo, dir_hi) in &s.barrier {
         // The nearest crossing leaves the other body when walking away from the end.
@@ -119,10 +100,9 @@ pub(super) fn flood_inside(
     let verts = &inner.mesh.vertices;
     for ci in 0..s.candidates.len() {
         let v = s.candidates[ci];
-        if s.stamp[v as usize] == g {
+        if !s.stamps.mark(v) {
             continue;
         }
-        s.stamp[v as usize] = g;
         if !outer.contains_point(to_outer.point(verts[v as usize])) {
             continue;
         }
@@ -131,8 +111,8 @@ pub(super) fn flood_inside(
         while let Some(u) = s.stack.pop() {
             visit(u);
             for &w in inner.neighbours(u) {
-                if s.stamp[w as usize] != g && !is_barrier(u, w) {
-                    s.stamp[w as usize] = g;
+                if !s.stamps.is_marked(w) && !is_barrier(u, w) {
+                    s.stamps.mark(w);
                     s.stack.push(w);
                 }
             }

@@ -1,6 +1,6 @@
 //! Times packing and hierarchy on an analytic field (a wavy slab) with millions of voxels.
 use glam::DVec3;
-use innersphere::field::{DistanceField, VoxelGrid};
+use innersphere::build::pack_signed_distance;
 use innersphere::progress::Silent;
 use std::time::Instant;
 
@@ -10,18 +10,15 @@ fn main() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(0.01);
     let half = DVec3::new(1.0, 0.7, 0.3);
-    let grid = VoxelGrid::covering(-half, half, h).unwrap();
     let sdf = |p: DVec3| {
         // a box with a wavy top: many small spheres near the waves
         let wave = 0.05 * (p.x * 40.0).sin() * (p.y * 30.0).cos();
         (half - p.abs()).min_element().min(half.z - wave - p.z)
     };
-    let field = DistanceField::from_signed_distance(grid, sdf);
     let t = Instant::now();
-    let spheres = innersphere::packing::pack(&field, &Default::default(), None, &Silent);
+    let spheres = pack_signed_distance(-half, half, h, sdf, &Default::default()).unwrap();
     println!(
-        "voxels {} spheres {} packing {:.2}s",
-        field.inside.len(),
+        "spheres {} packing {:.2}s",
         spheres.len(),
         t.elapsed().as_secs_f64()
     );

@@ -2,11 +2,8 @@
 //! pass each timing statistic comes from, with an injected clock.
 
 use glam::DVec3;
-use innersphere::build::tree_of_spheres;
+use innersphere::build::{pack_signed_distance, tree_of_spheres, HierarchyOptions, PackingOptions};
 use innersphere::exact::ExactMesh;
-use innersphere::field::{DistanceField, VoxelGrid};
-use innersphere::hierarchy::HierarchyOptions;
-use innersphere::packing::{self, PackingOptions};
 use innersphere::progress::Silent;
 use innersphere::tree::TreeMeta;
 use innersphere::Pose;
@@ -24,9 +21,9 @@ fn ball_tree() -> SharedTree {
 
 /// The tree of a ball of radius `r` (one sphere).
 fn ball_tree_of(r: f64) -> SharedTree {
-    let grid = VoxelGrid::covering(DVec3::splat(-r), DVec3::splat(r), 0.1).unwrap();
-    let field = DistanceField::from_signed_distance(grid, |p| r - p.length());
-    let spheres = packing::pack(&field, &PackingOptions::default(), None, &Silent);
+    let (lo, hi) = (DVec3::splat(-r), DVec3::splat(r));
+    let spheres =
+        pack_signed_distance(lo, hi, 0.1, |p| r - p.length(), &PackingOptions::default()).unwrap();
     assert!((spheres[0].radius - r).abs() < 1e-9);
     let meta = TreeMeta {
         mesh_volume: 4.0 / 3.0 * std::f64::consts::PI,

@@ -53,17 +53,13 @@
 pub mod build;
 pub mod error;
 pub mod exact;
-// The build's stages: public for the evaluation harness (packings without a mesh) and the
-// tests, not the API; their options are named in `build`.
-#[doc(hidden)]
-pub mod field;
-#[doc(hidden)]
-pub mod hierarchy;
+// The build's stages; their options are named in `build`.
+mod field;
+mod hierarchy;
 pub mod input;
 pub mod mesh;
 pub mod output;
-#[doc(hidden)]
-pub mod packing;
+mod packing;
 pub mod pose;
 pub mod progress;
 pub mod query;
@@ -81,6 +77,12 @@ pub use query::{
     RefineOptions, RefinedDistance, SharedTree, Tracking,
 };
 pub use tree::SphereTree;
+
+// The tests that need the internal stages name the crate as its users do.
+#[cfg(test)]
+extern crate self as innersphere;
+#[cfg(test)]
+mod tests;
 
 /// The README's examples, compiled as doctests.
 #[cfg(doctest)]

@@ -21,6 +21,8 @@ fn layer(module: &str) -> Option<u32> {
         "hierarchy" => 8,
         "build" | "exact" => 9,
         "query" => 10,
+        // The unit tests that need the internal stages (`src/tests/`) sit above everything.
+        "tests" => 11,
         _ => return None,
     })
 }

@@ -142,7 +142,7 @@ fn check_passes_a_tree_on_its_mesh_and_fails_it_on_another() {
 
     // The box's tree against the unit ball: not the mesh it was built from (by the bounding
     // box and volume the tree keeps), an error before any sphere is checked. (The library's
-    // check of the spheres against another mesh, exit code 1, is tests/check_negative.rs's.)
+    // check of the spheres against another mesh, exit code 1, is the core's src/tests/check_negative.rs.)
     for json in [true, false] {
         let mut args = vec!["check", s(&box_ist), "--mesh", s(&ball_obj)];
         if json {

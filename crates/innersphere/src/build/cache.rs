@@ -365,17 +365,7 @@ fn touch(path: &Path) {
     }
 }
 
-impl SphereTree {
-    /// [`SphereTree::build_with_progress`] through `cache` ([`BuildCache::get_or_build`]).
-    pub fn build_cached(
-        mesh: &Mesh,
-        opts: &BuildOptions,
-        cache: &BuildCache,
-        progress: &dyn Progress,
-    ) -> Result<(SphereTree, CacheOutcome, Option<BuildReport>)> {
-        cache.get_or_build(mesh, opts, progress)
-    }
-}
+impl SphereTree {}
 
 #[cfg(test)]
 mod tests {

@@ -6,8 +6,8 @@
 //! [`SphereTree::build`] is the short way (tree only); [`SphereTree::build_with_progress`]
 //! also reports progress and returns the [`BuildReport`] (warnings included; what `ist build`
 //! runs); [`build_tree`] is the same function under its older name (what [`BuildCache`] and
-//! the tests call). [`tree_of_spheres`] makes the tree of a sphere set that no mesh was
-//! packed into.
+//! the tests call). [`pack_signed_distance`] packs an analytic solid without a mesh, and
+//! [`tree_of_spheres`] makes the tree of a sphere set that no mesh was packed into.
 //!
 //! Lengths are in **model units**: the library never assumes a unit. [`BuildOptions`] says
 //! how fine the packing is, either as numbers or from a named [`Preset`]
@@ -23,14 +23,13 @@ mod stages;
 mod verdict;
 
 pub use crate::field::thick::ThickParts;
-pub use crate::hierarchy::HierarchyOptions;
-pub use crate::packing::PackingOptions;
+pub use crate::hierarchy::{HierarchyOptions, HierarchyStats};
+pub use crate::packing::{PackingOptions, Sphere};
 pub use cache::{BuildCache, CacheOutcome};
 pub use options::{validate_options, BuildOptions, Resolution};
-pub use pipeline::{build_tree, BuildReport, StageSeconds, MIN_EXTENT};
-// A tree from spheres packed elsewhere (the evaluation's analytic solids): not the API.
-#[doc(hidden)]
-pub use pipeline::tree_of_spheres;
+pub use pipeline::{
+    build_tree, pack_signed_distance, tree_of_spheres, BuildReport, StageSeconds, MIN_EXTENT,
+};
 pub use preset::Preset;
 pub use verdict::MeshVerdict;
 

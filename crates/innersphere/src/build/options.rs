@@ -25,7 +25,7 @@ pub struct BuildOptions {
     /// Fan-out and BNG settings.
     pub hierarchy: HierarchyOptions,
     /// Parts thicker than this rule's balls packed from a coarse lattice with a larger
-    /// minimum radius ([`crate::field::thick`]); `None`: every part alike. The jaw presets set
+    /// minimum radius (the build's thick-part stage); `None`: every part alike. The jaw presets set
     /// it (bone is thicker than any tooth); the unit-free presets do not.
     pub thick: Option<ThickParts>,
 }

@@ -6,16 +6,17 @@
 use super::options::BuildOptions;
 use super::stages;
 use crate::error::Result;
-use crate::field::InsideMethod;
+use crate::field::{DistanceField, InsideMethod, VoxelGrid};
 use crate::hierarchy::{self, HierarchyOptions, HierarchyStats};
 use crate::mesh::{Mesh, MeshReport};
-use crate::packing::Sphere;
+use crate::packing::{self, PackingOptions, Sphere};
 use crate::progress::Progress;
 use crate::tree::{SphereTree, TreeMeta};
+use glam::DVec3;
 use std::time::Instant;
 
 /// The smallest longest bounding-box side a build accepts (model units). The grid has at most
-/// [`MAX_CELLS`](crate::field::grid::MAX_CELLS) cells, so its voxels are at least
+/// `MAX_CELLS` (6·10^8) cells, so its voxels are at least
 /// `extent / 6e8` wide; from 1e-6 up, a voxel's squared size (≥ 2.8e-30) stays a normal
 /// `f32` with full precision (below ~1e-31 the queries' squared `f32` distances lose bits,
 /// and at 1e-30 across every answer is measured to be 0: no contact between overlapping
@@ -165,6 +166,22 @@ pub fn build_tree(
     let seconds = t0.elapsed().as_secs_f64();
     let report = stages::report(prep, &field, &spheres, &built, opts, seconds, stage_seconds);
     Ok((built.tree, report))
+}
+
+/// The inner spheres of an analytic solid, given by its signed distance function `sdf`
+/// (positive inside and there the exact distance to the surface; implicit surfaces, CSG, the
+/// evaluation's solids): the build's packing over the voxel centres of size `voxel` in the
+/// box `[lo, hi]`, no mesh needed. [`tree_of_spheres`] makes their tree.
+pub fn pack_signed_distance(
+    lo: DVec3,
+    hi: DVec3,
+    voxel: f64,
+    sdf: impl Fn(DVec3) -> f64,
+    opts: &PackingOptions,
+) -> Result<Vec<Sphere>> {
+    let grid = VoxelGrid::covering(lo, hi, voxel)?;
+    let field = DistanceField::from_signed_distance(grid, sdf);
+    Ok(packing::pack(&field, opts, None, &crate::progress::Silent))
 }
 
 /// The tree over a sphere set that was not packed from a mesh (hand-made or analytic): the

@@ -8,7 +8,9 @@ use super::frame::Frame;
 use super::mesh::ExactMesh;
 use super::overlap::overlap_pairs;
 use super::scratch::{ExactScratch, ExactStats};
-use super::tri_tri::{self, triangle_distance, triangle_distance_hint};
+#[cfg(test)]
+use super::tri_tri::triangle_distance;
+use super::tri_tri::{self, triangle_distance_hint};
 use crate::pose::Pose;
 use glam::DVec3;
 
@@ -36,7 +38,7 @@ pub struct ExactDistance {
 ///
 /// A non-finite pose gives NaN distances and `intersecting = false`.
 /// The distance is the exact minimum over all triangle pairs of
-/// [`triangle_distance`]; when the surfaces cross it is 0 with a common point, and when one
+/// `tri_tri::triangle_distance`; when the surfaces cross it is 0 with a common point, and when one
 /// body lies entirely inside the other `distance` is 0 and `intersecting` set while
 /// `surface_distance` and the points still give the closest surface pair.
 pub fn distance(
@@ -141,8 +143,9 @@ fn finish(
     }
 }
 
+#[cfg(test)]
 /// O(n·m) reference for [`distance`]: every triangle pair, the same containment rule.
-pub fn brute_force_distance(
+pub(crate) fn brute_force_distance(
     a: &ExactMesh,
     pose_a: &Pose,
     b: &ExactMesh,

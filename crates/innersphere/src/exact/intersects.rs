@@ -2,6 +2,7 @@
 //! its O(n·m) reference [`brute_force_intersects`].
 
 use super::containment::contained;
+#[cfg(test)]
 use super::distance::brute_force_distance;
 use super::frame::Frame;
 use super::mesh::ExactMesh;
@@ -46,7 +47,13 @@ pub fn intersects(
     contained(a, b, &rel, &f, &mut scratch.stats.winding_tests)
 }
 
+#[cfg(test)]
 /// O(n·m) reference for [`intersects`].
-pub fn brute_force_intersects(a: &ExactMesh, pose_a: &Pose, b: &ExactMesh, pose_b: &Pose) -> bool {
+pub(crate) fn brute_force_intersects(
+    a: &ExactMesh,
+    pose_a: &Pose,
+    b: &ExactMesh,
+    pose_b: &Pose,
+) -> bool {
     brute_force_distance(a, pose_a, b, pose_b).intersecting
 }

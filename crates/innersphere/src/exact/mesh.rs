@@ -167,7 +167,8 @@ impl ExactMesh {
     }
 
     /// Number of connected components (vertex-connected triangle sets).
-    pub fn component_count(&self) -> usize {
+    #[cfg(test)]
+    pub(crate) fn component_count(&self) -> usize {
         self.components.len()
     }
 

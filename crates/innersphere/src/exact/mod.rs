@@ -9,7 +9,7 @@
 //!
 //! * [`distance`] runs in two phases. First, do the surfaces cross? A depth-first traversal
 //!   of the node pairs that may touch tests every pair of triangles whose boxes overlap
-//!   with exact predicates ([`tri_tri::triangles_intersect`]) and stops at the first
+//!   with exact predicates (`tri_tri::triangles_intersect`) and stops at the first
 //!   crossing: distance 0. Otherwise a best-first branch and bound over node pairs, ordered
 //!   and pruned by lower bounds that combine the boxes with a slab-and-disc shape per node
 //!   (tight for the nearly flat patches near the leaves), finds the minimum of the
@@ -24,12 +24,12 @@
 //!   vertex of one body inside the other (both ways).
 //! * [`vertex_gaps`]: the signed distance of every vertex of one body to the other's
 //!   surface (negative inside), what a contact map colours.
-//! * [`brute_force_distance`] / [`brute_force_intersects`]: O(n·m) references for tests.
+//! * `brute_force_distance` / `brute_force_intersects` (tests only): O(n·m) references.
 //!
 //! The files: `mesh` ([`ExactMesh`]), `scratch` ([`ExactScratch`]), `frame` (B's frame in
 //! A's), `overlap` (the traversal of overlapping node pairs), `bnb` (the branch and bound),
 //! `containment`, `distance`, `gaps`, `intersects`, `penetration`, `bound` (node shapes) and
-//! [`tri_tri`] (triangle pairs).
+//! `tri_tri` (triangle pairs).
 //!
 //! No input panics: meshes are validated by [`ExactMesh::new`], degenerate triangles are
 //! handled, and a non-finite pose gives a NaN distance, no intersection and depth 0.
@@ -54,21 +54,23 @@ mod overlap;
 mod overlap_volume;
 mod penetration;
 mod scratch;
-// Triangle–triangle primitives: the kernels of the exact queries, not the API.
-#[doc(hidden)]
-pub mod tri_tri;
+// Triangle–triangle primitives: the kernels of the exact queries.
+pub(crate) mod tri_tri;
 
-pub use distance::{brute_force_distance, distance, ExactDistance};
+#[cfg(test)]
+pub(crate) use distance::brute_force_distance;
+pub use distance::{distance, ExactDistance};
 pub use gaps::vertex_gaps;
-pub use intersects::{brute_force_intersects, intersects};
+#[cfg(test)]
+pub(crate) use intersects::brute_force_intersects;
+pub use intersects::intersects;
 pub use mesh::ExactMesh;
 pub use overlap_volume::{intersection_volume, MeshOverlap};
 pub use penetration::{penetration, penetration_depth, Body, ExactPenetration};
 pub use scratch::{ExactScratch, ExactStats};
-#[doc(hidden)]
-pub use tri_tri::{
+#[cfg(test)]
+pub(crate) use tri_tri::{
     segment_segment_closest, segment_triangle_intersect, triangle_distance, triangles_intersect,
-    TriDistance,
 };
 
 #[cfg(doc)]

@@ -20,7 +20,7 @@ use robust::{orient2d, orient3d, Coord, Coord3D};
 
 /// The answer of [`triangle_distance`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TriDistance {
+pub(crate) struct TriDistance {
     /// Squared distance between the triangles (0 when they intersect).
     pub dist_sq: f64,
     /// The closest point on the first triangle (a common point when they intersect).
@@ -58,7 +58,7 @@ fn proj(p: DVec3, axis: usize) -> Coord<f64> {
 
 /// True when `a, b, c` are exactly collinear (every coordinate projection has zero area).
 #[inline]
-pub fn is_collinear(a: DVec3, b: DVec3, c: DVec3) -> bool {
+pub(crate) fn is_collinear(a: DVec3, b: DVec3, c: DVec3) -> bool {
     (0..3).all(|k| orient2d(proj(a, k), proj(b, k), proj(c, k)) == 0.0)
 }
 
@@ -127,7 +127,7 @@ pub(crate) fn segments_intersect(p: DVec3, q: DVec3, r: DVec3, s: DVec3) -> bool
 
 /// Closed segment `[p, q]` and closed triangle `a, b, c` share a point (exact; degenerate
 /// segments and triangles allowed).
-pub fn segment_triangle_intersect(p: DVec3, q: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {
+pub(crate) fn segment_triangle_intersect(p: DVec3, q: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {
     if is_collinear(a, b, c) {
         return segments_intersect(p, q, a, b)
             || segments_intersect(p, q, b, c)
@@ -274,11 +274,17 @@ fn edge_pair_closest(p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3) -> (DVec3, DVec
     (p1 + d1 * s, p2 + d2 * t)
 }
 
+#[cfg(test)]
 /// Closest points of two segments `[p1, q1]`, `[p2, q2]` and their squared distance.
 ///
 /// Robust (clamped) form of Ericson's *Real-Time Collision Detection* 5.1.9: point segments
 /// and parallel segments are handled, the result is never NaN for finite input.
-pub fn segment_segment_closest(p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3) -> (f64, DVec3, DVec3) {
+pub(crate) fn segment_segment_closest(
+    p1: DVec3,
+    q1: DVec3,
+    p2: DVec3,
+    q2: DVec3,
+) -> (f64, DVec3, DVec3) {
     let (x, y) = edge_pair_closest(p1, q1, p2, q2);
     // The clamped formula can miss the true minimum for nearly parallel segments: the ends
     // against the other segment are always candidates too.
@@ -326,9 +332,10 @@ pub(crate) fn plane_separates(t: &[DVec3; 3], pts: &[DVec3; 3]) -> bool {
     pos == 3 || neg == 3
 }
 
+#[cfg(test)]
 /// True when the closed triangles `a` and `b` share a point. Exact for every input,
 /// including coplanar, touching and degenerate triangles.
-pub fn triangles_intersect(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
+pub(crate) fn triangles_intersect(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
     intersection_point(a, b).is_some()
 }
 
@@ -573,11 +580,12 @@ fn disjoint_distance(a: &[DVec3; 3], b: &[DVec3; 3]) -> (f64, DVec3, DVec3) {
     }
 }
 
+#[cfg(test)]
 /// Exact-decision distance between two closed triangles with the closest points.
 ///
 /// Intersecting triangles (decided exactly by [`triangles_intersect`]) give 0 and a common
 /// point; others the minimum over the feature pairs. Never NaN for finite input.
-pub fn triangle_distance(a: &[DVec3; 3], b: &[DVec3; 3]) -> TriDistance {
+pub(crate) fn triangle_distance(a: &[DVec3; 3], b: &[DVec3; 3]) -> TriDistance {
     triangle_distance_hint(a, b, true)
 }
 

@@ -7,9 +7,13 @@
 //! The pruning is exactly conservative, so the result is bit-identical to brute force and
 //! independent of threads and seeds.
 
-use super::inside::{classify, classify_where};
+#[cfg(test)]
+use super::inside::classify;
+use super::inside::classify_where;
 use super::thick::ThickSet;
-use super::{DistanceField, VoxelGrid};
+#[cfg(test)]
+use super::DistanceField;
+use super::VoxelGrid;
 use crate::mesh::bvh::{Near, TriangleBvh};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
@@ -17,15 +21,17 @@ use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
+#[cfg(test)]
 /// Rows of voxels handled sequentially by one parallel task (fixed, so that seeding does not
 /// depend on scheduling).
 const ROWS_PER_TASK: usize = 16;
 /// Points handled sequentially by one parallel task in [`distance_of_points`].
 const POINTS_PER_TASK: usize = 256;
 
+#[cfg(test)]
 /// Classifies the cells of `grid` ([`classify`]) and gives every inside voxel its exact
 /// unsigned distance to the surface.
-pub fn compute(
+pub(crate) fn compute(
     mesh: &Mesh,
     grid: VoxelGrid,
     progress: &dyn Progress,
@@ -43,9 +49,10 @@ pub fn compute(
     })
 }
 
+#[cfg(test)]
 /// Exact distance from the centres of `cells` (linear indices, ascending) to the triangles of
 /// `bvh`, in the same order (`f64::INFINITY` for an empty tree).
-pub fn distances_of_cells(
+pub(crate) fn distances_of_cells(
     bvh: &TriangleBvh,
     grid: &VoxelGrid,
     cells: &[u32],
@@ -106,7 +113,7 @@ pub fn distances_of_cells(
 /// the triangle that gives it: what the packing starts from, making a voxel's distance exact
 /// only when it needs it ([`crate::packing::pack_bounded`]).
 #[derive(Debug, Clone)]
-pub struct DistanceBounds {
+pub(crate) struct DistanceBounds {
     /// The grid the voxels live on.
     pub grid: VoxelGrid,
     /// Linear grid indices of the inside voxels, ascending.
@@ -126,7 +133,7 @@ pub struct DistanceBounds {
 /// Which inside voxels are coarse ones (lattice nodes of a thick part, [`ThickSet`]) and the
 /// smallest sphere the packing may place at them.
 #[derive(Debug, Clone)]
-pub struct CoarseVoxels {
+pub(crate) struct CoarseVoxels {
     /// One flag per inside voxel (same order).
     pub flags: Vec<bool>,
     /// No sphere below this radius at a coarse voxel.
@@ -144,6 +151,7 @@ const BOUND_STRIDE: u32 = 3;
 /// the packing 0.3–0.5 s, 30 % cost it 1 s; half a voxel more (absolute) cost it 0.2 s.
 const NEAR_REL: f64 = 0.1;
 
+#[cfg(test)]
 /// Classifies the cells of `grid` ([`classify`]) and gives every inside voxel an upper bound
 /// of its distance: the distance to a triangle near the nearest node of a lattice
 /// `BOUND_STRIDE` (3) voxels apart (within a tenth of the closest triangle's distance, found
@@ -152,7 +160,7 @@ const NEAR_REL: f64 = 0.1;
 /// ones, the rest point–triangle distances. (On the jaw, 2 cores: stride 2 spends 0.3–0.5 s
 /// more on the nodes; stride 4 saves 0.1–0.2 s there and loses it to the packing's extra
 /// exact queries.)
-pub fn bounds(
+pub(crate) fn bounds(
     mesh: &Mesh,
     bvh: &TriangleBvh,
     grid: VoxelGrid,
@@ -316,14 +324,16 @@ fn with_coords<'a>(
     })
 }
 
+#[cfg(test)]
 /// Exact distance from each point to the triangles of `bvh` (`f64::INFINITY` when empty);
 /// fastest when consecutive points are close to each other.
-pub fn distance_of_points(bvh: &TriangleBvh, pts: &[DVec3]) -> Vec<f64> {
+pub(crate) fn distance_of_points(bvh: &TriangleBvh, pts: &[DVec3]) -> Vec<f64> {
     pts.par_chunks(POINTS_PER_TASK)
         .flat_map_iter(|chunk| seeded_distances(bvh, chunk.iter().copied()))
         .collect()
 }
 
+#[cfg(test)]
 /// Distances of a sequence of points, each query seeded with the previous answer.
 fn seeded_distances(bvh: &TriangleBvh, pts: impl Iterator<Item = DVec3>) -> Vec<f64> {
     let mut hint = u32::MAX;

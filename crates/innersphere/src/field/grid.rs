@@ -4,12 +4,12 @@ use crate::error::num;
 use glam::DVec3;
 
 /// The most cells a grid may have (per-cell arrays must fit in memory).
-pub const MAX_CELLS: u64 = 600_000_000;
+pub(crate) const MAX_CELLS: u64 = 600_000_000;
 
 /// A cubic voxel grid: `dims` cells of edge `h`, cell `(i, j, k)` centred at
 /// `origin + h * (i, j, k)`.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct VoxelGrid {
+pub(crate) struct VoxelGrid {
     /// Centre of cell (0, 0, 0).
     pub origin: DVec3,
     /// Edge length of a (cubic) cell, in model units.
@@ -20,7 +20,7 @@ pub struct VoxelGrid {
 
 impl VoxelGrid {
     /// A grid of cell size `h` covering the box `[lo, hi]` with the box centred in the grid.
-    pub fn covering(lo: DVec3, hi: DVec3, h: f64) -> crate::error::Result<Self> {
+    pub(crate) fn covering(lo: DVec3, hi: DVec3, h: f64) -> crate::error::Result<Self> {
         if !(h.is_finite() && h > 0.0) {
             return Err(crate::error::Error::InvalidOption(format!(
                 "voxel size must be a positive number, got {h}"
@@ -51,7 +51,7 @@ impl VoxelGrid {
     }
 
     /// A grid with `n` cells along the longest side of the box `[lo, hi]`.
-    pub fn with_resolution(lo: DVec3, hi: DVec3, n: u32) -> crate::error::Result<Self> {
+    pub(crate) fn with_resolution(lo: DVec3, hi: DVec3, n: u32) -> crate::error::Result<Self> {
         if n < 2 {
             return Err(crate::error::Error::InvalidOption(format!(
                 "resolution must be at least 2 cells, got {n}"
@@ -92,25 +92,25 @@ impl VoxelGrid {
 
     /// Total number of cells.
     #[inline]
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.dims[0] as usize * self.dims[1] as usize * self.dims[2] as usize
     }
 
     /// True when the grid has no cells.
     #[inline]
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
     /// Linear index of cell `(i, j, k)`: x fastest, then y, then z.
     #[inline]
-    pub fn index(&self, i: u32, j: u32, k: u32) -> usize {
+    pub(crate) fn index(&self, i: u32, j: u32, k: u32) -> usize {
         i as usize + self.dims[0] as usize * (j as usize + self.dims[1] as usize * k as usize)
     }
 
     /// Cell coordinates of a linear index.
     #[inline]
-    pub fn coords(&self, idx: usize) -> [u32; 3] {
+    pub(crate) fn coords(&self, idx: usize) -> [u32; 3] {
         let nx = self.dims[0] as usize;
         let ny = self.dims[1] as usize;
         [
@@ -122,13 +122,13 @@ impl VoxelGrid {
 
     /// Centre of cell `(i, j, k)`.
     #[inline]
-    pub fn center(&self, i: u32, j: u32, k: u32) -> DVec3 {
+    pub(crate) fn center(&self, i: u32, j: u32, k: u32) -> DVec3 {
         self.origin + DVec3::new(i as f64, j as f64, k as f64) * self.h
     }
 
     /// Centre of the cell with linear index `idx`.
     #[inline]
-    pub fn center_of(&self, idx: usize) -> DVec3 {
+    pub(crate) fn center_of(&self, idx: usize) -> DVec3 {
         let [i, j, k] = self.coords(idx);
         self.center(i, j, k)
     }

@@ -33,7 +33,7 @@ const MIN_RUN: u32 = 3;
 /// Classifies the cell centres of `grid`: returns the linear indices of the inside cells,
 /// ascending, and the method used (exact rays for oriented-closed meshes, the generalized
 /// winding number otherwise). A mesh that encloses nothing gives an empty list.
-pub fn classify(
+pub(crate) fn classify(
     mesh: &Mesh,
     grid: &VoxelGrid,
     progress: &dyn Progress,
@@ -44,7 +44,7 @@ pub fn classify(
 /// Which inside cells a classification keeps (`classify_where`): given `(i, j, k)`, the
 /// first `k' ≥ k` whose cell `(i, j, k')` it may keep (`k` itself when it keeps that cell;
 /// every cell between is dropped).
-pub type Keep<'a> = &'a (dyn Fn(u32, u32, u32) -> u32 + Sync);
+pub(crate) type Keep<'a> = &'a (dyn Fn(u32, u32, u32) -> u32 + Sync);
 
 /// [`classify`], keeping only the inside cells for which `keep` holds (all without it): the
 /// others are dropped row by row, so that the full list is never held.
@@ -89,7 +89,7 @@ pub(crate) struct EdgeSummary {
 
 impl EdgeSummary {
     /// Counts the directed uses of every edge.
-    pub fn of(mesh: &Mesh) -> Self {
+    pub(crate) fn of(mesh: &Mesh) -> Self {
         let mut uses: Vec<(u64, i32)> = Vec::with_capacity(mesh.triangles.len() * 3);
         for t in &mesh.triangles {
             for (u, v) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
@@ -118,7 +118,7 @@ impl EdgeSummary {
 
     /// Every edge is used equally often in each direction: exactly then the signed
     /// ray-crossing count is the winding number (manifold or not).
-    pub fn is_oriented_closed(&self) -> bool {
+    pub(crate) fn is_oriented_closed(&self) -> bool {
         self.open.is_empty()
     }
 
@@ -128,16 +128,18 @@ impl EdgeSummary {
     }
 }
 
+#[cfg(test)]
 /// True when every undirected edge is used equally often in each direction (see
 /// `EdgeSummary::is_oriented_closed`).
-pub fn is_oriented_closed(mesh: &Mesh) -> bool {
+pub(crate) fn is_oriented_closed(mesh: &Mesh) -> bool {
     EdgeSummary::of(mesh).is_oriented_closed()
 }
 
+#[cfg(test)]
 /// Exact inside test by signed ray crossings along +z (the mesh should be oriented-closed;
 /// otherwise the result is the signed crossing count of whatever is there). Indices must be
 /// valid.
-pub fn inside_by_rays(mesh: &Mesh, grid: &VoxelGrid, progress: &dyn Progress) -> Vec<u32> {
+pub(crate) fn inside_by_rays(mesh: &Mesh, grid: &VoxelGrid, progress: &dyn Progress) -> Vec<u32> {
     rays_inside(mesh, grid, None, progress)
 }
 
@@ -466,9 +468,14 @@ fn sweep_row(
     }
 }
 
+#[cfg(test)]
 /// Inside test by the generalized winding number: cells with |w| ≥ 0.5. Works on any mesh;
 /// a soup that encloses nothing gives (almost) no cells.
-pub fn inside_by_winding(mesh: &Mesh, grid: &VoxelGrid, progress: &dyn Progress) -> Vec<u32> {
+pub(crate) fn inside_by_winding(
+    mesh: &Mesh,
+    grid: &VoxelGrid,
+    progress: &dyn Progress,
+) -> Vec<u32> {
     winding_inside(mesh, grid, &EdgeSummary::of(mesh), None, progress)
 }
 

@@ -2,12 +2,12 @@
 //! ([`inside`]) and the exact unsigned distance of every inside voxel to the surface
 //! ([`distance`]); in the thick parts of a body only a coarse lattice of voxels ([`thick`]).
 
-pub mod distance;
-pub mod grid;
-pub mod inside;
-pub mod thick;
+pub(crate) mod distance;
+pub(crate) mod grid;
+pub(crate) mod inside;
+pub(crate) mod thick;
 
-pub use grid::VoxelGrid;
+pub(crate) use grid::VoxelGrid;
 
 /// How inside/outside was decided.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -22,7 +22,7 @@ pub enum InsideMethod {
 
 /// The inside voxels of a mesh and their exact distance to its surface.
 #[derive(Debug, Clone)]
-pub struct DistanceField {
+pub(crate) struct DistanceField {
     /// The grid the voxels live on.
     pub grid: VoxelGrid,
     /// Linear grid indices (see [`VoxelGrid::index`]) of the inside voxels, ascending.
@@ -37,7 +37,7 @@ impl DistanceField {
     /// The field of an analytic solid given by its signed distance function `sdf` (positive
     /// inside, the exact distance to the surface there): every cell centre with `sdf > 0` is an
     /// inside voxel. For tests and benchmarks that need packings without a mesh.
-    pub fn from_signed_distance(grid: VoxelGrid, sdf: impl Fn(glam::DVec3) -> f64) -> Self {
+    pub(crate) fn from_signed_distance(grid: VoxelGrid, sdf: impl Fn(glam::DVec3) -> f64) -> Self {
         let mut inside = Vec::new();
         let mut dist = Vec::new();
         for idx in 0..grid.len() {

@@ -25,7 +25,7 @@ use crate::mesh::Mesh;
 use crate::progress::Progress;
 use rayon::prelude::*;
 
-/// How the build treats thick parts (see the [module docs](self)); all lengths in model units.
+/// How the build treats thick parts (see the module `field::thick`); all lengths in model units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ThickParts {
     /// A part is thick where it holds an inscribed ball of at least this radius.
@@ -44,7 +44,7 @@ const NEAR_REL: f64 = 0.1;
 
 /// The covered nodes of a grid's `stride` lattice ([`ThickSet::find`]).
 #[derive(Debug, Clone)]
-pub struct ThickSet {
+pub(crate) struct ThickSet {
     stride: u32,
     /// Nodes along x, y, z; node `(a, b, c)` is voxel `(a, b, c)·stride`.
     dims: [u32; 3],
@@ -62,7 +62,7 @@ pub struct ThickSet {
 impl ThickSet {
     /// The thick set of `mesh` on `grid` (`bvh` is the mesh's triangle tree), or `None` when
     /// the mesh has no part that thick (then the build is what it is without the rule).
-    pub fn find(
+    pub(crate) fn find(
         mesh: &Mesh,
         bvh: &TriangleBvh,
         grid: &VoxelGrid,
@@ -159,9 +159,10 @@ impl ThickSet {
         (covered, on_a && on_b && on_c)
     }
 
+    #[cfg(test)]
     /// Whether the build keeps inside voxel `(i, j, k)`: outside the thick set, or a node of it.
     #[inline]
-    pub fn keeps(&self, i: u32, j: u32, k: u32) -> bool {
+    pub(crate) fn keeps(&self, i: u32, j: u32, k: u32) -> bool {
         let (covered, node) = self.lookup(i, j, k);
         !covered || node
     }
@@ -194,17 +195,17 @@ impl ThickSet {
     }
 
     /// No sphere smaller than this at a coarse voxel ([`ThickParts::min_radius`]).
-    pub fn min_radius(&self) -> f64 {
+    pub(crate) fn min_radius(&self) -> f64 {
         self.min_radius
     }
 
     /// The lattice's stride (voxels).
-    pub fn stride(&self) -> u32 {
+    pub(crate) fn stride(&self) -> u32 {
         self.stride
     }
 
     /// The volume the thick set covers, in voxels of the grid.
-    pub fn voxels(&self) -> f64 {
+    pub(crate) fn voxels(&self) -> f64 {
         self.count as f64 * f64::from(self.stride).powi(3)
     }
 }

@@ -32,11 +32,11 @@ impl Default for BngOptions {
 /// Chunk size for deterministic parallel sums; small clusters run on one thread.
 const CHUNK: usize = 4096;
 /// Most prototypes supported (the fan-out limit of the tree).
-pub const MAX_PROTOTYPES: usize = 32;
+pub(crate) const MAX_PROTOTYPES: usize = 32;
 
 /// Clusters `points` (with `weights`) into at most `n` groups; returns for every point the
 /// index of its nearest final prototype. Deterministic.
-pub fn cluster(points: &[DVec3], weights: &[f64], n: usize, opts: &BngOptions) -> Vec<u8> {
+pub(crate) fn cluster(points: &[DVec3], weights: &[f64], n: usize, opts: &BngOptions) -> Vec<u8> {
     let n = n.clamp(1, MAX_PROTOTYPES).min(points.len().max(1));
     let mut protos = initial_prototypes(points, n);
     let (lo, hi) = points.iter().fold(

@@ -11,7 +11,7 @@
 use glam::DVec3;
 
 /// A ball `(centre, radius)` in f64.
-pub type Ball = (DVec3, f64);
+pub(crate) type Ball = (DVec3, f64);
 
 /// The balls tangent from inside to every ball of `support` (1 to 4 balls) whose centre lies
 /// in the affine hull of the support centres: at most two candidates.
@@ -168,7 +168,7 @@ fn smallest_over_subsets(set: &[Ball], scratch: &mut Vec<Ball>) -> (Ball, Vec<us
 
 /// Minimal enclosing ball of `balls` (non-empty). The result encloses every ball exactly in
 /// f64 (its radius is the farthest reach from its centre).
-pub fn enclose(balls: &[Ball]) -> Ball {
+pub(crate) fn enclose(balls: &[Ball]) -> Ball {
     assert!(!balls.is_empty(), "enclose needs at least one ball");
     let mut scratch = Vec::with_capacity(2);
     // Start from the largest ball.

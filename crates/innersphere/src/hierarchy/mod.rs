@@ -11,8 +11,8 @@
 //! mesh and disjoint), parents are computed from the rounded leaves and rounded up (they
 //! still enclose them).
 
-pub mod bng;
-pub mod enclosing;
+pub(crate) mod bng;
+pub(crate) mod enclosing;
 
 use crate::packing::Sphere;
 use crate::tree::NO_PARENT;
@@ -55,7 +55,7 @@ pub struct HierarchyStats {
 /// as a [`SphereTree`](crate::tree::SphereTree) holds them (see there for their meaning),
 /// and facts about the clustering.
 #[derive(Debug, Clone)]
-pub struct Hierarchy {
+pub(crate) struct Hierarchy {
     /// Sphere centre x of each node.
     pub x: Vec<f32>,
     /// Sphere centre y of each node.
@@ -78,13 +78,8 @@ pub struct Hierarchy {
 
 impl Hierarchy {
     /// Number of nodes.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.r.len()
-    }
-
-    /// True without nodes (never produced by [`cluster`]).
-    pub fn is_empty(&self) -> bool {
-        self.r.is_empty()
     }
 }
 
@@ -97,7 +92,7 @@ struct Draft {
 /// Clusters `spheres` into the hierarchy and lays it out breadth-first: every leaf is one of
 /// `spheres` (rounded to `f32` inside it), every inner node's sphere encloses the leaves
 /// below it. Refuses an empty sphere set and a fan-out outside `2..=32`.
-pub fn cluster(
+pub(crate) fn cluster(
     spheres: &[Sphere],
     opts: &HierarchyOptions,
     progress: &dyn crate::progress::Progress,

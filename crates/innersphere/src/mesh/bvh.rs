@@ -32,7 +32,7 @@ pub(crate) const MAX_DEPTH: usize = MEDIAN_DEPTH as usize + 34;
 
 /// One node of a [`TriangleBvh`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BvhNode {
+pub(crate) struct BvhNode {
     /// Minimum corner of the box around every triangle below this node.
     pub lo: DVec3,
     /// Maximum corner of the box.
@@ -47,13 +47,13 @@ pub struct BvhNode {
 impl BvhNode {
     /// True when the node holds triangles rather than children.
     #[inline]
-    pub fn is_leaf(&self) -> bool {
+    pub(crate) fn is_leaf(&self) -> bool {
         self.count > 0
     }
 
     /// Squared distance from `p` to the node's box (0 inside).
     #[inline]
-    pub fn dist_sq(&self, p: DVec3) -> f64 {
+    pub(crate) fn dist_sq(&self, p: DVec3) -> f64 {
         (self.lo - p)
             .max(p - self.hi)
             .max(DVec3::ZERO)
@@ -65,20 +65,20 @@ impl BvhNode {
 #[derive(Debug, Clone, Default)]
 pub struct TriangleBvh {
     /// Nodes in depth-first order: an inner node `i` has children `i + 1` and `nodes[i].start`.
-    pub nodes: Vec<BvhNode>,
+    pub(crate) nodes: Vec<BvhNode>,
     /// The original triangle index of each slot.
     pub order: Vec<u32>,
     /// The corners of the triangle in each slot (BVH order).
     pub tris: Vec<[DVec3; 3]>,
     /// One slab per node (same index): a second, orientation-aware bound that is much
     /// tighter than the box for the nearly flat surface patches below low nodes.
-    pub slabs: Vec<NodeSlab>,
+    pub(crate) slabs: Vec<NodeSlab>,
 }
 
 /// The slab `lo ≤ normal · x ≤ hi` that holds every triangle below a node; `normal` is the
 /// unit area-weighted mean normal of those triangles (or +x when they cancel out).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct NodeSlab {
+pub(crate) struct NodeSlab {
     /// Unit slab normal.
     pub normal: DVec3,
     /// Lowest `normal · x` over the node's triangle corners.
@@ -92,14 +92,14 @@ impl NodeSlab {
     /// of 1e-9 that absorbs every rounding error: never above the computed distance from `p`
     /// to any triangle in the slab.
     #[inline]
-    pub fn lower_bound(&self, p: DVec3) -> f64 {
+    pub(crate) fn lower_bound(&self, p: DVec3) -> f64 {
         let d = self.normal.dot(p);
         let gap = (d - self.hi).max(self.lo - d);
         (gap - 1e-9 * (d.abs() + self.lo.abs() + self.hi.abs())).max(0.0)
     }
 }
 
-/// How near the nearest triangle [`TriangleBvh::near_point`] must come: a triangle at
+/// How near the nearest triangle `TriangleBvh::near_point` must come: a triangle at
 /// distance `d` will do when `d·(1 − rel) − abs` is at most the nearest triangle's distance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Near {
@@ -185,8 +185,9 @@ impl TriangleBvh {
         Self::from_triangles_with(&tris, leaf)
     }
 
+    #[cfg(test)]
     /// Builds the tree over a triangle soup; triangle `i` of the answers is `tris[i]`.
-    pub fn from_triangles(tris: &[[DVec3; 3]]) -> Self {
+    pub(crate) fn from_triangles(tris: &[[DVec3; 3]]) -> Self {
         Self::from_triangles_with(tris, LEAF_SIZE)
     }
 
@@ -397,7 +398,7 @@ impl TriangleBvh {
     /// margin): for upper bounds of distances, where the nearest triangle is not needed and
     /// a near one is much cheaper to find far from the surface (the search prunes what
     /// cannot beat the best so far by the margin).
-    pub fn near_point(&self, p: DVec3, upper_bound_sq: f64, near: Near) -> Option<Closest> {
+    pub(crate) fn near_point(&self, p: DVec3, upper_bound_sq: f64, near: Near) -> Option<Closest> {
         self.search::<false, true>(p, upper_bound_sq, near).ok()
     }
 

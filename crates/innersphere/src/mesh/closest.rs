@@ -7,7 +7,7 @@ use glam::DVec3;
 
 /// Closest point to `p` on the segment `[a, b]` (a point segment gives `a`).
 #[inline]
-pub fn closest_point_on_segment(p: DVec3, a: DVec3, b: DVec3) -> DVec3 {
+pub(crate) fn closest_point_on_segment(p: DVec3, a: DVec3, b: DVec3) -> DVec3 {
     let ab = b - a;
     let len_sq = ab.length_squared();
     if len_sq.is_nan() || len_sq <= 0.0 {
@@ -32,7 +32,7 @@ pub fn closest_point_on_segment(p: DVec3, a: DVec3, b: DVec3) -> DVec3 {
 /// it is never below the (identically rounded) squared distance to any box around the
 /// triangle: tree searches that prune boxes give bit-identical results to brute force.
 #[inline]
-pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+pub(crate) fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
     let q = region_closest(p, a, b, c);
     q.max(a.min(b).min(c)).min(a.max(b).max(c))
 }

@@ -33,8 +33,9 @@ pub fn solid_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     2.0 * num.atan2(den)
 }
 
+#[cfg(test)]
 /// The exact generalized winding number of `p`: the O(n) sum over all triangles.
-pub fn exact_winding_number(mesh: &Mesh, p: DVec3) -> f64 {
+pub(crate) fn exact_winding_number(mesh: &Mesh, p: DVec3) -> f64 {
     (0..mesh.triangles.len())
         .map(|t| {
             let [a, b, c] = mesh.triangle(t);

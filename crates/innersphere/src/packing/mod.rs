@@ -57,7 +57,7 @@ impl Default for PackingOptions {
 ///
 /// With `opts.refine_steps > 0` the surface BVH `surface` is needed to measure the exact
 /// distance to the surface at off-grid centres; without it refinement is skipped.
-pub fn pack(
+pub(crate) fn pack(
     field: &DistanceField,
     opts: &PackingOptions,
     surface: Option<&TriangleBvh>,
@@ -81,7 +81,7 @@ pub fn pack(
 /// entry's value is at least its exact one, so the voxel on top with an exact value is the
 /// one [`pack`] would take: the same spheres, bit for bit, for about a third of the exact
 /// distance queries on the jaw (two of three voxels are covered before they come up).
-pub fn pack_bounded(
+pub(crate) fn pack_bounded(
     field: &DistanceBounds,
     bvh: &TriangleBvh,
     opts: &PackingOptions,
@@ -111,7 +111,7 @@ pub fn pack_bounded(
 /// same for any number of threads), not the same spheres as the global order: a band's
 /// spheres come block by block. With a finite `max_spheres` this is [`pack_bounded`], whose
 /// global order makes "the largest N" meaningful.
-pub fn pack_parallel(
+pub(crate) fn pack_parallel(
     field: &DistanceBounds,
     bvh: &TriangleBvh,
     opts: &PackingOptions,
@@ -286,7 +286,7 @@ fn exact_distance(bvh: &TriangleBvh, voxel: DVec3, slot: u32, value: f64) -> f64
 }
 
 /// Total volume of a set of spheres.
-pub fn total_volume(spheres: &[Sphere]) -> f64 {
+pub(crate) fn total_volume(spheres: &[Sphere]) -> f64 {
     spheres
         .iter()
         .map(|s| 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3))

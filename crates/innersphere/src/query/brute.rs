@@ -24,7 +24,7 @@ fn leaves(a: &SphereTree, pose_a: &Pose, b: &SphereTree, pose_b: &Pose) -> Leave
 
 /// Minimum over all leaf pairs of `|cb − ca| − ra − rb` (negative: the deepest overlap) and
 /// the pair that attains it.
-pub fn min_distance(
+pub(crate) fn min_distance(
     a: &SphereTree,
     pose_a: &Pose,
     b: &SphereTree,
@@ -45,7 +45,7 @@ pub fn min_distance(
 }
 
 /// All overlapping leaf pairs, ordered by (leaf of A, leaf of B).
-pub fn overlapping_pairs(
+pub(crate) fn overlapping_pairs(
     a: &SphereTree,
     pose_a: &Pose,
     b: &SphereTree,
@@ -65,7 +65,7 @@ pub fn overlapping_pairs(
 }
 
 /// True when two leaves overlap at these poses (the leaf predicate of every query).
-pub fn leaves_overlap(
+pub(crate) fn leaves_overlap(
     a: &SphereTree,
     la: u32,
     pose_a: &Pose,
@@ -81,7 +81,7 @@ pub fn leaves_overlap(
 
 /// Penetration volume, normal, force and torques (world) summed over all leaf pairs.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BrutePenetration {
+pub(crate) struct BrutePenetration {
     /// Sum of lens volumes.
     pub volume: f64,
     /// Overlapping leaf pairs.
@@ -99,7 +99,7 @@ pub struct BrutePenetration {
 }
 
 /// [`Pair::penetration`](crate::Pair::penetration) by brute force.
-pub fn penetration(
+pub(crate) fn penetration(
     a: &SphereTree,
     pose_a: &Pose,
     b: &SphereTree,

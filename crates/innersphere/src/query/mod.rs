@@ -32,7 +32,7 @@
 //! Inside, imports run one way: `kernel` (pair context, node tests, the 4×4 block step,
 //! SIMD with one dispatch point) ← `search` (descents and kinetic fronts) ← one file per
 //! query kind, each owning its scratch ← `pair` (the [`Pair`], owning all of it).
-//! `docs/ARCHITECTURE.md` maps the files. [`brute`] holds O(n·m) references over all leaf
+//! `docs/ARCHITECTURE.md` maps the files. `brute` (tests only) holds O(n·m) references over all leaf
 //! pairs that the tests compare against.
 
 pub mod batch;
@@ -47,9 +47,9 @@ mod penetration;
 mod refined;
 mod search;
 
-// The brute-force references of the tests and benchmarks: not the API.
-#[doc(hidden)]
-pub mod brute;
+// The brute-force references of the tests.
+#[cfg(test)]
+pub(crate) mod brute;
 pub(crate) mod kernel;
 
 pub use batch::BatchOptions;
@@ -60,10 +60,8 @@ pub use kernel::geometry::Contact;
 // The kernel's types seen by the other crates' tests: not the API.
 #[doc(hidden)]
 pub use kernel::info::TreeInfo;
-#[doc(hidden)]
-pub use kernel::lenses::lens_volume;
-#[doc(hidden)]
-pub use kernel::separation::SeparationRecord;
+#[cfg(test)]
+pub(crate) use kernel::lenses::lens_volume;
 pub use mesh_penetration::MeshPenetration;
 pub use multipoint::{Multipoint, MultipointOptions};
 pub use pair::{Pair, Paper, SharedTree};

@@ -541,22 +541,6 @@ impl Pair {
         self.refine.reset();
     }
 
-    /// Size of the kinetic front: (separated node pairs on it, overlapping leaf pairs).
-    pub fn front_size(&self) -> (usize, usize) {
-        self.front.size()
-    }
-
-    /// Size of the block front of [`Pair::contact`]: (live entries, allocated slots,
-    /// overlapping leaf pairs).
-    pub fn block_front_size(&self) -> (usize, usize, usize) {
-        self.bfront.size()
-    }
-
-    /// The last separation bound recorded by a query, if any.
-    pub fn separation_record(&self) -> Option<SeparationRecord> {
-        self.sep
-    }
-
     /// A guaranteed lower bound on the current separation of the two sphere sets at the
     /// world poses `pose_a`, `pose_b`, from the last recorded separation and the relative
     /// motion since: `d − (|Δc| + θ·ρ)`, where `Δc` is the displacement of B's root-sphere

@@ -37,7 +37,7 @@ pub struct CheckReport {
 /// source ([`TreeMeta`](super::TreeMeta)): the bounding box, each coordinate within 1e-5 of
 /// the larger of the box's diagonal and its farthest coordinate from the origin (rounding the
 /// coordinates to f32 or to 6 significant digits moves them by less); the volume and its
-/// centroid of [`source_shape`] about the centre of the tree's box, within 1e-4 (of the
+/// centroid of `source_shape` about the centre of the tree's box, within 1e-4 (of the
 /// volume, of the box's diagonal) plus what moving every vertex by that coordinate tolerance
 /// can change them by (first order: the area, and for an open mesh its rim's length times
 /// the diagonal). `None` when all agree. A mesh moved, scaled or edited, the same surface
@@ -48,7 +48,7 @@ pub struct CheckReport {
 ///
 /// Open meshes are checked like closed ones: their enclosed volume is not defined (the
 /// tree's [`mesh_volume`](super::TreeMeta::mesh_volume) holds its inside voxels' volume
-/// there), but [`source_shape`]'s is, and the build records it
+/// there), but `source_shape`'s is, and the build records it
 /// ([`source_volume`](super::TreeMeta::source_volume),
 /// [`source_centroid`](super::TreeMeta::source_centroid)). A tree written before they were
 /// recorded is compared by its enclosed volume when its mesh was closed, and by its box
@@ -135,7 +135,7 @@ pub fn source_mismatch(tree: &SphereTree, mesh: &Mesh) -> Option<String> {
 /// (removing, adding or moving one changes them), unlike the inside that a build decides by
 /// the winding number. Orientation does not matter (the build flips an inward mesh). The
 /// centroid is `None` when the volume is zero.
-pub fn source_shape(mesh: &Mesh, apex: DVec3) -> (f64, Option<DVec3>) {
+pub(crate) fn source_shape(mesh: &Mesh, apex: DVec3) -> (f64, Option<DVec3>) {
     let (mut vol, mut moment) = (0.0, DVec3::ZERO);
     for t in 0..mesh.triangles.len() {
         let [a, b, c] = mesh.triangle(t);
@@ -151,7 +151,7 @@ pub fn source_shape(mesh: &Mesh, apex: DVec3) -> (f64, Option<DVec3>) {
 
 /// The area of `mesh`, and the length of its edges whose uses do not cancel (each counted
 /// `|uses a→b − uses b→a|` times: none on a closed, consistently oriented mesh, the boundary
-/// of an open one): what bounds how much [`source_shape`] moves when the vertices do.
+/// of an open one): what bounds how much `source_shape` moves when the vertices do.
 fn area_and_rim(mesh: &Mesh) -> (f64, f64) {
     let mut area = 0.0;
     let mut edges: Vec<(u32, u32, i32)> = Vec::with_capacity(3 * mesh.triangles.len());
@@ -266,13 +266,14 @@ pub fn check(tree: &SphereTree, mesh: &Mesh) -> crate::error::Result<CheckReport
     })
 }
 
+#[cfg(test)]
 /// Largest overlap r_a + r_b − |c_a − c_b| between two distinct leaves, by a self-join over
 /// the tree's own hierarchy. This is sound only when every node encloses the leaves below it,
 /// which [`check`] verifies independently (and reports as not ok otherwise): then every
 /// overlapping leaf pair lies under a chain of overlapping node pairs and is found. ([`check`]
 /// itself searches with twice its tolerance as slack, since it accepts nodes that miss their
 /// leaves by up to the tolerance.)
-pub fn max_leaf_overlap(tree: &SphereTree) -> f64 {
+pub(crate) fn max_leaf_overlap(tree: &SphereTree) -> f64 {
     leaf_overlap_search(tree, 0.0)
 }
 

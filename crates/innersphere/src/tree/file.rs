@@ -41,7 +41,7 @@ const HEADER: usize = 24;
 const BYTES_PER_NODE: usize = 16 + 4 + 1 + 4 + 2;
 const MAX_META: usize = 1 << 20;
 /// The most nodes a tree file may declare (2^31, a 58 GB file). No build comes near it: the
-/// voxel grid has at most [`MAX_CELLS`](crate::field::grid::MAX_CELLS) = 6·10^8 cells, every
+/// voxel grid has at most `MAX_CELLS` = 6·10^8 cells, every
 /// inner sphere takes its own inside cell, and a hierarchy of fan-out ≥ 2 has fewer inner
 /// nodes than leaves, so a build makes fewer than 1.2·10^9 nodes. A header beyond it is
 /// refused before anything is read or allocated.
@@ -54,7 +54,7 @@ const UNKNOWN_LENGTH_RESERVE: u64 = 64 << 20;
 /// [`MAX_NODES`] nodes, the structure of [`SphereTree::validate_structure`] (finite spheres,
 /// consistent links), and finite meta values (JSON has no NaN or infinity: a non-finite volume
 /// would be written as `null`, which no reader accepts).
-pub fn check_writable(tree: &SphereTree) -> Result<()> {
+pub(crate) fn check_writable(tree: &SphereTree) -> Result<()> {
     if tree.len() as u64 > MAX_NODES {
         return Err(Error::CorruptTree(format!(
             "{} nodes are more than a tree file holds ({MAX_NODES})",
@@ -99,7 +99,7 @@ pub fn check_writable(tree: &SphereTree) -> Result<()> {
     Ok(())
 }
 
-/// [`to_bytes`] after [`check_writable`]: the bytes of a tree that reads back.
+/// [`to_bytes`] after `check_writable` (the tree's limits): the bytes of a tree that reads back.
 pub fn to_checked_bytes(tree: &SphereTree) -> Result<Vec<u8>> {
     check_writable(tree)?;
     let bytes = to_bytes(tree);
@@ -247,7 +247,7 @@ pub fn from_bytes(bytes: &[u8]) -> Result<SphereTree> {
     Ok(tree)
 }
 
-/// Writes a tree file; refuses a tree that would not read back (see [`check_writable`]).
+/// Writes a tree file; refuses a tree that would not read back (see `check_writable` (the tree's limits)).
 pub fn save(tree: &SphereTree, path: &Path) -> Result<()> {
     let bytes = to_checked_bytes(tree)?;
     crate::output::write_atomic(path, |w| w.write_all(&bytes))

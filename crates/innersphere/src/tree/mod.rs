@@ -17,14 +17,14 @@ pub struct TreeMeta {
     /// Enclosed volume of the source mesh; for an open mesh (not closed, see
     /// [`mesh_closed`](Self::mesh_closed)) the volume of the voxels the build found inside.
     pub mesh_volume: f64,
-    /// The volume of the source mesh's triangles by [`check::source_shape`] (about the centre
+    /// The volume of the source mesh's triangles by `check::source_shape` (about the centre
     /// of its bounding box): its enclosed volume when closed, a number its triangles fix when
     /// open; with [`source_centroid`](Self::source_centroid), what lets
     /// [`check::source_mismatch`] recognise the mesh a tree was built from, open or closed.
     /// `None` in files written before it was stored.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source_volume: Option<f64>,
-    /// The centroid of that volume ([`check::source_shape`]): the centre of mass of a closed
+    /// The centroid of that volume (`check::source_shape`): the centre of mass of a closed
     /// mesh. `None` when the volume is zero and in files written before it was stored.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source_centroid: Option<[f64; 3]>,

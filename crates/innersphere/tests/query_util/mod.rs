@@ -3,10 +3,7 @@
 #![allow(dead_code)]
 
 use glam::{DQuat, DVec3};
-use innersphere::build::tree_of_spheres;
-use innersphere::field::{DistanceField, VoxelGrid};
-use innersphere::hierarchy::HierarchyOptions;
-use innersphere::packing::{self, PackingOptions};
+use innersphere::build::{pack_signed_distance, tree_of_spheres, HierarchyOptions, PackingOptions};
 use innersphere::progress::Silent;
 use innersphere::tree::{SphereTree, TreeMeta};
 use innersphere::{Pair, Pose};
@@ -14,7 +11,7 @@ use std::sync::OnceLock;
 
 /// The tree of an analytic solid given by its signed distance (positive inside), sampled on
 /// a grid of spacing `h` over `[lo, hi]`.
-pub fn analytic_tree(
+pub(crate) fn analytic_tree(
     lo: DVec3,
     hi: DVec3,
     h: f64,
@@ -22,9 +19,7 @@ pub fn analytic_tree(
     com: DVec3,
     sdf: impl Fn(DVec3) -> f64,
 ) -> SphereTree {
-    let grid = VoxelGrid::covering(lo, hi, h).unwrap();
-    let field = DistanceField::from_signed_distance(grid, sdf);
-    let spheres = packing::pack(&field, &PackingOptions::default(), None, &Silent);
+    let spheres = pack_signed_distance(lo, hi, h, sdf, &PackingOptions::default()).unwrap();
     let meta = TreeMeta {
         center_of_mass: com.to_array(),
         ..TreeMeta::unmeasured(fanout, h, lo.to_array(), hi.to_array())
@@ -37,14 +32,14 @@ pub fn analytic_tree(
 }
 
 /// A box of half extents `half` centred at `c`.
-pub fn box_tree(c: DVec3, half: DVec3, h: f64, fanout: u32) -> SphereTree {
+pub(crate) fn box_tree(c: DVec3, half: DVec3, h: f64, fanout: u32) -> SphereTree {
     analytic_tree(c - half, c + half, h, fanout, c, move |p| {
         (half - (p - c).abs()).min_element()
     })
 }
 
 /// A ball.
-pub fn ball_tree(c: DVec3, r: f64, h: f64, fanout: u32) -> SphereTree {
+pub(crate) fn ball_tree(c: DVec3, r: f64, h: f64, fanout: u32) -> SphereTree {
     analytic_tree(
         c - DVec3::splat(r),
         c + DVec3::splat(r),
@@ -56,7 +51,7 @@ pub fn ball_tree(c: DVec3, r: f64, h: f64, fanout: u32) -> SphereTree {
 }
 
 /// A torus around z.
-pub fn torus_tree(major: f64, minor: f64, h: f64, fanout: u32) -> SphereTree {
+pub(crate) fn torus_tree(major: f64, minor: f64, h: f64, fanout: u32) -> SphereTree {
     let e = DVec3::new(major + minor, major + minor, minor);
     analytic_tree(-e, e, h, fanout, DVec3::ZERO, move |p| {
         let q = DVec3::new((p.x * p.x + p.y * p.y).sqrt() - major, p.z, 0.0);
@@ -66,7 +61,7 @@ pub fn torus_tree(major: f64, minor: f64, h: f64, fanout: u32) -> SphereTree {
 
 /// A few small trees of different shapes, fan-outs and depths (built once per test binary).
 /// Their frames are deliberately offset from the shapes.
-pub fn trees() -> &'static [SphereTree] {
+pub(crate) fn trees() -> &'static [SphereTree] {
     static T: OnceLock<Vec<SphereTree>> = OnceLock::new();
     T.get_or_init(|| {
         vec![
@@ -89,12 +84,12 @@ pub fn trees() -> &'static [SphereTree] {
 }
 
 /// A fresh [`Pair`] of copies of `a` and `b`.
-pub fn pair(a: &SphereTree, b: &SphereTree) -> Pair {
+pub(crate) fn pair(a: &SphereTree, b: &SphereTree) -> Pair {
     Pair::new(a.clone(), b.clone())
 }
 
 /// A unit quaternion from four numbers (normalized; identity when all are ~0).
-pub fn quat(w: f64, x: f64, y: f64, z: f64) -> DQuat {
+pub(crate) fn quat(w: f64, x: f64, y: f64, z: f64) -> DQuat {
     let q = DQuat::from_xyzw(x, y, z, w);
     if q.length() < 1e-6 {
         DQuat::IDENTITY
@@ -104,13 +99,13 @@ pub fn quat(w: f64, x: f64, y: f64, z: f64) -> DQuat {
 }
 
 /// A pose from a translation and four quaternion numbers.
-pub fn pose(t: [f64; 3], q: [f64; 4]) -> Pose {
+pub(crate) fn pose(t: [f64; 3], q: [f64; 4]) -> Pose {
     Pose::new(DVec3::from_array(t), quat(q[0], q[1], q[2], q[3])).unwrap()
 }
 
 /// World poses of A and B so that B's root centre lands at `offset` (A's frame, relative to
 /// A's root centre) under B's rotation: contacts, near misses and deep overlaps alike.
-pub fn pair_poses(
+pub(crate) fn pair_poses(
     a: &SphereTree,
     b: &SphereTree,
     pose_a: Pose,
@@ -127,7 +122,7 @@ pub fn pair_poses(
 /// A motion of B relative to A: `n` frames of B swinging through A along `dir` (scaled by
 /// the root radii, so it goes from separated to touching to overlapping and back) while
 /// turning about `axis` by `spin` radians per frame; A moves rigidly too.
-pub fn motion(
+pub(crate) fn motion(
     a: &SphereTree,
     b: &SphereTree,
     dir: DVec3,
@@ -155,6 +150,6 @@ pub fn motion(
 }
 
 /// Relative tolerance helper: |x − y| ≤ rel·max(|x|,|y|) + abs.
-pub fn close(x: f64, y: f64, rel: f64, abs: f64) -> bool {
+pub(crate) fn close(x: f64, y: f64, rel: f64, abs: f64) -> bool {
     (x - y).abs() <= rel * x.abs().max(y.abs()) + abs
 }

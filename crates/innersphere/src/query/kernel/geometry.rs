@@ -180,6 +180,7 @@ impl Contact {
     }
 }
 
+#[cfg(test)]
 /// True when the f32 spheres overlap (the exact leaf predicate of every query).
 #[inline(always)]
 pub(crate) fn overlaps(ax: f32, ay: f32, az: f32, ar: f32, b: [f32; 3], br: f32) -> bool {
@@ -190,6 +191,7 @@ pub(crate) fn overlaps(ax: f32, ay: f32, az: f32, ar: f32, b: [f32; 3], br: f32)
     dx * dx + dy * dy + dz * dz < s * s
 }
 
+#[cfg(test)]
 /// Signed distance `|Δ| − ra − rb` of two f32 spheres (the exact leaf distance of every query).
 #[inline(always)]
 pub(crate) fn sphere_distance(ax: f32, ay: f32, az: f32, ar: f32, b: [f32; 3], br: f32) -> f32 {

@@ -75,9 +75,10 @@ pub(crate) fn lens(ra: f64, rb: f64, d: f64) -> (f64, f64) {
     lens_at(ra, rb, d, 1.0 / d)
 }
 
+#[cfg(test)]
 /// Volume of the intersection of two balls of radii `ra`, `rb` whose centres are `d` apart
 /// (the spherical lens; the smaller ball when one contains the other; 0 when disjoint).
-pub fn lens_volume(ra: f64, rb: f64, d: f64) -> f64 {
+pub(crate) fn lens_volume(ra: f64, rb: f64, d: f64) -> f64 {
     lens(ra, rb, d).0
 }
 

@@ -11,7 +11,7 @@ use glam::DVec3;
 /// A lower bound on the separation of the two sphere sets, proved by a query at a relative
 /// pose (B in A's frame).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SeparationRecord {
+pub(crate) struct SeparationRecord {
     /// The sphere sets were at least this far apart.
     pub lower: f64,
     /// Pose of B in A's frame when it was measured.

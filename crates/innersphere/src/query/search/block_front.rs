@@ -162,11 +162,6 @@ impl BlockFront {
         self.recent = [(NONE, NONE); RECENT];
     }
 
-    /// (live entries, slots, overlapping leaf pairs).
-    pub(crate) fn size(&self) -> (usize, usize, usize) {
-        (self.ent.len() - self.nfree, self.ent.len(), self.hits)
-    }
-
     /// A lower bound on the separation of the sphere sets at the last update when there are
     /// no hits (the smallest remaining margin of the separated pairs; −∞ with hits).
     pub(crate) fn margin(&self) -> f64 {

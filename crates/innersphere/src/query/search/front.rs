@@ -107,11 +107,6 @@ impl Front {
         self.hits.clear();
     }
 
-    /// (separated pairs, overlapping leaf pairs) on the front.
-    pub(crate) fn size(&self) -> (usize, usize) {
-        (self.queue.len, self.hits.len())
-    }
-
     /// Smallest remaining separation margin of the separated pairs (a lower bound on the
     /// separation when there are no hits), at the last update.
     pub(crate) fn margin(&self) -> f64 {

@@ -1,7 +1,7 @@
 //! Penetration volume, force, torque and patches against the brute-force sum over all leaf
 //! pairs, and the time-critical mode's bounds (found ≤ exact ≤ upper bound).
 
-mod query_util;
+use super::query_util;
 
 use glam::DVec3;
 use innersphere::query::brute;

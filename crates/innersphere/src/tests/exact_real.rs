@@ -1,6 +1,6 @@
 //! Exact distance and penetration depth on the real tooth data (run with `--ignored`).
 
-use innersphere_testkit::data as common;
+use super::data as common;
 
 use innersphere::exact::{
     distance, intersects, penetration, triangle_distance, ExactMesh, ExactScratch,

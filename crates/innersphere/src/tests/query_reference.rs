@@ -2,8 +2,8 @@
 //! code with the queries: hand-worked two-ball cases computed on paper, random poses of
 //! generated trees, and motions that carry each query's pair from frame to frame.
 
-mod query_util;
-mod reference;
+use super::query_util;
+use super::reference;
 
 use glam::DVec3;
 use innersphere::query::TraversalOptions;

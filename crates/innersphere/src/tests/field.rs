@@ -1,6 +1,6 @@
 //! The inside test, the winding number and the exact distance field.
 
-use innersphere_testkit::data as common;
+use super::data as common;
 
 use innersphere::field::distance::{compute, distance_of_points};
 use innersphere::field::inside::{classify, inside_by_rays, inside_by_winding, is_oriented_closed};

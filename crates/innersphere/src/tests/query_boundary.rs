@@ -7,7 +7,7 @@
 //! leaf pairs at a few rounding steps either side, with fresh pairs and with pairs carried
 //! across the steps.
 
-mod query_util;
+use super::query_util;
 
 use glam::{DQuat, DVec3};
 use innersphere::query::{brute, TraversalOptions};

@@ -2,9 +2,9 @@
 //! and the opposing molar pair of the jaw data set). Ignored by default:
 //! `cargo test -p innersphere --release --test query_real -- --ignored`.
 
-use innersphere_testkit::data as common;
-mod query_util;
-mod reference;
+use super::data as common;
+use super::query_util;
+use super::reference;
 
 use glam::{DQuat, DVec3};
 use innersphere::build::{build_tree, BuildOptions, Resolution};

@@ -2,7 +2,7 @@
 //! contact answer, backtracking equal to a full traversal on every frame of generated
 //! motions, and the multipoint traversal's contact set.
 
-mod query_util;
+use super::query_util;
 
 use glam::DVec3;
 use innersphere::query::{brute, TraversalOptions};

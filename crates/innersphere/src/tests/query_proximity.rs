@@ -1,7 +1,7 @@
 //! Exact distance ([`Pair::distance`](innersphere::Pair::distance)) against a brute-force scan over all leaf pairs, on random poses of small
 //! trees, with and without tolerances, signed or not, and along motions (coherence).
 
-mod query_util;
+use super::query_util;
 
 use glam::DVec3;
 use innersphere::query::brute;

@@ -2,7 +2,7 @@
 //! have been closed never misses a contact that a full query finds, and the bound itself is
 //! below the true separation.
 
-mod query_util;
+use super::query_util;
 
 use glam::DVec3;
 use innersphere::query::{brute, TraversalOptions};

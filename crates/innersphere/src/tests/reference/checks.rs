@@ -11,14 +11,14 @@ use innersphere::{
 use proptest::prelude::*;
 use std::collections::BTreeSet;
 
-pub const NO_SKIP: TraversalOptions = TraversalOptions { safe_motion: false };
+pub(crate) const NO_SKIP: TraversalOptions = TraversalOptions { safe_motion: false };
 
-pub fn near(x: DVec3, y: DVec3, tol: f64) -> bool {
+pub(crate) fn near(x: DVec3, y: DVec3, tol: f64) -> bool {
     (x - y).length() <= tol
 }
 
 /// Exact distance, every option, against the reference's minimum gap and closest points.
-pub fn check_proximity(
+pub(crate) fn check_proximity(
     pair: &mut Pair,
     pa: &Pose,
     pb: &Pose,
@@ -81,7 +81,11 @@ pub fn check_proximity(
 /// A first-contact answer against the reference: contact exactly when a leaf pair overlaps
 /// (outside the rounding band); the contact is a real overlapping pair with the reference's
 /// point, normal and depth; without contact a lower bound on the gap.
-pub fn check_contact(q: &ContactResult, r: &RefPair, what: &str) -> Result<(), TestCaseError> {
+pub(crate) fn check_contact(
+    q: &ContactResult,
+    r: &RefPair,
+    what: &str,
+) -> Result<(), TestCaseError> {
     let (g, _, _) = r.min_gap();
     let eps = r.eps;
     if g < -eps {
@@ -122,7 +126,7 @@ pub fn check_contact(q: &ContactResult, r: &RefPair, what: &str) -> Result<(), T
 
 /// Multipoint against the reference: every contact a real overlapping pair with the
 /// reference's point, at most one per split-depth pair, none missed while fewer than `k`.
-pub fn check_multipoint(
+pub(crate) fn check_multipoint(
     pair: &mut Pair,
     pa: &Pose,
     pb: &Pose,
@@ -170,7 +174,7 @@ pub fn check_multipoint(
 
 /// Penetration against the reference: pairs, volume, deepest overlap, normal, force, both
 /// torques, and the patches' points (their volume-weighted sum is the volume's moment).
-pub fn check_penetration(
+pub(crate) fn check_penetration(
     pair: &mut Pair,
     pa: &Pose,
     pb: &Pose,
@@ -277,7 +281,7 @@ pub fn check_penetration(
 }
 
 /// Every query kind and option at one pose, each with a fresh pair.
-pub fn check_all(
+pub(crate) fn check_all(
     a: &SphereTree,
     pa: &Pose,
     b: &SphereTree,

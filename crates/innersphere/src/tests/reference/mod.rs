@@ -12,14 +12,14 @@
 //! pairs inside it as undecided.
 #![allow(dead_code)]
 
-pub mod checks;
+pub(super) mod checks;
 
 use glam::DVec3;
 use innersphere::Pose;
 use innersphere::SphereTree;
 
 /// A 3-vector as plain numbers.
-pub type V3 = [f64; 3];
+pub(super) type V3 = [f64; 3];
 
 fn sub(a: V3, b: V3) -> V3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
@@ -41,16 +41,16 @@ fn cross(a: V3, b: V3) -> V3 {
     ]
 }
 /// Euclidean length.
-pub fn norm(a: V3) -> f64 {
+pub(super) fn norm(a: V3) -> f64 {
     dot(a, a).sqrt()
 }
 /// As a glam vector, for comparisons with query results.
-pub fn dv(a: V3) -> DVec3 {
+pub(super) fn dv(a: V3) -> DVec3 {
     DVec3::new(a[0], a[1], a[2])
 }
 
 /// The rotation matrix (rows) of the unit quaternion `w + xi + yj + zk`, normalised here.
-pub fn rotation_matrix(w: f64, x: f64, y: f64, z: f64) -> [V3; 3] {
+pub(super) fn rotation_matrix(w: f64, x: f64, y: f64, z: f64) -> [V3; 3] {
     let n = (w * w + x * x + y * y + z * z).sqrt();
     let (w, x, y, z) = (w / n, x / n, y / n, z / n);
     [
@@ -74,14 +74,14 @@ pub fn rotation_matrix(w: f64, x: f64, y: f64, z: f64) -> [V3; 3] {
 
 /// A pose as a matrix and a translation: `p' = M·p + t`.
 #[derive(Debug, Clone, Copy)]
-pub struct RefPose {
+pub(super) struct RefPose {
     pub m: [V3; 3],
     pub t: V3,
 }
 
 impl RefPose {
     /// From the quaternion and translation stored in `p`.
-    pub fn of(p: &Pose) -> RefPose {
+    pub(super) fn of(p: &Pose) -> RefPose {
         let q = p.rotation;
         RefPose {
             m: rotation_matrix(q.w, q.x, q.y, q.z),
@@ -89,18 +89,18 @@ impl RefPose {
         }
     }
     /// `M·v`.
-    pub fn rotate(&self, v: V3) -> V3 {
+    pub(super) fn rotate(&self, v: V3) -> V3 {
         [dot(self.m[0], v), dot(self.m[1], v), dot(self.m[2], v)]
     }
     /// `M·p + t`.
-    pub fn apply(&self, p: V3) -> V3 {
+    pub(super) fn apply(&self, p: V3) -> V3 {
         add(self.rotate(p), self.t)
     }
 }
 
 /// A leaf sphere in the world frame.
 #[derive(Debug, Clone, Copy)]
-pub struct Ball {
+pub(super) struct Ball {
     /// Node index in its tree.
     pub node: u32,
     pub c: V3,
@@ -108,7 +108,7 @@ pub struct Ball {
 }
 
 /// The leaf spheres of `t` at `pose`, world frame, ascending node index.
-pub fn world_leaves(t: &SphereTree, pose: &Pose) -> Vec<Ball> {
+pub(super) fn world_leaves(t: &SphereTree, pose: &Pose) -> Vec<Ball> {
     let p = RefPose::of(pose);
     (0..t.child_count.len())
         .filter(|&n| t.child_count[n] == 0)
@@ -121,7 +121,7 @@ pub fn world_leaves(t: &SphereTree, pose: &Pose) -> Vec<Ball> {
 }
 
 /// `|cb − ca| − ra − rb`.
-pub fn gap(a: &Ball, b: &Ball) -> f64 {
+pub(super) fn gap(a: &Ball, b: &Ball) -> f64 {
     norm(sub(b.c, a.c)) - a.r - b.r
 }
 
@@ -132,7 +132,7 @@ pub fn gap(a: &Ball, b: &Ball) -> f64 {
 /// the section is the smaller of the two discs, `π(ra² − x²)` and `π(rb² − (x − d)²)`,
 /// which cross at `x0`; each piece is a quadratic in `x`, so Simpson's rule is exact for
 /// both the volume `∫A` and the moment `∫x·A` (a cubic).
-pub fn lens(ra: f64, rb: f64, d: f64) -> (f64, f64) {
+pub(super) fn lens(ra: f64, rb: f64, d: f64) -> (f64, f64) {
     let pi = std::f64::consts::PI;
     let lo = (-ra).max(d - rb);
     let hi = ra.min(d + rb);
@@ -168,7 +168,7 @@ pub fn lens(ra: f64, rb: f64, d: f64) -> (f64, f64) {
 }
 
 /// The leaf spheres of both trees at their poses, and the centres of mass, all world frame.
-pub struct RefPair {
+pub(super) struct RefPair {
     pub a: Vec<Ball>,
     pub b: Vec<Ball>,
     pub com_a: V3,
@@ -179,7 +179,7 @@ pub struct RefPair {
 
 /// Penetration as the reference computes it (world frame).
 #[derive(Debug, Clone, Copy)]
-pub struct RefPenetration {
+pub(super) struct RefPenetration {
     pub volume: f64,
     pub pairs: usize,
     pub max_depth: f64,
@@ -197,7 +197,7 @@ pub struct RefPenetration {
 
 impl RefPair {
     /// The pair at world poses `pa`, `pb`.
-    pub fn new(a: &SphereTree, pa: &Pose, b: &SphereTree, pb: &Pose) -> RefPair {
+    pub(super) fn new(a: &SphereTree, pa: &Pose, b: &SphereTree, pb: &Pose) -> RefPair {
         let ca = a.meta.center_of_mass;
         let cb = b.meta.center_of_mass;
         let la = world_leaves(a, pa);
@@ -220,14 +220,14 @@ impl RefPair {
     }
 
     /// The leaf of A with node index `n`.
-    pub fn leaf_a(&self, n: u32) -> &Ball {
+    pub(super) fn leaf_a(&self, n: u32) -> &Ball {
         &self.a[self
             .a
             .binary_search_by_key(&n, |s| s.node)
             .expect("a leaf of A")]
     }
     /// The leaf of B with node index `n`.
-    pub fn leaf_b(&self, n: u32) -> &Ball {
+    pub(super) fn leaf_b(&self, n: u32) -> &Ball {
         &self.b[self
             .b
             .binary_search_by_key(&n, |s| s.node)
@@ -235,14 +235,14 @@ impl RefPair {
     }
 
     /// Every leaf pair as (leaf of A, leaf of B, gap).
-    pub fn pairs(&self) -> impl Iterator<Item = (&Ball, &Ball, f64)> + '_ {
+    pub(super) fn pairs(&self) -> impl Iterator<Item = (&Ball, &Ball, f64)> + '_ {
         self.a
             .iter()
             .flat_map(move |x| self.b.iter().map(move |y| (x, y, gap(x, y))))
     }
 
     /// The smallest gap over all leaf pairs and its pair (node indices).
-    pub fn min_gap(&self) -> (f64, u32, u32) {
+    pub(super) fn min_gap(&self) -> (f64, u32, u32) {
         self.pairs().fold((f64::INFINITY, 0, 0), |best, (x, y, g)| {
             if g < best.0 {
                 (g, x.node, y.node)
@@ -253,7 +253,7 @@ impl RefPair {
     }
 
     /// Node pairs with gap below `limit` (`-eps`: surely overlapping; `eps`: possibly).
-    pub fn overlapping(&self, limit: f64) -> Vec<(u32, u32)> {
+    pub(super) fn overlapping(&self, limit: f64) -> Vec<(u32, u32)> {
         self.pairs()
             .filter(|p| p.2 < limit)
             .map(|(x, y, _)| (x.node, y.node))
@@ -261,7 +261,7 @@ impl RefPair {
     }
 
     /// Closest points of a leaf pair on the two spheres: `ca + ra·u`, `cb − rb·u`.
-    pub fn closest_points(&self, la: u32, lb: u32) -> (V3, V3) {
+    pub(super) fn closest_points(&self, la: u32, lb: u32) -> (V3, V3) {
         let (x, y) = (self.leaf_a(la), self.leaf_b(lb));
         let d = sub(y.c, x.c);
         let u = scale(d, 1.0 / norm(d));
@@ -270,7 +270,7 @@ impl RefPair {
 
     /// The contact point of an overlapping leaf pair: on the centre line, in the middle of
     /// the overlap.
-    pub fn contact_point(&self, la: u32, lb: u32) -> (V3, f64) {
+    pub(super) fn contact_point(&self, la: u32, lb: u32) -> (V3, f64) {
         let (x, y) = (self.leaf_a(la), self.leaf_b(lb));
         let d = sub(y.c, x.c);
         let len = norm(d);
@@ -285,7 +285,7 @@ impl RefPair {
 
     /// Volume, normal, force (`k·V·n`, split into per-pair forces `fᵢ = s·vᵢ·uᵢ` that sum to
     /// it), torques about both centres of mass, over the pairs with gap below `limit`.
-    pub fn penetration(&self, k: f64, limit: f64) -> RefPenetration {
+    pub(super) fn penetration(&self, k: f64, limit: f64) -> RefPenetration {
         let mut pairs = Vec::new();
         let (mut volume, mut max_depth) = (0.0, 0.0f64);
         let mut vu = [0.0; 3];
@@ -341,7 +341,7 @@ impl RefPair {
     /// A bound on how much the queries' volume may differ from [`RefPair::penetration`] with
     /// `limit = 0`: each pair within the rounding band may be in or out, and every pair's
     /// volume moves with its centre distance by at most its section area times `eps`.
-    pub fn volume_tolerance(&self) -> f64 {
+    pub(super) fn volume_tolerance(&self) -> f64 {
         let pi = std::f64::consts::PI;
         self.pairs()
             .filter(|p| p.2 < self.eps)
@@ -360,7 +360,7 @@ impl RefPair {
 }
 
 /// The ancestor of node `n` at depth `d` (itself when shallower).
-pub fn ancestor_at(t: &SphereTree, mut n: u32, d: u32) -> u32 {
+pub(super) fn ancestor_at(t: &SphereTree, mut n: u32, d: u32) -> u32 {
     while t.depth[n as usize] as u32 > d {
         n = t.parent[n as usize];
     }
@@ -369,7 +369,7 @@ pub fn ancestor_at(t: &SphereTree, mut n: u32, d: u32) -> u32 {
 
 /// A tree made by hand: a root enclosing `leaves` (centre, radius; at most 4) as its
 /// children, the centre of mass at `com`.
-pub fn hand_tree(leaves: &[(V3, f64)], com: V3) -> SphereTree {
+pub(super) fn hand_tree(leaves: &[(V3, f64)], com: V3) -> SphereTree {
     use innersphere::tree::{TreeMeta, NO_PARENT};
     assert!(!leaves.is_empty() && leaves.len() <= 4);
     let meta = TreeMeta {

@@ -2,6 +2,7 @@
 //! collision thread's queries and publishing, counted over the whole process (its own test
 //! binary, one test: nothing else runs while it counts).
 
+#[path = "it/haptic_util/mod.rs"]
 mod haptic_util;
 
 use glam::{DQuat, DVec3};

@@ -6,7 +6,7 @@
 
 #[path = "../../../innersphere-testkit/src/data.rs"]
 mod data;
-#[path = "../../tests/query_util/mod.rs"]
+#[path = "../../tests/it/query_util/mod.rs"]
 mod query_util;
 mod reference;
 

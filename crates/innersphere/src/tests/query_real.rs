@@ -1,6 +1,6 @@
 //! Every query against brute force on trees built from real meshes (`../shared/data/small`
 //! and the opposing molar pair of the jaw data set). Ignored by default:
-//! `cargo test -p innersphere --release --test query_real -- --ignored`.
+//! `cargo test -p innersphere --release --lib -- --ignored query_real`.
 
 use super::data as common;
 use super::query_util;

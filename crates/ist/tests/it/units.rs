@@ -3,7 +3,7 @@
 //! without it, the size of a dental body read in the wrong unit is named, with the unit
 //! that fits.
 
-mod support;
+use crate::support;
 use support::{code, ist, s, stderr, stdout, TempDir};
 
 use innersphere::{shapes, Mesh};

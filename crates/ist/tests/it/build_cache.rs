@@ -4,7 +4,7 @@
 //! sentence, and the command still answers; a tree of an open mesh passes `ist check`
 //! against that mesh, and fails against another.
 
-mod support;
+use crate::support;
 use support::{code, s, stderr, stdout, TempDir};
 
 use innersphere::glam::DVec3;

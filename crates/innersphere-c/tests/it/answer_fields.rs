@@ -11,7 +11,7 @@ use std::collections::BTreeSet;
 
 /// The field names of `typedef struct NAME { … } NAME;` in the committed header.
 fn header_fields(name: &str) -> Vec<String> {
-    let header = include_str!("../../../include/innersphere.h");
+    let header = include_str!("../../../../include/innersphere.h");
     let start = header
         .find(&format!("typedef struct {name} {{"))
         .unwrap_or_else(|| panic!("{name} is not in the header"));

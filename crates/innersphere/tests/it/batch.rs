@@ -1,7 +1,7 @@
 //! Batches on many threads (`query::batch`): the same bits on any number of threads, in
 //! input order; chunks start from a fresh state and carry it within; bad options refused.
 
-mod query_util;
+use crate::query_util;
 
 use glam::DVec3;
 use innersphere::query::batch::{self, BatchOptions};

@@ -11,9 +11,6 @@
 
 use innersphere_testkit::alloc as alloc_util;
 
-#[global_allocator]
-static COUNTING: alloc_util::Counting = alloc_util::Counting;
-
 use std::hash::{Hash, Hasher};
 use std::sync::OnceLock;
 use std::time::Instant;

@@ -8,9 +8,7 @@
 
 use innersphere_testkit::alloc as alloc_util;
 
-#[global_allocator]
-static COUNTING: alloc_util::Counting = alloc_util::Counting;
-mod query_util;
+use crate::query_util;
 
 use alloc_util::*;
 use glam::DVec3;

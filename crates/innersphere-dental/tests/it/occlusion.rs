@@ -3,8 +3,7 @@
 //! closing out of time stops at its step limit.
 
 // The haptic crate's test helpers (the slab, the block, the serial lock).
-#[path = "../../innersphere-haptic/tests/haptic_util/mod.rs"]
-mod haptic_util;
+use crate::haptic_util;
 
 use glam::{DQuat, DVec3};
 use haptic_util::{build, on_slab, serial, slab_and_block};

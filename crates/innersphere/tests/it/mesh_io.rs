@@ -1,7 +1,7 @@
 //! Mesh loading, saving and the defect report.
 //!
 //! Tests on the real data in `../shared/data` are `#[ignore]`d; run them with
-//! `cargo test -p innersphere --release --test mesh_io -- --include-ignored`.
+//! `cargo test -p innersphere --release --test it -- --include-ignored mesh_io::`.
 
 use innersphere_testkit::data as common;
 

@@ -4,7 +4,7 @@
 //! file) and the same refusals with the same messages, on the generated arch pair and teeth
 //! files made from its tooth placement.
 
-mod support;
+use crate::support;
 use support::{code, ist, s, stderr, stdout, TempDir};
 
 use innersphere::shapes;

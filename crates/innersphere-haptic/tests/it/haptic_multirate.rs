@@ -4,7 +4,7 @@
 //! waits for a collision thread that is stuck; a slow collision thread leaves the loop
 //! passive, smooth and the tool out of the slab.
 
-mod haptic_util;
+use crate::haptic_util;
 
 use glam::{DQuat, DVec3};
 use haptic_util::{assert_passive_as_servo, on_slab, options, serial, slab_and_block, swing};

@@ -5,8 +5,6 @@
 
 use innersphere_testkit::alloc as alloc_util;
 
-#[global_allocator]
-static COUNTING: alloc_util::Counting = alloc_util::Counting;
 use innersphere_testkit::data as common;
 
 use alloc_util::*;

@@ -32,6 +32,7 @@ unsafe impl GlobalAlloc for Counting {
     }
 }
 
+// Per thread, only inside `counted`: the other tests of this binary run beside it unaffected.
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 

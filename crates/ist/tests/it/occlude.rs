@@ -5,7 +5,7 @@
 //! against its own copy, a start far away or beside A, a spread beyond a bite search); and
 //! `--free` accounting for every start.
 
-mod support;
+use crate::support;
 use support::{code, ist, s, stderr, stdout, TempDir};
 
 use innersphere::exact::{self, ExactMesh, ExactScratch};

@@ -7,7 +7,7 @@
 //! tiny quaternion called too small to normalise, `demo` on one mesh twice refused before it
 //! builds). docs/RELIABILITY.md, "Files and outputs", lists the same cases.
 
-mod support;
+use crate::support;
 use support::{code, ist, s, stderr, stdout, TempDir};
 
 use innersphere::glam::DVec3;

@@ -5,9 +5,7 @@
 
 use innersphere_testkit::alloc as alloc_util;
 
-#[global_allocator]
-static COUNTING: alloc_util::Counting = alloc_util::Counting;
-mod haptic_util;
+use crate::haptic_util;
 
 use glam::{DQuat, DVec3};
 use haptic_util::{assert_passive_as_servo, on_slab, options, serial, slab_and_block, swing};

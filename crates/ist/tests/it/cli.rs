@@ -5,7 +5,7 @@
 //! and say what to do, JSON that ends with a newline, progress on stderr when piped, and the
 //! same defaults for the same option in `query` and `replay`.
 
-mod support;
+use crate::support;
 use support::{code, ist, s, stderr, stdout, TempDir};
 
 use innersphere::glam::DVec3;

@@ -505,11 +505,7 @@ fn build_cache_soak() {
         .map(|seed| {
             std::process::Command::new(&exe)
                 // A name filter, not --exact: the test's path depends on the binary's layout.
-                .args([
-                    "build_cache_soak_child",
-                    "--ignored",
-                    "--test-threads=1",
-                ])
+                .args(["build_cache_soak_child", "--ignored", "--test-threads=1"])
                 .env(SOAK_DIR, &dir)
                 .env(SOAK_BOUND, bound.to_string())
                 .env(SOAK_SEED, seed.to_string())

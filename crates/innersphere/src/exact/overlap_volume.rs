@@ -118,6 +118,22 @@ impl Part {
     }
 }
 
+/// A whole triangle as a part: its unit normal, first corner, area and first moment (what
+/// [`part`] gives when every edge lies inside, by the same fan from the first corner).
+fn whole(tri: &[DVec3; 3]) -> Option<(DVec3, DVec3, Part)> {
+    let nn = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+    let len = nn.length();
+    if !(len > 0.0) {
+        return None;
+    }
+    let n = nn / len;
+    let mut part = Part::default();
+    for k in 0..3 {
+        part.add(tri[0], n, tri[k], tri[(k + 1) % 3]);
+    }
+    Some((n, tri[0], part))
+}
+
 /// The part inside the other body of the triangle with vertex ids `ids` and corners `tri`
 /// (A's frame): the inside stretches of its edges (`inside`: its mesh's vertices' states;
 /// `cross`: its mesh's edge crossings) and its crossing segments `segs`, oriented. Returns
@@ -312,22 +328,24 @@ fn side_parts(
             list.push(u);
         });
     }
-    // The triangles with a part inside: around an inside vertex, or crossing.
+    // The triangles with a part inside: the crossing ones first, then the others around an
+    // inside vertex (wholly inside: an edge from an inside vertex to an outside one crosses).
     s.slots.begin(inner.bvh().tris.len());
     s.touched.clear();
-    for &v in &s.inside_list {
-        for &t in inner.slots_of(v) {
-            if s.slots.mark(t) {
-                s.touched.push(t);
-            }
-        }
-    }
     let by = if is_a { &s.by_a } else { &s.by_b };
     for &k in by {
         let seg = &s.segments[k as usize];
         let t = if is_a { seg.slot_a } else { seg.slot_b };
         if s.slots.mark(t) {
             s.touched.push(t);
+        }
+    }
+    let crossing = s.touched.len();
+    for &v in &s.inside_list {
+        for &t in inner.slots_of(v) {
+            if s.slots.mark(t) {
+                s.touched.push(t);
+            }
         }
     }
     let slot_of = |k: &u32| {
@@ -339,9 +357,19 @@ fn side_parts(
         }
     };
     let mut area = 0.0;
-    for &t in &s.touched {
+    for (i, &t) in s.touched.iter().enumerate() {
         let tri = &inner.bvh().tris[t as usize];
         let tri = to_a.map_or(*tri, |f| f.tri(tri));
+        let ids = inner.slot_vertices(t);
+        if i >= crossing && ids.iter().all(|&v| s.inside[v as usize]) {
+            // No crossing on it and every corner inside: the whole triangle, without looking
+            // up its edges' crossings (most of a deep contact's parts).
+            if let Some((nrm, p0, p)) = whole(&tri) {
+                area += p.area;
+                visit(nrm, p0, p);
+            }
+            continue;
+        }
         let lo = by.partition_point(|k| slot_of(k) < t);
         let hi = lo + by[lo..].partition_point(|k| slot_of(k) == t);
         let segs = by[lo..hi].iter().map(|&k| {
@@ -353,7 +381,7 @@ fn side_parts(
                 (seg.q, seg.p)
             }
         });
-        if let Some((nrm, p0, p)) = part(inner.slot_vertices(t), &tri, &s.inside, cross, segs) {
+        if let Some((nrm, p0, p)) = part(ids, &tri, &s.inside, cross, segs) {
             area += p.area;
             visit(nrm, p0, p);
         }

@@ -59,6 +59,8 @@ pub(crate) struct PenScratch {
     /// Merged barrier edges: (key, dir at the crossing nearest lo, dir nearest hi).
     pub(super) barrier: Vec<(u64, f64, f64)>,
     stamps: Stamps,
+    /// The vertices at an end of a barrier edge: only an edge between two of them can be one.
+    ends: Stamps,
     stack: Vec<u32>,
     candidates: Vec<u32>,
 }
@@ -80,7 +82,12 @@ pub(super) fn flood_inside(
     mut visit: impl FnMut(u32),
 ) {
     s.stamps.begin(inner.mesh.vertices.len());
+    s.ends.begin(inner.mesh.vertices.len());
     s.candidates.clear();
+    for &(key, _, _) in &s.barrier {
+        s.ends.mark((key >> 32) as u32);
+        s.ends.mark(key as u32);
+    }
     for &(key, dir_lo, dir_hi) in &s.barrier {
         // The nearest crossing leaves the other body when walking away from the end.
         if dir_lo > 0.0 {
@@ -91,11 +98,14 @@ pub(super) fn flood_inside(
         }
     }
     s.candidates.extend(inner.maybe_inside(outer, to_outer));
-    let barrier = &s.barrier;
+    let (barrier, ends) = (&s.barrier, &s.ends);
+    // Most edges of a region have an end no barrier edge touches: no search for those.
     let is_barrier = |u: u32, v: u32| {
-        barrier
-            .binary_search_by_key(&edge_key(u, v), |e| e.0)
-            .is_ok()
+        ends.is_marked(u)
+            && ends.is_marked(v)
+            && barrier
+                .binary_search_by_key(&edge_key(u, v), |e| e.0)
+                .is_ok()
     };
     let verts = &inner.mesh.vertices;
     for ci in 0..s.candidates.len() {

@@ -2,7 +2,7 @@
 //! how far along it, and in which direction, from the exact segment–triangle test. What the
 //! penetration depth's flood fill and the intersection volume's boundary both read.
 
-use super::tri_tri::segment_triangle_intersect;
+use super::tri_tri::SidesOf;
 use glam::DVec3;
 
 /// An edge's key: its vertex ids, the smaller first.
@@ -80,18 +80,25 @@ pub(super) fn edge_crossings(
     out: &mut Vec<EdgeCrossing>,
     points: &mut Vec<DVec3>,
 ) {
+    // The corners' sides of the other plane, once for the three edges (the exact segment
+    // test of each edge reads them).
+    let Some(sides) = SidesOf::new(t_other, t_in) else {
+        return;
+    };
     let n = (t_other[1] - t_other[0]).cross(t_other[2] - t_other[0]);
     for k in 0..3 {
         let (mut u, mut v) = (ids[k], ids[(k + 1) % 3]);
         let (mut pu, mut pv) = (t_in[k], t_in[(k + 1) % 3]);
+        let (mut ku, mut kv) = (k, (k + 1) % 3);
         if u == v {
             continue;
         }
         if u > v {
             std::mem::swap(&mut u, &mut v);
             std::mem::swap(&mut pu, &mut pv);
+            std::mem::swap(&mut ku, &mut kv);
         }
-        if !segment_triangle_intersect(pu, pv, t_other[0], t_other[1], t_other[2]) {
+        if !sides.segment(pu, pv, ku, kv) {
             continue;
         }
         let du = n.dot(pu - t_other[0]);

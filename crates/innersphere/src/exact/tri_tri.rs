@@ -125,6 +125,7 @@ pub(crate) fn segments_intersect(p: DVec3, q: DVec3, r: DVec3, s: DVec3) -> bool
     (0..3).all(|k| segments_intersect_2d(proj(p, k), proj(q, k), proj(r, k), proj(s, k)))
 }
 
+#[cfg(test)]
 /// Closed segment `[p, q]` and closed triangle `a, b, c` share a point (exact; degenerate
 /// segments and triangles allowed).
 pub(crate) fn segment_triangle_intersect(p: DVec3, q: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {
@@ -136,6 +137,56 @@ pub(crate) fn segment_triangle_intersect(p: DVec3, q: DVec3, a: DVec3, b: DVec3,
     let op = o3(a, b, c, p);
     let oq = o3(a, b, c, q);
     segment_triangle_with_sides(p, q, op, oq, [a, b, c])
+}
+
+/// The triangle `t` prepared for segment tests: whether it is degenerate and the sides of its
+/// plane of given points, found once for all of a triangle's edges. `segment(k, j)` says of
+/// the closed segment `pts[k] → pts[j]` what [`segment_triangle_intersect`] says.
+pub(crate) struct SidesOf<'t> {
+    t: &'t [DVec3; 3],
+    collinear: bool,
+    side: [f64; 3],
+}
+
+impl<'t> SidesOf<'t> {
+    /// The sides of `pts` of `t`'s plane (exact signs); `None` when all three lie strictly on
+    /// one side, so that no segment between them meets `t`.
+    #[inline]
+    pub(crate) fn new(t: &'t [DVec3; 3], pts: &[DVec3; 3]) -> Option<Self> {
+        let [a, b, c] = *t;
+        if is_collinear(a, b, c) {
+            return Some(SidesOf {
+                t,
+                collinear: true,
+                side: [0.0; 3],
+            });
+        }
+        let side = [
+            o3(a, b, c, pts[0]),
+            o3(a, b, c, pts[1]),
+            o3(a, b, c, pts[2]),
+        ];
+        if side.iter().all(|&o| o > 0.0) || side.iter().all(|&o| o < 0.0) {
+            return None;
+        }
+        Some(SidesOf {
+            t,
+            collinear: false,
+            side,
+        })
+    }
+
+    /// The closed segment `p → q` between the points `k` and `j` of `pts` meets `t`.
+    #[inline]
+    pub(crate) fn segment(&self, p: DVec3, q: DVec3, k: usize, j: usize) -> bool {
+        let [a, b, c] = *self.t;
+        if self.collinear {
+            return segments_intersect(p, q, a, b)
+                || segments_intersect(p, q, b, c)
+                || segments_intersect(p, q, c, a);
+        }
+        segment_triangle_with_sides(p, q, self.side[k], self.side[j], *self.t)
+    }
 }
 
 /// [`segment_triangle_intersect`] for a non-degenerate triangle, with the orientations of
@@ -627,6 +678,35 @@ mod tests {
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(3000))]
+
+        /// The prepared triangle answers every edge of another triangle as the one-shot
+        /// segment test does, for either direction of the edge; degenerate triangles, shared
+        /// corners and corners on the plane included.
+        #[test]
+        fn sides_of_agrees_with_the_segment_test(
+            s in (v3(1.0), v3(1.0), v3(1.0)), t in (v3(1.0), v3(1.0), v3(1.0)),
+            degenerate in 0u8..7, u in 0.0..1.0f64,
+        ) {
+            let mut s = [s.0, s.1, s.2];
+            let mut t = [t.0, t.1, t.2];
+            match degenerate {
+                1 => t[2] = t[0] + (t[1] - t[0]) * u,
+                2 => s[1] = t[0],
+                3 => { s[0] = t[1]; s[1] = t[0] + (t[2] - t[0]) * u; }
+                4 => s[2] = s[0],
+                5 => s = [t[0] + (t[1] - t[0]) * u, t[2], t[0] * (1.0 - u) + t[2] * u],
+                _ => {}
+            }
+            let sides = SidesOf::new(&t, &s);
+            for k in 0..3 {
+                let j = (k + 1) % 3;
+                let want = segment_triangle_intersect(s[k], s[j], t[0], t[1], t[2]);
+                let got = sides.as_ref().is_some_and(|x| x.segment(s[k], s[j], k, j));
+                let back = sides.as_ref().is_some_and(|x| x.segment(s[j], s[k], j, k));
+                prop_assert_eq!(got, want);
+                prop_assert_eq!(back, want);
+            }
+        }
 
         /// PQP's TriDist agrees with the exhaustive feature pairs on disjoint triangles,
         /// degenerate ones included.

@@ -37,6 +37,10 @@ pub struct ExactMesh {
     /// `vslots[vslot_start[v]..vslot_start[v + 1]]`.
     pub(super) vslot_start: Vec<u32>,
     pub(super) vslots: Vec<u32>,
+    /// Every edge used once in each direction: a closed, consistently wound surface, whose
+    /// inside flips at every crossing of it (the flood's regions need no winding number
+    /// unless their crossings disagree).
+    pub(super) closed: bool,
 }
 
 impl ExactMesh {
@@ -138,6 +142,7 @@ impl ExactMesh {
         }
         let (vslot_start, vslots) = vertex_slots(n, &winding, mesh);
         Ok(ExactMesh {
+            closed: crate::field::inside::EdgeSummary::of(mesh).is_oriented_closed(),
             vslot_start,
             vslots,
             mesh: mesh.clone(),

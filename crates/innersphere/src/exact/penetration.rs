@@ -6,9 +6,14 @@
 //! edges, each entirely inside or outside. Edges that cross (from the exact triangle pair
 //! tests) are barriers; the end of a barrier edge that the nearest crossing leaves through
 //! the other body's outward face is a candidate inside vertex, and so is one vertex of every
-//! connected component that might lie wholly inside the other body. Each candidate region
-//! is confirmed with one winding-number evaluation and flooded; every vertex reached gets
-//! its distance to the other surface from the BVH.
+//! connected component that might lie wholly inside the other body. On a closed,
+//! consistently wound other surface a region that its crossings call inside, and none call
+//! outside, is inside (the inside flips at every crossing); any other candidate region (an
+//! open surface, crossings that disagree, a component with no crossing) is decided by one
+//! winding-number evaluation. A closed surface that crosses itself is trusted too, so where
+//! it wraps twice a region may be counted by its crossings where the winding number would say
+//! otherwise. Every vertex of an inside region gets its distance to the other surface from
+//! the BVH.
 //!
 //! Meant for closed, outward-facing meshes (for open meshes it is a best effort).
 
@@ -61,6 +66,11 @@ pub(crate) struct PenScratch {
     stamps: Stamps,
     /// The vertices at an end of a barrier edge: only an edge between two of them can be one.
     ends: Stamps,
+    /// The barrier ends whose nearest crossing enters the other body walking away from them:
+    /// outside by the crossings.
+    outside: Stamps,
+    /// One region's vertices, visited once it is known to be inside.
+    region: Vec<u32>,
     stack: Vec<u32>,
     candidates: Vec<u32>,
 }
@@ -81,22 +91,29 @@ pub(super) fn flood_inside(
     s: &mut PenScratch,
     mut visit: impl FnMut(u32),
 ) {
-    s.stamps.begin(inner.mesh.vertices.len());
-    s.ends.begin(inner.mesh.vertices.len());
+    let n = inner.mesh.vertices.len();
+    s.stamps.begin(n);
+    s.ends.begin(n);
+    s.outside.begin(n);
     s.candidates.clear();
-    for &(key, _, _) in &s.barrier {
-        s.ends.mark((key >> 32) as u32);
-        s.ends.mark(key as u32);
-    }
     for &(key, dir_lo, dir_hi) in &s.barrier {
-        // The nearest crossing leaves the other body when walking away from the end.
+        let (lo, hi) = ((key >> 32) as u32, key as u32);
+        s.ends.mark(lo);
+        s.ends.mark(hi);
+        // The nearest crossing leaves the other body when walking away from the end: inside.
         if dir_lo > 0.0 {
-            s.candidates.push((key >> 32) as u32);
+            s.candidates.push(lo);
+        } else {
+            s.outside.mark(lo);
         }
         if dir_hi < 0.0 {
-            s.candidates.push(key as u32);
+            s.candidates.push(hi);
+        } else {
+            s.outside.mark(hi);
         }
     }
+    // Candidates up to here are inside by their crossings; the components' are not known.
+    let by_crossings = s.candidates.len();
     s.candidates.extend(inner.maybe_inside(outer, to_outer));
     let (barrier, ends) = (&s.barrier, &s.ends);
     // Most edges of a region have an end no barrier edge touches: no search for those.
@@ -113,19 +130,27 @@ pub(super) fn flood_inside(
         if !s.stamps.mark(v) {
             continue;
         }
-        if !outer.contains_point(to_outer.point(verts[v as usize])) {
-            continue;
-        }
+        // The region of `v`: the vertices joined to it by edges that cross nothing.
+        s.region.clear();
         s.stack.clear();
         s.stack.push(v);
+        let mut disputed = false;
         while let Some(u) = s.stack.pop() {
-            visit(u);
+            s.region.push(u);
+            disputed |= s.outside.is_marked(u);
             for &w in inner.neighbours(u) {
                 if !s.stamps.is_marked(w) && !is_barrier(u, w) {
                     s.stamps.mark(w);
                     s.stack.push(w);
                 }
             }
+        }
+        // A closed outer surface flips inside at every crossing: a region its crossings call
+        // inside, and none outside, is inside. Otherwise (an open or self-crossing surface, a
+        // degenerate crossing, a component with no crossing) one winding number decides.
+        let trusted = outer.closed && ci < by_crossings && !disputed;
+        if trusted || outer.contains_point(to_outer.point(verts[v as usize])) {
+            s.region.iter().for_each(|&u| visit(u));
         }
     }
 }

@@ -46,6 +46,7 @@ mod containment;
 mod crossings;
 mod distance;
 mod frame;
+mod front;
 mod gaps;
 mod intersects;
 pub(crate) mod local;

@@ -39,63 +39,96 @@ pub(crate) fn overlap_pairs(
         return false;
     }
     stack.push((0, 0, 0.0));
-    let mut tb_buf = [[DVec3::ZERO; 3]; LEAF_SIZE];
-    let mut bb = [(DVec3::ZERO, DVec3::ZERO); LEAF_SIZE];
     while let Some((ia, ib, _)) = stack.pop() {
         let na = &ta.nodes[ia as usize];
         let nb = &tb.nodes[ib as usize];
         match (na.is_leaf(), nb.is_leaf()) {
             (true, true) => {
-                let (sa0, ca) = (na.start as usize, na.count as usize);
-                let (sb0, cb) = (nb.start as usize, nb.count as usize);
-                let (Some(ta_all), Some(tb_all)) =
-                    (ta.tris.get(sa0..sa0 + ca), tb.tris.get(sb0..sb0 + cb))
-                else {
-                    continue;
-                };
-                for (ci, chunk) in tb_all.chunks(LEAF_SIZE).enumerate() {
-                    for (j, t) in chunk.iter().enumerate() {
-                        tb_buf[j] = f.tri(t);
-                        bb[j] = tri_box(&tb_buf[j]);
-                    }
-                    for (i, x) in ta_all.iter().enumerate() {
-                        let (alo, ahi) = tri_box(x);
-                        for j in 0..chunk.len() {
-                            let (blo, bhi) = bb[j];
-                            if (alo - bhi).max(blo - ahi).max_element() > 0.0 {
-                                continue;
-                            }
-                            let y = &tb_buf[j];
-                            if tri_tri::plane_separates(x, y) || tri_tri::plane_separates(y, x) {
-                                continue;
-                            }
-                            let sb = (sb0 + ci * LEAF_SIZE + j) as u32;
-                            if leaf((sa0 + i) as u32, sb, x, y) {
-                                stack.clear();
-                                return true;
-                            }
-                        }
-                    }
+                if leaf_pair(a, b, f, ia, ib, &mut leaf) {
+                    stack.clear();
+                    return true;
                 }
             }
-            (la, lb_leaf) => {
-                if !la && (lb_leaf || size_sq(na) >= size_sq(nb)) {
-                    let sb = f.shape(&b.shapes[ib as usize]);
-                    for x in [na.start, ia + 1] {
-                        if sb.lower_bound_sq(&a.shapes[x as usize], f.pad) <= 0.0 {
-                            stack.push((x, ib, 0.0));
-                        }
-                    }
-                } else {
-                    let sa = &a.shapes[ia as usize];
-                    for y in [nb.start, ib + 1] {
-                        if f.lower_bound_sq(sa, &b.shapes[y as usize]) <= 0.0 {
-                            stack.push((ia, y, 0.0));
-                        }
-                    }
+            _ => split_pair(a, b, f, ia, ib, |x, y, lb| {
+                if lb <= 0.0 {
+                    stack.push((x, y, 0.0));
+                }
+            }),
+        }
+    }
+    false
+}
+
+/// The triangle pairs of the leaf pair (`ia` of A, `ib` of B) whose boxes overlap and whose
+/// planes do not separate them, given to `leaf(slot_a, slot_b, tri_a, tri_b)` (B's triangle
+/// in A's frame) until it returns true. Returns whether it stopped early.
+#[inline]
+pub(super) fn leaf_pair(
+    a: &ExactMesh,
+    b: &ExactMesh,
+    f: &Frame,
+    ia: u32,
+    ib: u32,
+    leaf: &mut impl FnMut(u32, u32, &[DVec3; 3], &[DVec3; 3]) -> bool,
+) -> bool {
+    let (ta, tb) = (a.bvh(), b.bvh());
+    let (na, nb) = (&ta.nodes[ia as usize], &tb.nodes[ib as usize]);
+    let (sa0, ca) = (na.start as usize, na.count as usize);
+    let (sb0, cb) = (nb.start as usize, nb.count as usize);
+    let (Some(ta_all), Some(tb_all)) = (ta.tris.get(sa0..sa0 + ca), tb.tris.get(sb0..sb0 + cb))
+    else {
+        return false;
+    };
+    let mut tb_buf = [[DVec3::ZERO; 3]; LEAF_SIZE];
+    let mut bb = [(DVec3::ZERO, DVec3::ZERO); LEAF_SIZE];
+    for (ci, chunk) in tb_all.chunks(LEAF_SIZE).enumerate() {
+        for (j, t) in chunk.iter().enumerate() {
+            tb_buf[j] = f.tri(t);
+            bb[j] = tri_box(&tb_buf[j]);
+        }
+        for (i, x) in ta_all.iter().enumerate() {
+            let (alo, ahi) = tri_box(x);
+            for j in 0..chunk.len() {
+                let (blo, bhi) = bb[j];
+                if (alo - bhi).max(blo - ahi).max_element() > 0.0 {
+                    continue;
+                }
+                let y = &tb_buf[j];
+                if tri_tri::plane_separates(x, y) || tri_tri::plane_separates(y, x) {
+                    continue;
+                }
+                let sb = (sb0 + ci * LEAF_SIZE + j) as u32;
+                if leaf((sa0 + i) as u32, sb, x, y) {
+                    return true;
                 }
             }
         }
     }
     false
+}
+
+/// The children to visit next of the internal pair (`ia`, `ib`): the larger node is split
+/// (A's when B's is a leaf, B's when A's is), each child pair given to `visit` with the
+/// squared lower bound of its distance (> 0: apart).
+#[inline]
+pub(super) fn split_pair(
+    a: &ExactMesh,
+    b: &ExactMesh,
+    f: &Frame,
+    ia: u32,
+    ib: u32,
+    mut visit: impl FnMut(u32, u32, f64),
+) {
+    let (na, nb) = (&a.bvh().nodes[ia as usize], &b.bvh().nodes[ib as usize]);
+    if !na.is_leaf() && (nb.is_leaf() || size_sq(na) >= size_sq(nb)) {
+        let sb = f.shape(&b.shapes[ib as usize]);
+        for x in [na.start, ia + 1] {
+            visit(x, ib, sb.lower_bound_sq(&a.shapes[x as usize], f.pad));
+        }
+    } else {
+        let sa = &a.shapes[ia as usize];
+        for y in [nb.start, ib + 1] {
+            visit(ia, y, f.lower_bound_sq(sa, &b.shapes[y as usize]));
+        }
+    }
 }

@@ -29,7 +29,6 @@
 use super::crossings::{barriers, edge_crossings, edge_key, EdgeCrossing, Stamps};
 use super::frame::Frame;
 use super::mesh::ExactMesh;
-use super::overlap::overlap_pairs;
 use super::penetration::flood_inside;
 use super::scratch::ExactScratch;
 use crate::pose::Pose;
@@ -223,41 +222,43 @@ pub fn intersection_volume(
             &mut s.segments,
             &mut s.points,
         );
-        overlap_pairs(a, b, &f, &mut scratch.stack, None, |sa, sb, x, y| {
-            points.clear();
-            edge_crossings(a.slot_vertices(sa), x, sb, y, cross_a, points);
-            edge_crossings(b.slot_vertices(sb), y, sa, x, cross_b, points);
-            if points.len() >= 2 {
-                // The two points farthest apart (two, unless the contact is degenerate).
-                let (mut p, mut q, mut best) = (points[0], points[1], -1.0);
-                for i in 0..points.len() {
-                    for j in i + 1..points.len() {
-                        let d = points[i].distance_squared(points[j]);
-                        if d > best {
-                            (p, q, best) = (points[i], points[j], d);
+        let warm = scratch.warm_start;
+        scratch
+            .front
+            .overlap_pairs(a, b, &rel, &f, warm, |sa, sb, x, y| {
+                points.clear();
+                edge_crossings(a.slot_vertices(sa), x, sb, y, cross_a, points);
+                edge_crossings(b.slot_vertices(sb), y, sa, x, cross_b, points);
+                if points.len() >= 2 {
+                    // The two points farthest apart (two, unless the contact is degenerate).
+                    let (mut p, mut q, mut best) = (points[0], points[1], -1.0);
+                    for i in 0..points.len() {
+                        for j in i + 1..points.len() {
+                            let d = points[i].distance_squared(points[j]);
+                            if d > best {
+                                (p, q, best) = (points[i], points[j], d);
+                            }
                         }
                     }
+                    let na = (x[1] - x[0]).cross(x[2] - x[0]);
+                    let nb = (y[1] - y[0]).cross(y[2] - y[0]);
+                    let dir = na.cross(nb);
+                    let (p, q) = if (q - p).dot(dir) >= 0.0 {
+                        (p, q)
+                    } else {
+                        (q, p)
+                    };
+                    if best > 0.0 {
+                        pairs += 1;
+                        segments.push(PairSegment {
+                            slot_a: sa,
+                            slot_b: sb,
+                            p,
+                            q,
+                        });
+                    }
                 }
-                let na = (x[1] - x[0]).cross(x[2] - x[0]);
-                let nb = (y[1] - y[0]).cross(y[2] - y[0]);
-                let dir = na.cross(nb);
-                let (p, q) = if (q - p).dot(dir) >= 0.0 {
-                    (p, q)
-                } else {
-                    (q, p)
-                };
-                if best > 0.0 {
-                    pairs += 1;
-                    segments.push(PairSegment {
-                        slot_a: sa,
-                        slot_b: sb,
-                        p,
-                        q,
-                    });
-                }
-            }
-            false
-        });
+            });
     }
     settle(&mut s.cross_a);
     settle(&mut s.cross_b);
@@ -431,5 +432,50 @@ mod tests {
         let mut flipped = shapes::icosphere(2);
         flipped.triangles[0].swap(0, 1);
         assert!(!ExactMesh::new(&flipped).unwrap().closed);
+    }
+
+    /// The node-pair front carried along a coherent motion finds every crossing pair that a
+    /// traversal from the roots finds, frame after frame: pressing in, sliding, twisting,
+    /// pulling out, with steps small and large.
+    #[test]
+    fn a_carried_front_misses_no_crossing() {
+        let (upper, lower) = shapes::tooth_pair(3);
+        let a = ExactMesh::new(&upper).unwrap();
+        let b = ExactMesh::new(&lower).unwrap();
+        let com = DVec3::ZERO;
+        let (mut warm, mut cold) = (ExactScratch::new(), ExactScratch::cold());
+        let mut overlapping = 0;
+        for i in 0..600 {
+            // Mostly 1 µm-scale steps; every 50th frame a jump.
+            let x = i as f64 / 600.0 + if i % 50 == 49 { 0.05 } else { 0.0 };
+            let pose = Pose::new(
+                DVec3::new(
+                    0.2 * (9.0 * x).sin(),
+                    0.15 * (6.0 * x).cos(),
+                    0.4 * (3.0 * x).cos() - 0.2,
+                ),
+                DQuat::from_rotation_z(0.3 * (4.0 * x).sin()) * DQuat::from_rotation_y(0.05 * x),
+            )
+            .unwrap();
+            let got = intersection_volume(&a, &Pose::IDENTITY, &b, &pose, com, &mut warm);
+            let want = intersection_volume(&a, &Pose::IDENTITY, &b, &pose, com, &mut cold);
+            assert_eq!(got.crossing_pairs, want.crossing_pairs, "frame {i}");
+            let close = |p: f64, q: f64| (p - q).abs() <= 1e-9 * (1.0 + q.abs());
+            assert!(
+                close(got.volume, want.volume),
+                "frame {i}: {got:?} {want:?}"
+            );
+            assert!(
+                (got.gradient - want.gradient).length() <= 1e-9 * (1.0 + want.gradient.length())
+            );
+            overlapping += usize::from(want.volume > 0.0);
+        }
+        assert!(overlapping > 100, "{overlapping} overlapping frames");
+        assert!(
+            warm.front.carried() > 300,
+            "{} frames carried",
+            warm.front.carried()
+        );
+        assert_eq!(cold.front.carried(), 0);
     }
 }

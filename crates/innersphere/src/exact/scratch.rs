@@ -19,6 +19,8 @@ pub struct ExactScratch {
     pub(super) stats: ExactStats,
     pub(crate) pen: penetration::PenScratch,
     pub(crate) vol: super::overlap_volume::VolumeScratch,
+    /// The meshes' penetration's node-pair front, carried to the next query.
+    pub(crate) front: super::front::PairFront,
 }
 
 /// Work counters of the last query run with an [`ExactScratch`].
@@ -53,6 +55,7 @@ impl ExactScratch {
             stats: ExactStats::default(),
             pen: Default::default(),
             vol: Default::default(),
+            front: Default::default(),
         }
     }
 
@@ -73,6 +76,7 @@ impl ExactScratch {
     pub fn reset(&mut self) {
         self.last_pair = None;
         self.last_hit = None;
+        self.front.reset();
     }
 }
 

@@ -477,5 +477,13 @@ mod tests {
             warm.front.carried()
         );
         assert_eq!(cold.front.carried(), 0);
+        // Reset, the scratch answers as a new one does, bit for bit.
+        let pose = Pose::from_translation(DVec3::new(0.05, 0.0, 0.0));
+        warm.reset();
+        let again = intersection_volume(&a, &Pose::IDENTITY, &b, &pose, com, &mut warm);
+        let mut new = ExactScratch::new();
+        let fresh = intersection_volume(&a, &Pose::IDENTITY, &b, &pose, com, &mut new);
+        assert!(fresh.volume > 0.0);
+        assert_eq!(again, fresh);
     }
 }

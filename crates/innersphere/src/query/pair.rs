@@ -539,6 +539,7 @@ impl Pair {
         self.front.reset();
         self.bfront.reset();
         self.refine.reset();
+        self.exact.reset();
     }
 
     /// A guaranteed lower bound on the current separation of the two sphere sets at the

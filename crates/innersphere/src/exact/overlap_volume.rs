@@ -118,15 +118,18 @@ impl Part {
     }
 }
 
+/// A triangle's unit normal from its winding; `None` when it is degenerate.
+#[inline]
+fn unit_normal(tri: &[DVec3; 3]) -> Option<DVec3> {
+    let nn = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+    let len = nn.length();
+    (len > 0.0).then(|| nn / len)
+}
+
 /// A whole triangle as a part: its unit normal, first corner, area and first moment (what
 /// [`part`] gives when every edge lies inside, by the same fan from the first corner).
 fn whole(tri: &[DVec3; 3]) -> Option<(DVec3, DVec3, Part)> {
-    let nn = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-    let len = nn.length();
-    if !(len > 0.0) {
-        return None;
-    }
-    let n = nn / len;
+    let n = unit_normal(tri)?;
     let mut part = Part::default();
     for k in 0..3 {
         part.add(tri[0], n, tri[k], tri[(k + 1) % 3]);
@@ -145,12 +148,7 @@ fn part(
     cross: &[EdgeCrossing],
     segs: impl Iterator<Item = (DVec3, DVec3)>,
 ) -> Option<(DVec3, DVec3, Part)> {
-    let nn = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-    let len = nn.length();
-    if !(len > 0.0) {
-        return None;
-    }
-    let n = nn / len;
+    let n = unit_normal(tri)?;
     let p0 = tri[0];
     let mut part = Part::default();
     for k in 0..3 {

@@ -495,6 +495,15 @@ typedef struct ist_mesh_penetration_result {
    Area of B's surface inside A.
    */
   double area;
+  /*
+   The largest thickness of a patch along the direction it pushes B.
+   */
+  double max_depth;
+  /*
+   Connected pieces of the intersection; read them with ist_penetration_patch (the 8
+   largest).
+   */
+  size_t patch_count;
 } ist_mesh_penetration_result;
 
 /*
@@ -819,7 +828,8 @@ int ist_penetration_with_stiffness(struct ist_pair *pair, const struct ist_pose 
  The penetration of the meshes themselves: the exact volume of the intersection of the two
  solids, with the force (stiffness × volume along the direction that loses overlap
  fastest; stiffness from 0 to 1e30, else IST_ERR_INVALID_ARGUMENT) and torques from its
- exact gradient. Both trees need their meshes (ist_tree_with_mesh), else
+ exact gradient, and its connected pieces (read the 8 largest with
+ ist_penetration_patch). Both trees need their meshes (ist_tree_with_mesh), else
  IST_ERR_INVALID_ARGUMENT.
 
  # Safety
@@ -828,7 +838,8 @@ int ist_penetration_with_stiffness(struct ist_pair *pair, const struct ist_pose 
 int ist_mesh_penetration(struct ist_pair *pair, const struct ist_pose *pose_a, const struct ist_pose *pose_b, double stiffness, struct ist_mesh_penetration_result *out);
 
 /*
- Patch `i` (< patch_count) of the pair's last ist_penetration.
+ Patch `i` (< the patches kept: patch_count, at most 8) of the pair's last
+ ist_penetration or ist_mesh_penetration.
 
  # Safety
  Every pointer is NULL or valid.

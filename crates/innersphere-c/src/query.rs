@@ -286,7 +286,8 @@ pub unsafe extern "C" fn ist_penetration_with_stiffness(
 /// The penetration of the meshes themselves: the exact volume of the intersection of the two
 /// solids, with the force (stiffness × volume along the direction that loses overlap
 /// fastest; stiffness from 0 to 1e30, else IST_ERR_INVALID_ARGUMENT) and torques from its
-/// exact gradient. Both trees need their meshes (ist_tree_with_mesh), else
+/// exact gradient, and its connected pieces (read the 8 largest with
+/// ist_penetration_patch). Both trees need their meshes (ist_tree_with_mesh), else
 /// IST_ERR_INVALID_ARGUMENT.
 ///
 /// # Safety
@@ -311,7 +312,8 @@ pub unsafe extern "C" fn ist_mesh_penetration(
     })
 }
 
-/// Patch `i` (< patch_count) of the pair's last ist_penetration.
+/// Patch `i` (< the patches kept: patch_count, at most 8) of the pair's last
+/// ist_penetration or ist_mesh_penetration.
 ///
 /// # Safety
 /// Every pointer is NULL or valid.

@@ -158,6 +158,11 @@ pub struct ist_mesh_penetration_result {
     pub torque_b: [f64; 3],
     /// Area of B's surface inside A.
     pub area: f64,
+    /// The largest thickness of a patch along the direction it pushes B.
+    pub max_depth: f64,
+    /// Connected pieces of the intersection; read them with ist_penetration_patch (the 8
+    /// largest).
+    pub patch_count: usize,
 }
 
 impl From<&innersphere::MeshPenetration> for ist_mesh_penetration_result {
@@ -170,6 +175,8 @@ impl From<&innersphere::MeshPenetration> for ist_mesh_penetration_result {
             torque_a: m.torque_a.to_array(),
             torque_b: m.torque_b.to_array(),
             area: m.area,
+            max_depth: m.max_depth,
+            patch_count: m.patch_count,
         }
     }
 }

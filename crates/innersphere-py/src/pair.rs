@@ -1,7 +1,7 @@
 //! `innersphere.Pair` and its results: every query kind, single and batched.
 
 use crate::convert::{
-    answer_dict, columns, error, non_negative, pose, pose_or_identity, poses, PosesA,
+    answer_dict, columns, error, non_negative, pose, pose_or_identity, poses, to_python, PosesA,
 };
 use crate::results::{DistanceResult, PenetrationResult};
 use crate::tree::Tree;
@@ -356,19 +356,26 @@ impl Pair {
     /// overlap fastest) and the torques from its exact gradient. Both trees need their
     /// meshes (Tree.with_mesh): ValueError otherwise. Returns the answer's serde form as a
     /// dict (`ist query --json --query mesh-penetration`): contact, volume, normal, force,
-    /// torque_a, torque_b, gradient, rotation_gradient, area, crossing_pairs.
-    #[pyo3(signature = (pose_b, *, pose_a=None, stiffness=1.0))]
+    /// torque_a, torque_b, gradient, rotation_gradient, area, max_depth, patch_count,
+    /// stiffness, crossing_pairs, and the max_patches largest patches (the intersection's
+    /// connected pieces: point, normal, depth, volume, pairs) as patches.
+    #[pyo3(signature = (pose_b, *, pose_a=None, stiffness=1.0, max_patches=8))]
     fn mesh_penetration<'py>(
         &self,
         py: Python<'py>,
         pose_b: &Bound<'py, PyAny>,
         pose_a: Option<&Bound<'py, PyAny>>,
         stiffness: f64,
+        max_patches: i64,
     ) -> PyResult<Bound<'py, PyDict>> {
         let pb = pose(pose_b, "pose_b")?;
         let pa = pose_or_identity(pose_a, "pose_a")?;
+        let max_patches = usize::try_from(max_patches).map_err(|_| {
+            PyValueError::new_err(format!("max_patches must be ≥ 0, not {max_patches}"))
+        })?;
         let opts = PenetrationOptions {
             stiffness: stiffness_arg(stiffness)?,
+            max_patches,
             ..Default::default()
         };
         let mut guard = self.lock()?;
@@ -376,7 +383,8 @@ impl Pair {
         let m = py
             .detach(|| inner.mesh_penetration_with(&pa, &pb, &opts))
             .map_err(error)?;
-        answer_dict(py, &m, &[])
+        let patches = to_python(py, &inner.patches())?;
+        answer_dict(py, &m, &[("patches", patches)])
     }
 
     /// The paper's distance traversal (its first-contact baseline): whether the packings

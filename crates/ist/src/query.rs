@@ -266,12 +266,14 @@ fn mesh_penetration(
     };
     let m = pair.mesh_penetration_with(pose_a, pose_b, &opts)?;
     let secs = t0.elapsed().as_secs_f64();
-    let summary = if m.contact {
+    let patches = pair.patches();
+    let mut summary = if m.contact {
         format!(
-            "the meshes overlap by {:.6e} units³ ({} triangle pairs cross), {:.1} µs\n\
+            "the meshes overlap by {:.6e} units³ ({} triangle pairs cross, deepest {:.6} units), {:.1} µs\n\
              force on B {:?}, torque on B {:?}, torque on A {:?} (force = stiffness {} × volume along the direction that loses overlap fastest; torques about each body's centre of mass)",
             m.volume,
             m.crossing_pairs,
+            m.max_depth,
             secs * 1e6,
             v3(m.force),
             v3(m.torque_b),
@@ -281,8 +283,24 @@ fn mesh_penetration(
     } else {
         format!("the meshes do not overlap, {:.1} µs", secs * 1e6)
     };
+    for q in patches {
+        summary += &format!(
+            "\n  patch: deepest point {:?} units, normal {:?}, depth {:.6} units, volume {:.6e} units³, {} triangle pairs",
+            v3(q.point),
+            v3(q.normal),
+            q.depth,
+            q.volume,
+            q.pairs
+        );
+    }
     Ok((
-        answer_json("mesh-penetration", &m, None, secs, json!({})),
+        answer_json(
+            "mesh-penetration",
+            &m,
+            None,
+            secs,
+            json!({ "patches": patches }),
+        ),
         summary,
     ))
 }

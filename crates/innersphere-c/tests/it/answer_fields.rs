@@ -166,7 +166,12 @@ fn the_mesh_answers_structs_spell_their_serialized_forms() {
         "ist_mesh_penetration_result",
         &keys(&m),
         &[],
-        &["gradient", "rotation_gradient", "crossing_pairs"],
+        &[
+            "gradient",
+            "rotation_gradient",
+            "crossing_pairs",
+            "stiffness",
+        ],
     );
     let mut k = keys(&r);
     // C flattens the nested sphere distance to the one number it carries.

@@ -318,12 +318,16 @@ class Pair:
         *,
         pose_a: Optional[_PoseLike] = None,
         stiffness: float = 1.0,
+        max_patches: int = 8,
     ) -> Dict[str, Any]:
         """The penetration of the meshes themselves (both trees need their meshes:
         ``Tree.with_mesh``): the exact volume of the intersection of the two solids, the
         force and torques from its exact gradient, as the answer's serialized form (``ist
         query --json --query mesh-penetration``): contact, volume, normal, force, torque_a,
-        torque_b, gradient, rotation_gradient, area, crossing_pairs."""
+        torque_b, gradient, rotation_gradient, area, max_depth, patch_count, stiffness,
+        crossing_pairs, and the ``max_patches`` largest connected pieces of the
+        intersection as ``patches`` (point: the deepest point of B in A, normal, depth,
+        volume, pairs)."""
     def distance_traversal(self, pose_b: _PoseLike, *, pose_a: Optional[_PoseLike] = None) -> bool:
         """The paper's distance traversal: whether the packings overlap."""
     def backtracking(self, pose_b: _PoseLike, *, pose_a: Optional[_PoseLike] = None) -> bool:

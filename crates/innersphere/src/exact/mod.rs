@@ -28,8 +28,10 @@
 //!
 //! The files: `mesh` ([`ExactMesh`]), `scratch` ([`ExactScratch`]), `frame` (B's frame in
 //! A's), `overlap` (the traversal of overlapping node pairs), `bnb` (the branch and bound),
-//! `containment`, `distance`, `gaps`, `intersects`, `penetration`, `bound` (node shapes) and
-//! `tri_tri` (triangle pairs).
+//! `containment`, `distance`, `gaps`, `intersects`, `penetration`, `overlap_volume` (the
+//! meshes' intersection volume and its gradient), `overlap_patches` (its connected pieces),
+//! `front` (the node-pair front it carries), `crossings` (edge–triangle crossings), `bound`
+//! (node shapes) and `tri_tri` (triangle pairs).
 //!
 //! No input panics: meshes are validated by [`ExactMesh::new`], degenerate triangles are
 //! handled, and a non-finite pose gives a NaN distance, no intersection and depth 0.
@@ -52,6 +54,7 @@ mod intersects;
 pub(crate) mod local;
 mod mesh;
 mod overlap;
+mod overlap_patches;
 mod overlap_volume;
 mod penetration;
 mod scratch;
@@ -66,6 +69,7 @@ pub use gaps::vertex_gaps;
 pub(crate) use intersects::brute_force_intersects;
 pub use intersects::intersects;
 pub use mesh::ExactMesh;
+pub use overlap_patches::{AreaMoments, OverlapPatch};
 pub use overlap_volume::{intersection_volume, MeshOverlap};
 pub use penetration::{penetration, penetration_depth, Body, ExactPenetration};
 pub use scratch::{ExactScratch, ExactStats};

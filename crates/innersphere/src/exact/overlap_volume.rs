@@ -29,6 +29,7 @@
 use super::crossings::{barriers, edge_crossings, edge_key, EdgeCrossing, Stamps};
 use super::frame::Frame;
 use super::mesh::ExactMesh;
+use super::overlap_patches::{AreaMoments, Grouping, PartRec};
 use super::penetration::flood_inside;
 use super::scratch::ExactScratch;
 use crate::pose::Pose;
@@ -51,6 +52,15 @@ pub struct MeshOverlap {
     pub area_a: f64,
     /// Triangle pairs that cross.
     pub crossing_pairs: usize,
+    /// The largest thickness of a connected piece of the intersection along the direction
+    /// that piece pushes B ([`OverlapPatch::depth`](super::OverlapPatch::depth)).
+    pub max_depth: f64,
+    /// Connected pieces of the intersection (the patches; read them with
+    /// [`ExactScratch::patches`]).
+    pub patch_count: usize,
+    /// Area moments of B's surface inside A (world), about `center_b`: the linearised
+    /// penalty wrench per unit stiffness.
+    pub moments: AreaMoments,
 }
 
 /// A segment where triangle `slot_a` of A and `slot_b` of B cross (A's frame), from `p` to
@@ -78,6 +88,8 @@ pub(crate) struct VolumeScratch {
     inside_list: Vec<u32>,
     touched: Vec<u32>,
     slots: Stamps,
+    /// The parts, grouped into patches.
+    pub(super) group: Grouping,
 }
 
 /// Sorts the crossings by edge, then along it, and drops the duplicates: the same edge and
@@ -128,8 +140,9 @@ fn unit_normal(tri: &[DVec3; 3]) -> Option<DVec3> {
 
 /// A whole triangle as a part: its unit normal, first corner, area and first moment (what
 /// [`part`] gives when every edge lies inside, by the same fan from the first corner).
-fn whole(tri: &[DVec3; 3]) -> Option<(DVec3, DVec3, Part)> {
+fn whole(tri: &[DVec3; 3], pts: &mut Vec<DVec3>) -> Option<(DVec3, DVec3, Part)> {
     let n = unit_normal(tri)?;
+    pts.extend_from_slice(tri);
     let mut part = Part::default();
     for k in 0..3 {
         part.add(tri[0], n, tri[k], tri[(k + 1) % 3]);
@@ -140,13 +153,15 @@ fn whole(tri: &[DVec3; 3]) -> Option<(DVec3, DVec3, Part)> {
 /// The part inside the other body of the triangle with vertex ids `ids` and corners `tri`
 /// (A's frame): the inside stretches of its edges (`inside`: its mesh's vertices' states;
 /// `cross`: its mesh's edge crossings) and its crossing segments `segs`, oriented. Returns
-/// its unit normal, first corner and part; `None` for a degenerate triangle.
+/// its unit normal, first corner and part; `None` for a degenerate triangle. The ends of the
+/// part's boundary segments go to `pts`.
 fn part(
     ids: [u32; 3],
     tri: &[DVec3; 3],
     inside: &[bool],
     cross: &[EdgeCrossing],
     segs: impl Iterator<Item = (DVec3, DVec3)>,
+    pts: &mut Vec<DVec3>,
 ) -> Option<(DVec3, DVec3, Part)> {
     let n = unit_normal(tri)?;
     let p0 = tri[0];
@@ -166,6 +181,8 @@ fn part(
         // The stretches inside, lo → hi; added in the triangle's own direction u → v.
         let mut add = |a: f64, b: f64| {
             let (p, q) = (at(a), at(b));
+            pts.push(p);
+            pts.push(q);
             if u < v {
                 part.add(p0, n, p, q);
             } else {
@@ -185,6 +202,8 @@ fn part(
         }
     }
     for (p, q) in segs {
+        pts.push(p);
+        pts.push(q);
         part.add(p0, n, p, q);
     }
     Some((n, p0, part))
@@ -270,18 +289,35 @@ pub fn intersection_volume(
         .sort_unstable_by_key(|&i| s.segments[i as usize].slot_b);
 
     let c = f.point(center_b);
-    let mut volume = 0.0;
-    // A's surface inside B (A's frame).
-    let area_a = side_parts(a, b, &g, None, s, &mut scratch.pen, |n, p0, part| {
-        volume += n.dot(p0) * part.area;
-    });
-    // B's surface inside A (in A's frame): also the gradient.
-    let (mut grad, mut rot) = (DVec3::ZERO, DVec3::ZERO);
-    let area_b = side_parts(b, a, &f, Some(&f), s, &mut scratch.pen, |n, p0, part| {
-        volume += n.dot(p0) * part.area;
-        grad += n * part.area;
-        rot += (part.moment - c * part.area).cross(n);
-    });
+    s.group.clear();
+    // A's surface inside B, then B's inside A (both in A's frame).
+    let area_a = side_parts(a, b, &g, None, s, &mut scratch.pen);
+    let area_b = side_parts(b, a, &f, Some(&f), s, &mut scratch.pen);
+    let (mut volume, mut grad, mut rot) = (0.0, DVec3::ZERO, DVec3::ZERO);
+    let mut moments = AreaMoments::default();
+    for r in &s.group.parts {
+        volume += r.n.dot(r.p0) * r.area;
+        if r.of_b {
+            grad += r.n * r.area;
+            rot += (r.moment - c * r.area).cross(r.n);
+            if r.area > 0.0 {
+                moments.add(r.area, r.n, r.moment / r.area, c);
+            }
+        }
+    }
+    for seg in &s.segments {
+        s.group.join_crossing(seg.slot_a, seg.slot_b);
+    }
+    let g_len = grad.length();
+    let push = if g_len > 0.0 {
+        -grad / g_len
+    } else {
+        DVec3::ZERO
+    };
+    let max_depth = s
+        .group
+        .group(s.segments.iter().map(|seg| (seg.slot_a, seg.slot_b)), push);
+    let r = glam::DMat3::from_quat(pose_a.rotation);
     MeshOverlap {
         volume: (volume / 3.0).max(0.0),
         gradient: pose_a.transform_vector(grad),
@@ -289,13 +325,16 @@ pub fn intersection_volume(
         area_a,
         area_b,
         crossing_pairs: pairs,
+        max_depth,
+        patch_count: s.group.patches.len(),
+        moments: moments.rotated(r),
     }
 }
 
-/// Calls `visit(n, p0, part)` for every triangle of `inner` with a part inside `outer`
-/// (`n` its unit normal, `p0` its first corner, in A's frame; `to_a`: `inner`'s frame to
-/// A's, `None` when `inner` is A) and returns the parts' summed area. `to_outer` maps
-/// `inner`'s points into `outer`'s frame (for the inside test).
+/// Records the part inside `outer` of every triangle of `inner` in `s.group` (A's frame;
+/// `to_a`: `inner`'s frame to A's, `None` when `inner` is A), joins the parts around each
+/// inside vertex, and returns the parts' summed area. `to_outer` maps `inner`'s points into
+/// `outer`'s frame (for the inside test).
 fn side_parts(
     inner: &ExactMesh,
     outer: &ExactMesh,
@@ -303,7 +342,6 @@ fn side_parts(
     to_a: Option<&Frame>,
     s: &mut VolumeScratch,
     pen: &mut super::penetration::PenScratch,
-    mut visit: impl FnMut(DVec3, DVec3, Part),
 ) -> f64 {
     let is_a = to_a.is_none();
     let cross = if is_a { &s.cross_a } else { &s.cross_b };
@@ -356,6 +394,7 @@ fn side_parts(
             seg.slot_b
         }
     };
+    let tris = inner.bvh().tris.len();
     let mut area = 0.0;
     for (i, &t) in s.touched.iter().enumerate() {
         let tri = &inner.bvh().tris[t as usize];
@@ -364,9 +403,11 @@ fn side_parts(
         if i >= crossing && ids.iter().all(|&v| s.inside[v as usize]) {
             // No crossing on it and every corner inside: the whole triangle, without looking
             // up its edges' crossings (most of a deep contact's parts).
-            if let Some((nrm, p0, p)) = whole(&tri) {
+            let from = s.group.pts.len() as u32;
+            if let Some((nrm, p0, p)) = whole(&tri, &mut s.group.pts) {
                 area += p.area;
-                visit(nrm, p0, p);
+                let pts = (from, s.group.pts.len() as u32);
+                s.group.push(rec(t, !is_a, nrm, p0, p, pts), tris);
             }
             continue;
         }
@@ -381,12 +422,31 @@ fn side_parts(
                 (seg.q, seg.p)
             }
         });
-        if let Some((nrm, p0, p)) = part(ids, &tri, &s.inside, cross, segs) {
+        let from = s.group.pts.len() as u32;
+        if let Some((nrm, p0, p)) = part(ids, &tri, &s.inside, cross, segs, &mut s.group.pts) {
             area += p.area;
-            visit(nrm, p0, p);
+            let pts = (from, s.group.pts.len() as u32);
+            s.group.push(rec(t, !is_a, nrm, p0, p, pts), tris);
         }
     }
+    // The parts around an inside vertex touch there: one piece.
+    for &v in &s.inside_list {
+        s.group.join_around(!is_a, inner.slots_of(v));
+    }
     area
+}
+
+/// The record of a part.
+fn rec(slot: u32, of_b: bool, n: DVec3, p0: DVec3, p: Part, pts: (u32, u32)) -> PartRec {
+    PartRec {
+        slot,
+        of_b,
+        n,
+        p0,
+        area: p.area,
+        moment: p.moment,
+        pts,
+    }
 }
 
 #[cfg(test)]

@@ -72,6 +72,12 @@ impl ExactScratch {
         self.stats
     }
 
+    /// The connected pieces of the intersection found by the last
+    /// [`intersection_volume`](fn@super::intersection_volume) (A's frame), the largest first.
+    pub fn patches(&self) -> &[super::OverlapPatch] {
+        &self.vol.group.patches
+    }
+
     /// Forgets the last answers.
     pub fn reset(&mut self) {
         self.last_pair = None;

@@ -2,6 +2,7 @@
 //! intersection of the two solids the trees were built from, and the penalty wrench that
 //! follows from its exact gradient ([`exact::intersection_volume`](crate::exact::intersection_volume)).
 
+use super::penetration::{ContactStiffness, Patch};
 use crate::exact::{intersection_volume, ExactMesh, ExactScratch, MeshOverlap};
 use crate::pose::Pose;
 use glam::DVec3;
@@ -13,8 +14,10 @@ use glam::DVec3;
 /// loses overlap fastest (`−∇V / |∇V|`, `∇V` the gradient with respect to B's
 /// translation); the torque on B is the same scale times `−∇_θV / |∇V|` (`∇_θV` the gradient
 /// with respect to a rotation of B about its centre of mass), i.e. the moment of that force
-/// about the point where the overlap's surface is centred. Its serde form is the answer every
-/// door prints.
+/// about the point where the overlap's surface is centred. The patches (the intersection's
+/// connected pieces) stay in the pair until its next query:
+/// [`Pair::patches`](crate::Pair::patches). Its serde form is the answer every door prints;
+/// the doors add the patches as `patches`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct MeshPenetration {
     /// True when the solids overlap (`volume > 0`).
@@ -36,6 +39,18 @@ pub struct MeshPenetration {
     pub rotation_gradient: DVec3,
     /// Area of B's surface inside A.
     pub area: f64,
+    /// The largest thickness of a patch along the direction it pushes B: how far B moves
+    /// to leave the deepest piece of the overlap.
+    pub max_depth: f64,
+    /// Connected pieces of the intersection (the pair keeps the largest
+    /// [`PenetrationOptions::max_patches`](crate::PenetrationOptions::max_patches)).
+    pub patch_count: usize,
+    /// How the force and B's torque change as B moves: `stiffness × Σ a·JJᵀ` over the
+    /// parts of B's surface inside A (`a` a part's area, `J = [n; r × n]`, `n` its normal,
+    /// `r` its centroid from B's centre of mass), the Gauss–Newton form of the spheres'
+    /// [`Penetration::stiffness`](crate::Penetration::stiffness): exact for a flat contact,
+    /// symmetric and positive semi-definite.
+    pub stiffness: ContactStiffness,
     /// Triangle pairs that cross.
     pub crossing_pairs: usize,
 }
@@ -51,9 +66,19 @@ pub(crate) fn mesh_penetration(
     com_a: DVec3,
     com_b: DVec3,
     stiffness: f64,
+    max_patches: usize,
     scratch: &mut ExactScratch,
+    patches: &mut Vec<Patch>,
 ) -> MeshPenetration {
     let v: MeshOverlap = intersection_volume(a, pose_a, b, pose_b, com_b, scratch);
+    patches.clear();
+    patches.extend(scratch.patches().iter().take(max_patches).map(|p| Patch {
+        point: pose_a.transform_point(p.point),
+        normal: pose_a.transform_vector(p.normal),
+        depth: p.depth,
+        volume: p.volume,
+        pairs: p.pairs,
+    }));
     let g = v.gradient.length();
     if !(v.volume > 0.0 && g > 0.0) {
         return MeshPenetration {
@@ -64,6 +89,8 @@ pub(crate) fn mesh_penetration(
             // Wholly inside (no surface crossing): overlap without a direction to push.
             contact: v.volume > 0.0,
             volume: v.volume,
+            max_depth: v.max_depth,
+            patch_count: v.patch_count,
             ..Default::default()
         };
     }
@@ -83,6 +110,13 @@ pub(crate) fn mesh_penetration(
         gradient: v.gradient,
         rotation_gradient: v.rotation_gradient,
         area: v.area_b,
+        max_depth: v.max_depth,
+        patch_count: v.patch_count,
+        stiffness: ContactStiffness {
+            linear: v.moments.linear * stiffness,
+            coupling: v.moments.coupling * stiffness,
+            angular: v.moments.angular * stiffness,
+        },
         crossing_pairs: v.crossing_pairs,
     }
 }

@@ -317,7 +317,8 @@ impl Pair {
     /// intersection of the two solids the trees were built from, with the penalty force
     /// and torques of [`PenetrationOptions::stiffness`] from its exact gradient
     /// ([`MeshPenetration`]). Needs both trees' meshes ([`SharedTree::with_mesh`]); an error
-    /// without them. Of the options only the stiffness applies.
+    /// without them. Of the options the stiffness and `max_patches` apply: the pair keeps
+    /// that many of the largest patches ([`Pair::patches`]).
     pub fn mesh_penetration_with(
         &mut self,
         pose_a: &Pose,
@@ -336,7 +337,9 @@ impl Pair {
             self.a.info.center_of_mass,
             self.b.info.center_of_mass,
             opts.stiffness,
+            opts.max_patches,
             &mut self.exact,
+            &mut self.penetration.patches,
         ))
     }
 
@@ -429,8 +432,9 @@ impl Pair {
         p.in_world(pose_a)
     }
 
-    /// The contact patches of the last [`Pair::penetration`] (world frame); other query
-    /// kinds leave them as they are.
+    /// The contact patches of the last [`Pair::penetration`] or
+    /// [`Pair::mesh_penetration_with`] (world frame); other query kinds leave them as they
+    /// are.
     pub fn patches(&self) -> &[Patch] {
         &self.penetration.patches
     }

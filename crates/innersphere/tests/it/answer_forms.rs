@@ -264,6 +264,9 @@ fn a_mesh_penetration_keeps_its_field_names() {
             "gradient",
             "rotation_gradient",
             "area",
+            "max_depth",
+            "patch_count",
+            "stiffness",
             "crossing_pairs",
         ],
     );

@@ -44,7 +44,80 @@ fn a_cube_sunk_into_a_box_overlaps_by_its_depth() {
         );
         assert!((v.area_b - (1.0 + 4.0 * d)).abs() < 1e-12, "{v:?}");
         assert!((v.area_a - 1.0).abs() < 1e-12, "{v:?}");
+        // One piece, d thick, its deepest point on the cube's bottom face, pushed up.
+        assert_eq!(v.patch_count, 1, "{v:?}");
+        assert!((v.max_depth - d).abs() < 1e-12, "{v:?}");
+        // The linearisation: only the bottom face (area 1, normal −z) moves the force up
+        // and down, the side faces' in-plane normals couple nothing vertical.
+        let k = v.moments.linear;
+        assert!((k.z_axis.z - 1.0).abs() < 1e-12, "{k:?}");
+        assert!((k.z_axis.x.abs() + k.x_axis.z.abs()) < 1e-12, "{k:?}");
     }
+}
+
+/// `m` with every triangle split into four at its edges' midpoints, `k` times (flat faces
+/// stay flat; shared edges stay shared).
+fn subdivided(mut m: Mesh, k: u32) -> Mesh {
+    for _ in 0..k {
+        let mut mid = std::collections::HashMap::new();
+        let mut tris = Vec::new();
+        for t in &m.triangles {
+            let mut at = |u: u32, v: u32| {
+                let key = (u.min(v), u.max(v));
+                *mid.entry(key).or_insert_with(|| {
+                    m.vertices
+                        .push((m.vertices[u as usize] + m.vertices[v as usize]) * 0.5);
+                    m.vertices.len() as u32 - 1
+                })
+            };
+            let (a, b, c) = (at(t[0], t[1]), at(t[1], t[2]), at(t[2], t[0]));
+            tris.extend([[t[0], a, c], [a, t[1], b], [c, b, t[2]], [a, b, c]]);
+        }
+        m.triangles = tris;
+    }
+    m
+}
+
+/// Two cubes side by side sunk by different depths into a box of fine triangles: two
+/// pieces, each with its own volume and depth, their volumes summing to the whole; the
+/// deepest point is on the deeper cube's bottom. (Pieces that share a triangle of the other
+/// surface count as one: the box's top must be finer than the cubes' gap.)
+#[test]
+fn separate_contacts_are_separate_patches() {
+    let a = subdivided(shapes::cuboid(DVec3::new(4.0, 4.0, 1.0)), 4);
+    let a = ExactMesh::new(&a).unwrap();
+    let cube = shapes::cuboid(DVec3::splat(0.5));
+    let mut two = cube.clone();
+    let n = two.vertices.len() as u32;
+    two.vertices
+        .extend(cube.vertices.iter().map(|v| *v + DVec3::new(2.0, 0.0, 0.3)));
+    two.triangles
+        .extend(cube.triangles.iter().map(|t| t.map(|i| i + n)));
+    let b = ExactMesh::new(&two).unwrap();
+    let d = 0.4;
+    // Off the box's grid lines (an edge through an edge is a degenerate contact).
+    let pb = pose(DVec3::new(-0.9731, 0.5377, 1.5 - d), DQuat::IDENTITY);
+    let mut s = ExactScratch::new();
+    let v = intersection_volume(&a, &Pose::IDENTITY, &b, &pb, DVec3::ZERO, &mut s);
+    // The first cube sunk by 0.4, the second (0.3 higher) by 0.1.
+    assert!((v.volume - 0.5).abs() < 1e-12, "{v:?}");
+    assert_eq!(v.patch_count, 2);
+    let p = s.patches();
+    assert!(
+        (p[0].volume - 0.4).abs() < 1e-12 && (p[1].volume - 0.1).abs() < 1e-12,
+        "{p:?}"
+    );
+    assert!(
+        (p[0].depth - 0.4).abs() < 1e-12 && (p[1].depth - 0.1).abs() < 1e-12,
+        "{p:?}"
+    );
+    assert!((v.max_depth - 0.4).abs() < 1e-12);
+    for q in p {
+        assert!((q.normal - DVec3::Z).length() < 1e-12, "{q:?}");
+        assert!((q.point.z - (1.0 - q.depth)).abs() < 1e-12, "{q:?}");
+        assert!(q.pairs > 0);
+    }
+    assert!(p[0].point.x < 0.0 && p[1].point.x > 0.0, "{p:?}");
 }
 
 #[test]
@@ -226,8 +299,16 @@ mod properties {
         ) {
             let (a, b, va, vb) = bodies();
             let pb = pose(DVec3::from_array(t), DQuat::from_scaled_axis(DVec3::from_array(r)));
-            let ab = volume(a, &Pose::IDENTITY, b, &pb);
+            let mut s = ExactScratch::new();
+            let ab = intersection_volume(a, &Pose::IDENTITY, b, &pb, DVec3::ZERO, &mut s);
             let ba = volume(b, &pb, a, &Pose::IDENTITY);
+            // The patches are closed pieces: their volumes (each about its own origin) sum
+            // to the whole, and none is deeper than the deepest.
+            let sum: f64 = s.patches().iter().map(|p| p.volume).sum();
+            prop_assert_eq!(s.patches().len(), ab.patch_count);
+            prop_assert!((sum - ab.volume).abs() <= 1e-9 * va.min(*vb), "{} {:?}", sum, ab);
+            prop_assert!(s.patches().iter().all(|p| p.depth <= ab.max_depth));
+            prop_assert_eq!(ab.patch_count == 0, ab.volume == 0.0);
             prop_assert!(ab.volume >= 0.0 && ab.volume <= va.min(*vb) * (1.0 + 1e-9), "{:?}", ab);
             prop_assert!((ab.volume - ba.volume).abs() <= 1e-9 * va.min(*vb), "{:?} {:?}", ab, ba);
             if ab.volume == 0.0 {

@@ -339,6 +339,11 @@ typedef struct ist_haptic_params {
    */
   double collision_budget;
   /*
+   1: the contact is the meshes' own (ist_mesh_penetration; needs collision_thread 1
+   and both trees' meshes, ist_tree_with_mesh); 0: the sphere packings' (default).
+   */
+  int mesh_contact;
+  /*
    World pose of body A (fixed).
    */
   struct ist_pose pose_a;

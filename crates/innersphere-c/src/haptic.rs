@@ -6,8 +6,8 @@ use crate::types::ist_pose;
 use crate::{mutable, reference};
 use innersphere::Pair;
 use innersphere_haptic::{
-    CollisionOptions, Coupling, DeviceClass, DeviceLimits, HapticLoop, HapticOptions,
-    MultirateLoop, Tick,
+    CollisionOptions, ContactSource, Coupling, DeviceClass, DeviceLimits, HapticLoop,
+    HapticOptions, MultirateLoop, Tick,
 };
 use std::ffi::c_int;
 
@@ -67,6 +67,9 @@ pub struct ist_haptic_params {
     /// With collision_thread: most time one collision query may take (s) before the
     /// time-critical query bounds the model in use instead.
     pub collision_budget: f64,
+    /// 1: the contact is the meshes' own (ist_mesh_penetration; needs collision_thread 1
+    /// and both trees' meshes, ist_tree_with_mesh); 0: the sphere packings' (default).
+    pub mesh_contact: c_int,
     /// World pose of body A (fixed).
     pub pose_a: ist_pose,
     /// Where the tool (body B) starts, at rest.
@@ -180,6 +183,7 @@ pub unsafe extern "C" fn ist_haptic_params_for_rate(
             collision_thread: 0,
             collision_delay: 0.0,
             collision_budget: CollisionOptions::default().budget,
+            mesh_contact: 0,
             pose_a: id,
             start: id,
         };
@@ -226,12 +230,24 @@ pub unsafe extern "C" fn ist_haptic_new(
         };
         let own = Pair::new(p.pair.tree_a().clone(), p.pair.tree_b().clone());
         let (pose_a, start) = (c.pose_a.to_pose()?, c.start.to_pose()?);
+        let contact = match c.mesh_contact {
+            0 => ContactSource::Spheres,
+            1 => ContactSource::Mesh,
+            n => return Err(Fail::arg(format!("mesh_contact must be 0 or 1, not {n}"))),
+        };
         let hl = match c.collision_thread {
+            0 if contact == ContactSource::Mesh => {
+                return Err(Fail::arg(
+                    "mesh_contact 1 needs collision_thread 1 (the meshes' query takes milliseconds in deep contact)"
+                        .to_string(),
+                ))
+            }
             0 => Loop::Single(Box::new(HapticLoop::new(own, pose_a, start, opts)?)),
             1 => {
                 let collision = CollisionOptions {
                     delay: c.collision_delay,
                     budget: c.collision_budget,
+                    contact,
                     ..Default::default()
                 };
                 Loop::Multirate(Box::new(MultirateLoop::spawn(

@@ -9,7 +9,7 @@ use innersphere::glam::DVec3;
 use innersphere::{Error, Mesh, Pair, Pose, Result, SphereTree};
 use innersphere_dental::contact_map::{ArchContext, Teeth};
 use innersphere_haptic::{
-    CollisionOptions, CollisionStats, HapticLoop, HapticOptions, MultirateLoop, Tick,
+    CollisionOptions, CollisionStats, ContactSource, HapticLoop, HapticOptions, MultirateLoop, Tick,
 };
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
@@ -73,8 +73,13 @@ pub struct HapticSummary {
     pub collision_thread: bool,
     /// The collision thread's stress delay before each query (µs).
     pub collision_delay_us: Option<f64>,
+    /// Where the contact came from (`spheres` or `mesh`).
+    pub contact: ContactSource,
     /// Contact models the collision thread published per second.
     pub collision_rate_hz: Option<f64>,
+    /// The fewest models the collision thread published in any quarter second of the
+    /// session, per second: the rate in the phase where the contact cost most.
+    pub collision_rate_min_hz: Option<f64>,
     /// 99th percentile of the collision thread's query time (µs).
     pub collision_p99_us: Option<f64>,
     /// Collision queries answered by the time-critical query (the model kept, bounded).
@@ -211,6 +216,9 @@ pub fn run(
         }
         let tick = hl.tick(&pose);
         figures.add(&tick);
+        if let Looper::Servo(s) = &hl {
+            figures.models(i as f64 / opts.rate, s.collision_queries());
+        }
         if session.keep_ticks {
             ticks.push(TickRecord {
                 t: at(i),
@@ -253,7 +261,11 @@ pub fn run(
         model_age_max_us: f.age_us.max(),
         collision_thread: stats.is_some(),
         collision_delay_us: session.collision.map(|c| c.delay * 1e6),
+        contact: session
+            .collision
+            .map_or(ContactSource::Spheres, |c| c.contact),
         collision_rate_hz: stats.as_ref().map(|s| s.rate_hz()),
+        collision_rate_min_hz: f.min_rate(),
         collision_p99_us: stats.as_ref().map(|s| s.quantile(0.99) * 1e6),
         collision_budgeted: stats.as_ref().map(|s| s.budgeted),
     };
@@ -273,7 +285,14 @@ struct Figures {
     max_volume: f64,
     max_step: f64,
     last_force: Option<DVec3>,
+    /// Start (s) and models published then of the current quarter second, and the fewest
+    /// models of a whole quarter second so far.
+    window: Option<(f64, u64)>,
+    fewest: Option<u64>,
 }
+
+/// The window of [`HapticSummary::collision_rate_min_hz`] (s).
+const RATE_WINDOW: f64 = 0.25;
 
 impl Figures {
     fn add(&mut self, t: &Tick) {
@@ -289,6 +308,24 @@ impl Figures {
             self.max_step = self.max_step.max((t.force - f).length());
         }
         self.last_force = Some(t.force);
+    }
+
+    /// Counts the collision thread's models: `published` so far at session time `t`.
+    fn models(&mut self, t: f64, published: u64) {
+        match self.window {
+            None => self.window = Some((t, published)),
+            Some((t0, n0)) if t - t0 >= RATE_WINDOW => {
+                let n = published - n0;
+                self.fewest = Some(self.fewest.map_or(n, |f| f.min(n)));
+                self.window = Some((t, published));
+            }
+            Some(_) => {}
+        }
+    }
+
+    /// The fewest models of a whole window, per second.
+    fn min_rate(&self) -> Option<f64> {
+        self.fewest.map(|n| n as f64 / RATE_WINDOW)
     }
 }
 

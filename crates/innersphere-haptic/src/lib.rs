@@ -30,7 +30,7 @@ pub mod step;
 
 pub use body::{BodyState, RigidBody, TOOTH_DENSITY};
 pub use device::{Coupling, DeviceClass, DeviceLimits};
-pub use model::ContactModel;
+pub use model::{ContactModel, ContactSource};
 pub use multirate::{CollisionOptions, CollisionStats, MultirateLoop};
 pub use render::{check_step, HapticLoop, HapticOptions, Tick, MIN_RATE};
 pub use servo::Servo;

@@ -8,8 +8,35 @@ use crate::mat6::{self, Mat6};
 use crate::step::Wrench;
 use glam::DVec3;
 use innersphere::pose::Pose;
-use innersphere::query::Penetration;
+use innersphere::query::{MeshPenetration, Penetration};
 use std::time::Instant;
+
+/// Where the contact comes from: the inner-sphere packings' penetration volume (the paper's,
+/// tens of microseconds a query) or the meshes' own exact intersection volume (the scanned
+/// surfaces, milliseconds in deep contact: the collision thread's).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ContactSource {
+    /// [`Pair::penetration`](innersphere::Pair::penetration).
+    #[default]
+    Spheres,
+    /// [`Pair::mesh_penetration_with`](innersphere::Pair::mesh_penetration_with); needs both
+    /// trees' meshes.
+    Mesh,
+}
+
+impl std::str::FromStr for ContactSource {
+    type Err = innersphere::Error;
+    fn from_str(s: &str) -> innersphere::Result<Self> {
+        match s {
+            "spheres" => Ok(ContactSource::Spheres),
+            "mesh" => Ok(ContactSource::Mesh),
+            _ => Err(innersphere::Error::InvalidOption(format!(
+                "the contact is `spheres` or `mesh`, not `{s}`"
+            ))),
+        }
+    }
+}
 
 /// Fraction of the model's own push below which the linearised wrench fades out: a
 /// linearised penalty would pull once the tool has backed out past the contact, and a
@@ -79,6 +106,28 @@ impl ContactModel {
             max_depth: p.max_depth,
             normal: p.normal,
             patches: p.patch_count,
+            force_cap: f64::INFINITY,
+            sampled,
+            query_seconds: 0.0,
+            seq: 0,
+        }
+    }
+
+    /// The model of the meshes' own penetration ([`MeshPenetration`]) of the tool at `pose`.
+    pub fn from_mesh_penetration(
+        pose: Pose,
+        m: &MeshPenetration,
+        sampled: Instant,
+    ) -> ContactModel {
+        ContactModel {
+            pose,
+            force: m.force,
+            torque: m.torque_b,
+            stiffness: m.stiffness.to_matrix6(),
+            volume: m.volume,
+            max_depth: m.max_depth,
+            normal: m.normal,
+            patches: m.patch_count,
             force_cap: f64::INFINITY,
             sampled,
             query_seconds: 0.0,

@@ -8,7 +8,7 @@
 
 use crate::body::{BodyState, RigidBody};
 use crate::deadline::{needs_exact, Answer, Deadline};
-use crate::model::ContactModel;
+use crate::model::{ContactModel, ContactSource};
 use crate::render::{HapticOptions, Tick};
 use crate::servo::Servo;
 use innersphere::error::num;
@@ -34,6 +34,10 @@ pub struct CollisionOptions {
     /// Collision query times kept for [`CollisionStats`] (a ring allocated when the thread
     /// starts, 4 bytes each). Default 2²⁰.
     pub history: usize,
+    /// Where the contact comes from. Default the spheres (see docs/HAPTICS.md for why). With
+    /// [`ContactSource::Mesh`] every query is the meshes' exact one, whatever it costs:
+    /// `budget` does not apply, the servo renders the newest model meanwhile.
+    pub contact: ContactSource,
 }
 
 impl Default for CollisionOptions {
@@ -42,6 +46,7 @@ impl Default for CollisionOptions {
             delay: 0.0,
             budget: 5e-3,
             history: 1 << 20,
+            contact: ContactSource::Spheres,
         }
     }
 }
@@ -134,7 +139,8 @@ pub struct MultirateLoop {
 impl MultirateLoop {
     /// Starts the collision thread on `pair` (A fixed at `pose_a`, the tool B at rest at
     /// `start`) and returns the servo side. Fails on bad options, a tree of B without mass
-    /// properties, or a thread the system would not start.
+    /// properties, mesh contact without both trees' meshes, or a thread the system would not
+    /// start.
     pub fn spawn(
         pair: Pair,
         pose_a: Pose,
@@ -144,6 +150,13 @@ impl MultirateLoop {
     ) -> Result<MultirateLoop> {
         opts.check()?;
         collision.check()?;
+        if collision.contact == ContactSource::Mesh
+            && (pair.tree_a().mesh().is_none() || pair.tree_b().mesh().is_none())
+        {
+            return Err(Error::InvalidOption(
+                "mesh contact needs both trees' meshes (SharedTree::with_mesh)".into(),
+            ));
+        }
         let body = RigidBody::from_tree(pair.tree_b(), opts.density)?;
         let now = Instant::now();
         let (poses_in, poses_out) = triple_buffer(&PoseSample {
@@ -315,28 +328,10 @@ impl Collision {
                 std::thread::sleep(delay);
             }
             let t0 = Instant::now();
-            let mut answer = deadline.query(
-                &mut self.pair,
-                &self.pose_a,
-                &p.pose,
-                p.at,
-                &self.penetration,
-                t0 + budget,
-                Duration::ZERO,
-                false,
-            );
-            if needs_exact(&answer, &last) {
-                answer = deadline.query(
-                    &mut self.pair,
-                    &self.pose_a,
-                    &p.pose,
-                    p.at,
-                    &self.penetration,
-                    t0,
-                    Duration::ZERO,
-                    true,
-                );
-            }
+            let answer = match self.options.contact {
+                ContactSource::Spheres => self.spheres(&mut deadline, &p, t0 + budget, &last),
+                ContactSource::Mesh => Answer::Model(self.mesh(&p)),
+            };
             let t = t0.elapsed().as_secs_f64();
             budgeted += matches!(answer, Answer::Bound { .. }) as u64;
             let mut model = model_of(answer, &last);
@@ -348,12 +343,62 @@ impl Collision {
             self.published.store(queries, Ordering::Relaxed);
             let slot = ring_slot(queries, times.len());
             times[slot] = t as f32;
+            if let Some(rest) = rest_after(t) {
+                std::thread::sleep(rest);
+            }
         }
         CollisionStats {
             queries,
             budgeted,
             elapsed: began.elapsed().as_secs_f64(),
             times: oldest_first(&times, queries),
+        }
+    }
+}
+
+impl Collision {
+    /// The spheres' answer at the sampled pose `p`: exact when it fits before `due`, else the
+    /// time-critical one, unless that found a contact the model in use (`last`) does not know.
+    fn spheres(
+        &mut self,
+        deadline: &mut Deadline,
+        p: &PoseSample,
+        due: Instant,
+        last: &ContactModel,
+    ) -> Answer {
+        let answer = deadline.query(
+            &mut self.pair,
+            &self.pose_a,
+            &p.pose,
+            p.at,
+            &self.penetration,
+            due,
+            Duration::ZERO,
+            false,
+        );
+        if !needs_exact(&answer, last) {
+            return answer;
+        }
+        deadline.query(
+            &mut self.pair,
+            &self.pose_a,
+            &p.pose,
+            p.at,
+            &self.penetration,
+            due,
+            Duration::ZERO,
+            true,
+        )
+    }
+
+    /// The meshes' model at the sampled pose `p` (both meshes are there: checked at spawn).
+    fn mesh(&mut self, p: &PoseSample) -> ContactModel {
+        match self
+            .pair
+            .mesh_penetration_with(&self.pose_a, &p.pose, &self.penetration)
+        {
+            Ok(m) => ContactModel::from_mesh_penetration(p.pose, &m, p.at),
+            Err(_) => ContactModel::none(p.pose),
         }
     }
 }
@@ -368,6 +413,19 @@ fn model_of(answer: Answer, last: &ContactModel) -> ContactModel {
             ..*last
         },
     }
+}
+
+/// Queries longer than this are followed by a rest ([`rest_after`]).
+const REST_AFTER: f64 = 200e-6;
+
+/// The rest after a query of `t` seconds: an eighth of it when it is long. A collision thread
+/// that never idles (queries of milliseconds, a new pose every tick: the meshes' contact)
+/// runs more than 95 % of every second, and under real-time scheduling the kernel's
+/// throttling then stops it for the rest of that second, 50 ms of ever older models
+/// (measured on the jaw press at 10 kHz: models 52 ms old once a second). Resting an eighth
+/// keeps it busy at most 89 % of the time, models a tenth older.
+fn rest_after(t: f64) -> Option<Duration> {
+    (t > REST_AFTER).then(|| Duration::from_secs_f64(t / 8.0))
 }
 
 /// Where query `k` (1, 2, …) keeps its time in a ring of `len`.
@@ -398,6 +456,13 @@ mod tests {
     use glam::DVec3;
 
     #[test]
+    fn only_a_long_query_is_followed_by_a_rest_of_an_eighth() {
+        assert_eq!(rest_after(150e-6), None);
+        assert_eq!(rest_after(REST_AFTER), None);
+        assert_eq!(rest_after(4e-3), Some(Duration::from_micros(500)));
+    }
+
+    #[test]
     fn bad_collision_options_are_refused_and_the_edges_taken() {
         let ok = CollisionOptions::default();
         assert!(ok.check().is_ok());
@@ -405,6 +470,7 @@ mod tests {
             delay,
             budget,
             history,
+            contact: ContactSource::Mesh,
         };
         for good in [with(0.0, 1.0, 1), with(1.0, 1e-9, 1 << 26)] {
             assert!(good.check().is_ok(), "{good:?}");

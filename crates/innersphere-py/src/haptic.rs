@@ -2,7 +2,9 @@
 
 use crate::convert::{error, pose, pose44, pose7, pose_or_identity};
 use crate::pair::Pair;
-use innersphere_haptic::{CollisionOptions, DeviceClass, HapticLoop, HapticOptions, MultirateLoop};
+use innersphere_haptic::{
+    CollisionOptions, ContactSource, DeviceClass, HapticLoop, HapticOptions, MultirateLoop,
+};
 use numpy::PyArray1;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -66,6 +68,9 @@ impl Tick {
 ///     when the Haptic is deleted.
 /// collision_delay: with collision_thread, seconds the collision thread sleeps before each
 ///     query (a stress knob standing for a slow machine).
+/// contact: "spheres" (the packings' penetration volume) or "mesh" (the meshes' own exact
+///     intersection volume: both trees need their meshes, Tree.with_mesh; runs in the
+///     collision thread, which it implies).
 ///
 /// Call tick(device_pose) once per device tick, from one thread. Raises ValueError for a bad
 /// option or a tree of B without mass properties.
@@ -93,7 +98,7 @@ macro_rules! either {
 #[pymethods]
 impl Haptic {
     #[new]
-    #[pyo3(signature = (pair, device="omega", rate=1000.0, start=None, *, pose_a=None, budget=None, collision_thread=false, collision_delay=0.0))]
+    #[pyo3(signature = (pair, device="omega", rate=1000.0, start=None, *, pose_a=None, budget=None, collision_thread=false, collision_delay=0.0, contact="spheres"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         pair: PyRef<'_, Pair>,
@@ -104,7 +109,10 @@ impl Haptic {
         budget: Option<f64>,
         collision_thread: bool,
         collision_delay: f64,
+        contact: &str,
     ) -> PyResult<Haptic> {
+        let contact: ContactSource = contact.parse().map_err(error)?;
+        let collision_thread = collision_thread || contact == ContactSource::Mesh;
         let class = DeviceClass::ALL
             .into_iter()
             .find(|c| c.name() == device.to_ascii_lowercase())
@@ -120,6 +128,7 @@ impl Haptic {
         let inner = if collision_thread {
             let c = CollisionOptions {
                 delay: collision_delay,
+                contact,
                 ..Default::default()
             };
             Loop::Multirate(Box::new(

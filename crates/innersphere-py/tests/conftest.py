@@ -80,3 +80,16 @@ def ist():
             pytest.fail(msg)
         pytest.skip(msg)
     return Ist(exe)
+
+
+@pytest.fixture(scope="session")
+def mesh_files(meshes, tmp_path_factory):
+    """The two trees' meshes as OBJ files (the exact floats): what `ist query --meshes`
+    and Tree.with_mesh both read."""
+    from helpers import write_obj
+
+    d = tmp_path_factory.mktemp("meshes")
+    a, b = d / "box.obj", d / "ellipsoid.obj"
+    write_obj(a, *meshes["box"])
+    write_obj(b, *meshes["ellipsoid"])
+    return a, b

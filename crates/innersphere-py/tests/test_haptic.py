@@ -103,3 +103,29 @@ def test_haptic_with_a_collision_thread_pushes_back_passively(trees):
         innersphere.Haptic(pair, collision_delay=0.001)
     single = innersphere.Haptic(pair)
     assert single.collision_queries == 0 and single.tick(poses[0]).model_age == 0.0
+
+
+def test_haptic_on_the_meshes_contact_pushes_back_passively(trees, mesh_files):
+    """contact="mesh": the meshes' own volume in the collision thread (implied), the tool held
+    at the box's face, the hand given no energy; refused without the meshes or for an unknown
+    contact."""
+    import time
+
+    with pytest.raises(ValueError, match="meshes"):
+        innersphere.Haptic(innersphere.Pair(*trees), contact="mesh")
+    with pytest.raises(ValueError, match="spheres"):
+        innersphere.Haptic(innersphere.Pair(*trees), contact="voxels")
+    pair = innersphere.Pair(trees[0].with_mesh(str(mesh_files[0])), trees[1].with_mesh(mesh_files[1]))
+    _, poses = press(600)
+    h = innersphere.Haptic(pair, "touch", 2000.0, start=poses[0], contact="mesh")
+    start = time.perf_counter()
+    ticks = []
+    for i, p in enumerate(poses):
+        while time.perf_counter() < start + i / 2000.0:
+            pass
+        ticks.append(h.tick(p))
+    last = ticks[-1]
+    assert h.collision_queries > 100
+    assert last.tool[0] > poses[-1][0] + 0.1 and last.force[0] > 0.02
+    assert last.volume > 0
+    assert h.energy_to_user_max <= 1e-9

@@ -222,19 +222,6 @@ def test_pair_keeps_its_trees(trees):
     assert "Pair(" in repr(pair)
 
 
-@pytest.fixture(scope="module")
-def mesh_files(meshes, tmp_path_factory):
-    """The two trees' meshes as OBJ files (the exact floats): what `ist query --meshes`
-    and Tree.with_mesh both read."""
-    from helpers import write_obj
-
-    d = tmp_path_factory.mktemp("meshes")
-    a, b = d / "box.obj", d / "ellipsoid.obj"
-    write_obj(a, *meshes["box"])
-    write_obj(b, *meshes["ellipsoid"])
-    return a, b
-
-
 @pytest.mark.parametrize("i", range(len(POSES)))
 def test_refined_distance_equals_cli(trees, tree_files, mesh_files, ist, i):
     want = ist.query(*tree_files, POSES[i], "refined-distance", "--meshes", *mesh_files)

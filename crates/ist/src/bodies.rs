@@ -124,7 +124,7 @@ pub fn load_body(
     Ok((tree, Some(mesh)))
 }
 
-/// `tree` with its mesh for the refined distance: `given` (--meshes, in `unit`), else the
+/// `tree` with its mesh for the meshes' queries (refined distance, mesh penetration): `given` (--meshes, in `unit`), else the
 /// body's own mesh, else the mesh the tree names as its source (in the unit it recorded); an
 /// error that says which to give.
 pub fn with_mesh(
@@ -142,7 +142,7 @@ pub fn with_mesh(
                 format!("body {body}'s tree names its mesh, but it cannot be used: give --meshes MESH_A MESH_B")
             })?,
             None => anyhow::bail!(
-                "the refined distance needs the meshes: body {body}'s tree does not name the mesh it was built from; give --meshes MESH_A MESH_B"
+                "the meshes' queries need the meshes: body {body}'s tree does not name the mesh it was built from; give --meshes MESH_A MESH_B"
             ),
         },
     };

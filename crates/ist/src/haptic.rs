@@ -1,10 +1,10 @@
 //! `ist haptic`: the library's 6-DOF haptic loop over a recorded device trajectory.
 
 use anyhow::Context;
-use innersphere::Pair;
+use innersphere::{Pair, SharedTree};
 use innersphere_eval::haptic::{run as run_session, trace_csv, Session};
 use innersphere_eval::motion::Motion;
-use innersphere_haptic::{CollisionOptions, DeviceClass, HapticOptions};
+use innersphere_haptic::{CollisionOptions, ContactSource, DeviceClass, HapticOptions};
 use std::path::PathBuf;
 
 /// Arguments of `ist haptic`. Units: millimetres, newtons, seconds (torques in N·mm).
@@ -55,8 +55,19 @@ pub struct Args {
     collision_thread: bool,
     /// With --collision-thread: sleep this long (µs) before each collision query, standing
     /// for a slow machine.
-    #[arg(long, requires = "collision_thread")]
+    #[arg(long)]
     collision_delay_us: Option<f64>,
+    /// Where the contact comes from: `spheres` (the packings' penetration volume, tens of
+    /// µs a query) or `mesh` (the meshes' own exact intersection volume, milliseconds in
+    /// deep contact; runs in the collision thread, which it implies, and needs the meshes
+    /// as `ist query --query mesh-penetration` does). docs/HAPTICS.md says why spheres is the
+    /// default.
+    #[arg(long, default_value = "spheres", value_parser = parse_contact)]
+    contact: ContactSource,
+    /// The meshes of A and B for --contact mesh (default: the bodies' own when given as
+    /// meshes, else the meshes their tree files name as their source).
+    #[arg(long, num_args = 2, value_names = ["MESH_A", "MESH_B"])]
+    meshes: Option<Vec<PathBuf>>,
     /// Write one row per tick: t, device pose, tool pose, force xyz (N), torque xyz (N·mm),
     /// volume (mm³), depth (mm), compute_us, budgeted.
     #[arg(long)]
@@ -67,6 +78,10 @@ pub struct Args {
     /// Print JSON.
     #[arg(long)]
     json: bool,
+}
+
+fn parse_contact(s: &str) -> Result<ContactSource, String> {
+    s.parse().map_err(|e: innersphere::Error| e.to_string())
 }
 
 fn parse_class(s: &str) -> Result<DeviceClass, String> {
@@ -93,9 +108,19 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         opts.contact_stiffness = k;
     }
     opts.check()?;
-    let collision = if args.collision_thread {
+    let mesh = args.contact == ContactSource::Mesh;
+    anyhow::ensure!(
+        args.collision_thread || mesh || args.collision_delay_us.is_none(),
+        "--collision-delay-us needs the collision thread (--collision-thread or --contact mesh)"
+    );
+    anyhow::ensure!(
+        mesh || args.meshes.is_none(),
+        "--meshes gives the meshes of --contact mesh"
+    );
+    let collision = if args.collision_thread || mesh {
         let c = CollisionOptions {
             delay: args.collision_delay_us.unwrap_or(0.0) * 1e-6,
+            contact: args.contact,
             ..Default::default()
         };
         c.check()?;
@@ -103,8 +128,14 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     } else {
         None
     };
-    let a = crate::bodies::load(&args.a, &args.body)?;
-    let b = crate::bodies::load(&args.b, &args.body)?;
+    let (a, mesh_a) = crate::bodies::load_body(&args.a, &args.body)?;
+    let (b, mesh_b) = crate::bodies::load_body(&args.b, &args.body)?;
+    let (mut a, mut b) = (SharedTree::new(a), SharedTree::new(b));
+    if mesh {
+        let given = args.meshes.as_deref().unwrap_or(&[]);
+        a = crate::bodies::with_mesh(a, given.first(), mesh_a, "A", args.body.unit.unit)?;
+        b = crate::bodies::with_mesh(b, given.get(1), mesh_b, "B", args.body.unit.unit)?;
+    }
     let device = Motion::load(&args.device)?;
     let session = Session {
         realtime: args.realtime,
@@ -148,7 +179,12 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             s.model_age_max_us,
             match (s.collision_rate_hz, s.collision_p99_us) {
                 (Some(r), Some(p)) => format!(
-                    "; collision thread {r:.0} models/s, query p99 {p:.1} µs"
+                    "; collision thread ({} contact) {r:.0} models/s (fewest in a quarter second: {:.0}/s), query p99 {p:.1} µs",
+                    match s.contact {
+                        ContactSource::Spheres => "sphere",
+                        ContactSource::Mesh => "mesh",
+                    },
+                    s.collision_rate_min_hz.unwrap_or(0.0)
                 ),
                 _ => String::new(),
             }

@@ -269,7 +269,7 @@ fn mesh_penetration(
     let patches = pair.patches();
     let mut summary = if m.contact {
         format!(
-            "the meshes overlap by {:.6e} units³ ({} triangle pairs cross, deepest {:.6} units), {:.1} µs\n\
+            "the meshes overlap by {:.6e} units³ ({} triangle pairs cross, largest mean depth of a patch {:.6} units), {:.1} µs\n\
              force on B {:?}, torque on B {:?}, torque on A {:?} (force = stiffness {} × volume along the direction that loses overlap fastest; torques about each body's centre of mass)",
             m.volume,
             m.crossing_pairs,
@@ -285,7 +285,7 @@ fn mesh_penetration(
     };
     for q in patches {
         summary += &format!(
-            "\n  patch: deepest point {:?} units, normal {:?}, depth {:.6} units, volume {:.6e} units³, {} triangle pairs",
+            "\n  patch at {:?} units, normal {:?}, mean depth {:.6} units, volume {:.6e} units³, {} triangle pairs",
             v3(q.point),
             v3(q.normal),
             q.depth,

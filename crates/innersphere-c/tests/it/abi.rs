@@ -316,6 +316,20 @@ fn penetration_and_the_haptic_tool_pose_are_the_librarys_bit_for_bit() {
             "{q:?}"
         );
         ist_haptic_free(h);
+        // Mesh contact: only in the collision thread, only with both trees' meshes.
+        hp.mesh_contact = 1;
+        assert!(ist_haptic_new(pair, &hp).is_null());
+        assert!(
+            last_error().contains("collision_thread"),
+            "{}",
+            last_error()
+        );
+        hp.collision_thread = 1;
+        assert!(ist_haptic_new(pair, &hp).is_null());
+        assert!(last_error().contains("meshes"), "{}", last_error());
+        hp.mesh_contact = 2;
+        assert!(ist_haptic_new(pair, &hp).is_null());
+        assert!(last_error().contains("mesh_contact"), "{}", last_error());
         ist_pair_free(pair);
         ist_tree_free(a);
         ist_tree_free(b);

@@ -326,8 +326,8 @@ class Pair:
         query --json --query mesh-penetration``): contact, volume, normal, force, torque_a,
         torque_b, gradient, rotation_gradient, area, max_depth, patch_count, stiffness,
         crossing_pairs, and the ``max_patches`` largest connected pieces of the
-        intersection as ``patches`` (point: the deepest point of B in A, normal, depth,
-        volume, pairs)."""
+        intersection as ``patches`` (point: the centre of B's surface inside A, normal,
+        depth: the mean thickness along it, volume, pairs)."""
     def distance_traversal(self, pose_b: _PoseLike, *, pose_a: Optional[_PoseLike] = None) -> bool:
         """The paper's distance traversal: whether the packings overlap."""
     def backtracking(self, pose_b: _PoseLike, *, pose_a: Optional[_PoseLike] = None) -> bool:
@@ -447,11 +447,14 @@ class Haptic:
         budget: Optional[float] = None,
         collision_thread: bool = False,
         collision_delay: float = 0.0,
+        contact: str = "spheres",
     ) -> "Haptic":
         """device: "omega" (12 N) or "touch" (3.3 N); rate in Hz; start: the tool's pose
         at rest (default identity); budget: most seconds per tick (default one period);
         collision_thread: the penetration query in a thread of its own (pace the ticks in
-        real time); collision_delay: seconds it sleeps before each query (stress knob)."""
+        real time); collision_delay: seconds it sleeps before each query (stress knob);
+        contact: "spheres" or "mesh" (the meshes' own exact volume: both trees need their
+        meshes, Tree.with_mesh; implies collision_thread)."""
     def tick(self, device_pose: _PoseLike, dt: float = 0.0) -> Tick:
         """One device tick: the device's pose in, the force to send out (dt: seconds since
         the last tick; 0 = one period). A NaN pose raises ValueError."""

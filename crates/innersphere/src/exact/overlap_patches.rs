@@ -1,7 +1,7 @@
 //! The parts of the intersection's surface grouped into its connected pieces (the contact
 //! patches of [`intersection_volume`](super::intersection_volume)), each piece's volume,
-//! push direction, deepest point and depth, and the area moments of B's surface inside A
-//! that linearise the penalty wrench.
+//! push direction, centre and mean depth, and the area moments of B's surface inside A that
+//! linearise the penalty wrench.
 //!
 //! A piece of `A ∩ B` is bounded by parts of both surfaces. Two parts belong to the same
 //! piece when a crossing segment joins them (A's triangle and B's meet along it) or when they
@@ -26,20 +26,20 @@ pub(super) struct PartRec {
     pub(super) area: f64,
     /// First moment `∫ x dS` of the part.
     pub(super) moment: DVec3,
-    /// The part's boundary points: `pts[start..end]` of [`Grouping::pts`].
-    pub(super) pts: (u32, u32),
 }
 
 /// One connected piece of the intersection (A's frame).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct OverlapPatch {
-    /// The deepest point of B inside A in this piece: its boundary point farthest against
-    /// `normal`.
+    /// Centre of B's surface inside A in this piece (area-weighted; of A's inside B when
+    /// none of B's bounds it).
     pub point: DVec3,
     /// Unit direction B is pushed out of this piece (`−` the vector area of B's surface in
-    /// it); zero when none of B's surface bounds it (B wholly inside A there).
+    /// it); zero when that vanishes (B wholly inside A there).
     pub normal: DVec3,
-    /// Thickness of the piece along `normal`: how far B would move along it to leave.
+    /// Mean thickness of the piece along `normal`: its volume over B's surface in it
+    /// projected across `normal` (`|∇V|` of the piece). For a flat contact the depth
+    /// exactly; for a lens about half its peak. 0 without a normal.
     pub depth: f64,
     /// Volume of the piece.
     pub volume: f64,
@@ -104,9 +104,9 @@ struct Acc {
     origin: DVec3,
     volume: f64,
     grad: DVec3,
-    lo: f64,
-    hi: f64,
-    point: DVec3,
+    /// Area and first moment of B's parts, of A's parts.
+    area: [f64; 2],
+    moment: [DVec3; 2],
     pairs: u32,
 }
 
@@ -114,7 +114,6 @@ struct Acc {
 #[derive(Debug, Clone, Default)]
 pub(super) struct Grouping {
     pub(super) parts: Vec<PartRec>,
-    pub(super) pts: Vec<DVec3>,
     /// Slot → part index, per mesh (valid where the part it names has that slot and side).
     node_a: Vec<u32>,
     node_b: Vec<u32>,
@@ -129,11 +128,10 @@ impl Grouping {
     /// Forgets the last query's parts.
     pub(super) fn clear(&mut self) {
         self.parts.clear();
-        self.pts.clear();
         self.parent.clear();
     }
 
-    /// Records a part; `pts_from` is where its boundary points start in `pts`.
+    /// Records a part (`tris`: the triangles of its mesh).
     pub(super) fn push(&mut self, rec: PartRec, tris: usize) {
         let i = self.parts.len() as u32;
         let map = if rec.of_b {
@@ -198,13 +196,8 @@ impl Grouping {
     }
 
     /// Groups the parts into pieces (after every join): `patches`, the largest first;
-    /// `crossings` the crossing pairs' slots; `fallback` the direction B is pushed overall
-    /// (for pieces without B's surface). Returns the largest depth.
-    pub(super) fn group(
-        &mut self,
-        crossings: impl Iterator<Item = (u32, u32)>,
-        fallback: DVec3,
-    ) -> f64 {
+    /// `crossings` the crossing pairs' slots. Returns the largest depth.
+    pub(super) fn group(&mut self, crossings: impl Iterator<Item = (u32, u32)>) -> f64 {
         self.patches.clear();
         self.acc.clear();
         self.patch_of.clear();
@@ -215,8 +208,6 @@ impl Grouping {
                 self.patch_of[root] = self.acc.len() as u32;
                 self.acc.push(Acc {
                     origin: self.parts[i as usize].p0,
-                    lo: f64::INFINITY,
-                    hi: f64::NEG_INFINITY,
                     ..Acc::default()
                 });
             }
@@ -229,6 +220,9 @@ impl Grouping {
             if r.of_b {
                 acc.grad += r.n * r.area;
             }
+            let side = usize::from(!r.of_b);
+            acc.area[side] += r.area;
+            acc.moment[side] += r.moment;
         }
         for (sa, _) in crossings {
             if let Some(x) = self.node(false, sa) {
@@ -236,33 +230,24 @@ impl Grouping {
                 self.acc[k as usize].pairs += 1;
             }
         }
-        for (i, r) in self.parts.iter().enumerate() {
-            let acc = &mut self.acc[self.patch_of[i] as usize];
-            let g = acc.grad.length();
-            let u = if g > 0.0 { -acc.grad / g } else { fallback };
-            for &p in &self.pts[r.pts.0 as usize..r.pts.1 as usize] {
-                let h = p.dot(u);
-                if h < acc.lo {
-                    acc.lo = h;
-                    acc.point = p;
-                }
-                acc.hi = acc.hi.max(h);
-            }
-        }
         let mut deepest = 0.0f64;
         for acc in &self.acc {
             let g = acc.grad.length();
-            let depth = if acc.hi >= acc.lo {
-                acc.hi - acc.lo
+            let volume = (acc.volume / 3.0).max(0.0);
+            // Without a usable direction (B's surface in the piece closes on itself) the
+            // piece has no depth to push out of.
+            let (normal, depth) = if g > 1e-12 * acc.area[0] {
+                (-acc.grad / g, volume / g)
             } else {
-                0.0
+                (DVec3::ZERO, 0.0)
             };
+            let side = if acc.area[0] > 0.0 { 0 } else { 1 };
             deepest = deepest.max(depth);
             self.patches.push(OverlapPatch {
-                point: acc.point,
-                normal: if g > 0.0 { -acc.grad / g } else { DVec3::ZERO },
+                point: acc.moment[side] / acc.area[side].max(f64::MIN_POSITIVE),
+                normal,
                 depth,
-                volume: (acc.volume / 3.0).max(0.0),
+                volume,
                 pairs: acc.pairs,
             });
         }

@@ -52,8 +52,8 @@ pub struct MeshOverlap {
     pub area_a: f64,
     /// Triangle pairs that cross.
     pub crossing_pairs: usize,
-    /// The largest thickness of a connected piece of the intersection along the direction
-    /// that piece pushes B ([`OverlapPatch::depth`](super::OverlapPatch::depth)).
+    /// The largest mean thickness of a connected piece of the intersection along the
+    /// direction it pushes B ([`OverlapPatch::depth`](super::OverlapPatch::depth)).
     pub max_depth: f64,
     /// Connected pieces of the intersection (the patches; read them with
     /// [`ExactScratch::patches`]).
@@ -140,9 +140,8 @@ fn unit_normal(tri: &[DVec3; 3]) -> Option<DVec3> {
 
 /// A whole triangle as a part: its unit normal, first corner, area and first moment (what
 /// [`part`] gives when every edge lies inside, by the same fan from the first corner).
-fn whole(tri: &[DVec3; 3], pts: &mut Vec<DVec3>) -> Option<(DVec3, DVec3, Part)> {
+fn whole(tri: &[DVec3; 3]) -> Option<(DVec3, DVec3, Part)> {
     let n = unit_normal(tri)?;
-    pts.extend_from_slice(tri);
     let mut part = Part::default();
     for k in 0..3 {
         part.add(tri[0], n, tri[k], tri[(k + 1) % 3]);
@@ -153,15 +152,13 @@ fn whole(tri: &[DVec3; 3], pts: &mut Vec<DVec3>) -> Option<(DVec3, DVec3, Part)>
 /// The part inside the other body of the triangle with vertex ids `ids` and corners `tri`
 /// (A's frame): the inside stretches of its edges (`inside`: its mesh's vertices' states;
 /// `cross`: its mesh's edge crossings) and its crossing segments `segs`, oriented. Returns
-/// its unit normal, first corner and part; `None` for a degenerate triangle. The ends of the
-/// part's boundary segments go to `pts`.
+/// its unit normal, first corner and part; `None` for a degenerate triangle.
 fn part(
     ids: [u32; 3],
     tri: &[DVec3; 3],
     inside: &[bool],
     cross: &[EdgeCrossing],
     segs: impl Iterator<Item = (DVec3, DVec3)>,
-    pts: &mut Vec<DVec3>,
 ) -> Option<(DVec3, DVec3, Part)> {
     let n = unit_normal(tri)?;
     let p0 = tri[0];
@@ -181,8 +178,6 @@ fn part(
         // The stretches inside, lo → hi; added in the triangle's own direction u → v.
         let mut add = |a: f64, b: f64| {
             let (p, q) = (at(a), at(b));
-            pts.push(p);
-            pts.push(q);
             if u < v {
                 part.add(p0, n, p, q);
             } else {
@@ -202,8 +197,6 @@ fn part(
         }
     }
     for (p, q) in segs {
-        pts.push(p);
-        pts.push(q);
         part.add(p0, n, p, q);
     }
     Some((n, p0, part))
@@ -308,15 +301,9 @@ pub fn intersection_volume(
     for seg in &s.segments {
         s.group.join_crossing(seg.slot_a, seg.slot_b);
     }
-    let g_len = grad.length();
-    let push = if g_len > 0.0 {
-        -grad / g_len
-    } else {
-        DVec3::ZERO
-    };
     let max_depth = s
         .group
-        .group(s.segments.iter().map(|seg| (seg.slot_a, seg.slot_b)), push);
+        .group(s.segments.iter().map(|seg| (seg.slot_a, seg.slot_b)));
     let r = glam::DMat3::from_quat(pose_a.rotation);
     MeshOverlap {
         volume: (volume / 3.0).max(0.0),
@@ -403,11 +390,9 @@ fn side_parts(
         if i >= crossing && ids.iter().all(|&v| s.inside[v as usize]) {
             // No crossing on it and every corner inside: the whole triangle, without looking
             // up its edges' crossings (most of a deep contact's parts).
-            let from = s.group.pts.len() as u32;
-            if let Some((nrm, p0, p)) = whole(&tri, &mut s.group.pts) {
+            if let Some((nrm, p0, p)) = whole(&tri) {
                 area += p.area;
-                let pts = (from, s.group.pts.len() as u32);
-                s.group.push(rec(t, !is_a, nrm, p0, p, pts), tris);
+                s.group.push(rec(t, !is_a, nrm, p0, p), tris);
             }
             continue;
         }
@@ -422,11 +407,9 @@ fn side_parts(
                 (seg.q, seg.p)
             }
         });
-        let from = s.group.pts.len() as u32;
-        if let Some((nrm, p0, p)) = part(ids, &tri, &s.inside, cross, segs, &mut s.group.pts) {
+        if let Some((nrm, p0, p)) = part(ids, &tri, &s.inside, cross, segs) {
             area += p.area;
-            let pts = (from, s.group.pts.len() as u32);
-            s.group.push(rec(t, !is_a, nrm, p0, p, pts), tris);
+            s.group.push(rec(t, !is_a, nrm, p0, p), tris);
         }
     }
     // The parts around an inside vertex touch there: one piece.
@@ -437,7 +420,7 @@ fn side_parts(
 }
 
 /// The record of a part.
-fn rec(slot: u32, of_b: bool, n: DVec3, p0: DVec3, p: Part, pts: (u32, u32)) -> PartRec {
+fn rec(slot: u32, of_b: bool, n: DVec3, p0: DVec3, p: Part) -> PartRec {
     PartRec {
         slot,
         of_b,
@@ -445,7 +428,6 @@ fn rec(slot: u32, of_b: bool, n: DVec3, p0: DVec3, p: Part, pts: (u32, u32)) -> 
         p0,
         area: p.area,
         moment: p.moment,
-        pts,
     }
 }
 

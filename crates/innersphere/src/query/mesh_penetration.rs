@@ -39,8 +39,11 @@ pub struct MeshPenetration {
     pub rotation_gradient: DVec3,
     /// Area of B's surface inside A.
     pub area: f64,
-    /// The largest thickness of a patch along the direction it pushes B: how far B moves
-    /// to leave the deepest piece of the overlap.
+    /// The largest mean thickness of a patch along the direction it pushes B (its volume
+    /// over its area projected across that direction): a flat contact's depth exactly, about
+    /// half the peak of a lens-shaped one. (The largest distance of a vertex inside the other
+    /// body to its surface, [`exact::penetration`](crate::exact::penetration), costs
+    /// milliseconds in deep contact.)
     pub max_depth: f64,
     /// Connected pieces of the intersection (the pair keeps the largest
     /// [`PenetrationOptions::max_patches`](crate::PenetrationOptions::max_patches)).

@@ -44,7 +44,7 @@ fn a_cube_sunk_into_a_box_overlaps_by_its_depth() {
         );
         assert!((v.area_b - (1.0 + 4.0 * d)).abs() < 1e-12, "{v:?}");
         assert!((v.area_a - 1.0).abs() < 1e-12, "{v:?}");
-        // One piece, d thick, its deepest point on the cube's bottom face, pushed up.
+        // One piece, d thick, pushed up.
         assert_eq!(v.patch_count, 1, "{v:?}");
         assert!((v.max_depth - d).abs() < 1e-12, "{v:?}");
         // The linearisation: only the bottom face (area 1, normal −z) moves the force up
@@ -79,8 +79,8 @@ fn subdivided(mut m: Mesh, k: u32) -> Mesh {
 }
 
 /// Two cubes side by side sunk by different depths into a box of fine triangles: two
-/// pieces, each with its own volume and depth, their volumes summing to the whole; the
-/// deepest point is on the deeper cube's bottom. (Pieces that share a triangle of the other
+/// pieces, each with its own volume, depth and centre, their volumes summing to the whole.
+/// (Pieces that share a triangle of the other
 /// surface count as one: the box's top must be finer than the cubes' gap.)
 #[test]
 fn separate_contacts_are_separate_patches() {
@@ -114,10 +114,21 @@ fn separate_contacts_are_separate_patches() {
     assert!((v.max_depth - 0.4).abs() < 1e-12);
     for q in p {
         assert!((q.normal - DVec3::Z).length() < 1e-12, "{q:?}");
-        assert!((q.point.z - (1.0 - q.depth)).abs() < 1e-12, "{q:?}");
         assert!(q.pairs > 0);
     }
-    assert!(p[0].point.x < 0.0 && p[1].point.x > 0.0, "{p:?}");
+    // Each centre is that of its cube's surface inside the box: the bottom face and the
+    // walls' sunk strips.
+    let centre = |c: DVec3, d: f64| {
+        // Bottom face (area 1) at z = 1 − d; four walls (area d each) centred at 1 − d/2.
+        let z = ((1.0 - d) + 4.0 * d * (1.0 - d / 2.0)) / (1.0 + 4.0 * d);
+        DVec3::new(c.x, c.y, z)
+    };
+    let c0 = DVec3::new(-0.9731, 0.5377, 0.0);
+    assert!((p[0].point - centre(c0, 0.4)).length() < 1e-12, "{p:?}");
+    assert!(
+        (p[1].point - centre(c0 + DVec3::new(2.0, 0.0, 0.0), 0.1)).length() < 1e-12,
+        "{p:?}"
+    );
 }
 
 #[test]

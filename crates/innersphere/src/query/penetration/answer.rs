@@ -3,18 +3,24 @@
 
 use glam::{DMat3, DVec3};
 
-/// A cluster of overlapping leaf pairs (world frame).
+/// A contact patch (world frame): of [`Pair::penetration`](crate::Pair::penetration), a
+/// cluster of overlapping leaf pairs; of
+/// [`Pair::mesh_penetration_with`](crate::Pair::mesh_penetration_with), a connected piece of
+/// the meshes' intersection ([`exact::OverlapPatch`](crate::exact::OverlapPatch)).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Patch {
-    /// Volume-weighted centroid of the pairs' lenses.
+    /// Spheres: volume-weighted centroid of the pairs' lenses. Meshes: centre of B's
+    /// surface inside A in the piece.
     pub point: DVec3,
-    /// Unit volume-weighted direction from A into B (the direction B is pushed).
+    /// Unit direction B is pushed (from A into B): volume-weighted over the pairs, or
+    /// against the vector area of B's surface in the piece.
     pub normal: DVec3,
-    /// Largest pair overlap `ra + rb − d` in the patch.
+    /// Spheres: largest pair overlap `ra + rb − d` in the patch. Meshes: the piece's mean
+    /// thickness along `normal`.
     pub depth: f64,
-    /// Sum of the pairs' lens volumes.
+    /// Spheres: sum of the pairs' lens volumes. Meshes: the piece's exact volume.
     pub volume: f64,
-    /// Number of leaf pairs.
+    /// Leaf pairs overlapping (spheres) or triangle pairs crossing (meshes).
     pub pairs: u32,
 }
 

@@ -3,10 +3,14 @@ mesh boolean (an independent library), and its gradient against central differen
 manifold3d's volumes.
 
     python3 check.py A.stl B.stl OUT.csv [--gradient N]
+    python3 check.py A.stl B.stl --motion MOTION.csv --reference REF.csv [--every K] [--gradient N]
 
-Prints per frame class (apart, touching < 0.05 mm³, overlapping) how the volumes agree, the
+The first form prints per frame class (apart, touching < 0.05 mm³, overlapping) how the volumes agree, the
 frames where one says contact and the other not, and for N frames the angle between our
-gradient and the reference's."""
+gradient and the reference's. The second writes the reference itself for every K-th frame of
+a motion (`frame,volume,gx,gy,gz`; the gradient by central differences on N of the
+overlapping frames, blank elsewhere), which `ist replay --query mesh-penetration --reference`
+compares with."""
 import argparse, csv, math
 import numpy as np
 import trimesh
@@ -35,16 +39,55 @@ def overlap(a, mb, m):
     return (a ^ manifold(b)).volume()
 
 
+def gradient(a, mb, m, h=1e-3):
+    """Central differences of the reference volume along B's translation."""
+    g = []
+    for e in np.eye(3):
+        mp, mm = m.copy(), m.copy()
+        mp[:3, 3] += e * h
+        mm[:3, 3] -= e * h
+        g.append((overlap(a, mb, mp) - overlap(a, mb, mm)) / (2 * h))
+    return np.array(g)
+
+
+def reference(a, mb, args):
+    """The reference CSV of every K-th frame of the motion."""
+    rows = [r for r in csv.reader(open(args.motion)) if r and not r[0].startswith("t")]
+    frames = list(range(0, len(rows), args.every))
+    poses = {}
+    for i in frames:
+        t = [float(x) for x in rows[i][1:8]]
+        poses[i] = matrix(dict(zip(("tx", "ty", "tz", "qw", "qx", "qy", "qz"), t)))
+    volumes = {i: overlap(a, mb, poses[i]) for i in frames}
+    touching = [i for i in frames if volumes[i] > 1e-3]
+    picked = set(touching[:: max(1, len(touching) // max(1, args.gradient))][: args.gradient])
+    with open(args.reference, "w") as out:
+        out.write("frame,volume,gx,gy,gz\n")
+        for i in frames:
+            g = ",".join(repr(float(x)) for x in gradient(a, mb, poses[i])) if i in picked else ",,"
+            out.write(f"{i},{float(volumes[i])!r},{g}\n")
+    print(f"{len(frames)} frames, {sum(v > 0 for v in volumes.values())} overlapping, "
+          f"{len(picked)} gradients: {args.reference}")
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("a"); ap.add_argument("b"); ap.add_argument("csv")
+    ap.add_argument("a"); ap.add_argument("b"); ap.add_argument("csv", nargs="?")
     ap.add_argument("--gradient", type=int, default=0)
+    ap.add_argument("--motion"); ap.add_argument("--reference")
+    ap.add_argument("--every", type=int, default=1)
     args = ap.parse_args()
     # Merged vertices (STL stores each triangle's own): manifold3d needs a closed manifold.
     ma, mb = (trimesh.load(p, force="mesh", process=True) for p in (args.a, args.b))
     # manifold3d's Mesh holds f32 positions: B is moved in f64, then rounded (≈ 1e-6 mm at
     # the jaw's 50 mm), far below the bars.
     a = manifold(ma)
+    if args.reference:
+        if not args.motion:
+            raise SystemExit("--reference needs --motion")
+        return reference(a, mb, args)
+    if not args.csv:
+        raise SystemExit("give OUT.csv of mesh_volume_replay, or --motion and --reference")
     rows = list(csv.DictReader(open(args.csv)))
     spheres = bool(rows and rows[0].get("sphere_volume"))
     sphere_ratios, sphere_silent = [], 0

@@ -16,6 +16,7 @@ use innersphere::error::{Error, Result};
 use innersphere::pose::Pose;
 use innersphere::query::{Pair, SharedTree};
 use innersphere::tree::SphereTree;
+use innersphere_haptic::ContactSource;
 
 /// Half the distance between a human's condyles (mm, at the frame's scale 1).
 pub const CONDYLE_HALF_SPAN: f64 = 50.0;
@@ -53,6 +54,9 @@ pub struct BiteOptions {
     pub spread: f64,
     /// Free: the seed of the spread.
     pub seed: u64,
+    /// Where the contact comes from: the sphere packings (default) or the meshes' own
+    /// ([`OcclusionOptions::contact`]; both trees need their meshes).
+    pub contact: ContactSource,
 }
 
 impl Default for BiteOptions {
@@ -70,6 +74,7 @@ impl Default for BiteOptions {
             starts: 120,
             spread: 2.5,
             seed: 1,
+            contact: ContactSource::Spheres,
         }
     }
 }
@@ -122,6 +127,7 @@ impl BiteOptions {
             damping: self.force / CLOSING_SPEED,
             max_seconds: self.max_seconds,
             joints,
+            contact: self.contact,
             ..OcclusionOptions::default()
         };
         let fo = FreeOcclusionOptions {
@@ -262,6 +268,7 @@ impl Bite {
             "axis": o.axis.to_array(),
             "force": self.closing.force,
             "contact_stiffness": self.closing.contact_stiffness,
+            "contact": self.closing.contact,
             "joints": self.closing.joints.map(|j| json!({
                 "points": j.points.map(|p| p.to_array()),
                 "anchors": j.anchors.map(|p| p.to_array()),

@@ -28,13 +28,16 @@ use glam::{DMat3, DQuat, DVec3};
 use innersphere::error::{num, vec3, Error, Result};
 use innersphere::pose::Pose;
 use innersphere::query::{Pair, Patch, PenetrationOptions, SharedTree};
+use innersphere_haptic::ContactSource;
 use rayon::prelude::*;
 
 /// Settings of [`occlude_free`]. Units: mm, N, s.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct FreeOcclusionOptions {
     /// How each start closes: [`OcclusionOptions`] without joints (the default: 5 N along
-    /// `closing.axis`, a stiff 1000 N/mm³ contact, 20 s at most).
+    /// `closing.axis`, a stiff 1000 N/mm³ contact, 20 s at most). The starts close on the
+    /// spheres whatever its `contact`; with [`ContactSource::Mesh`] the chosen rest then
+    /// settles on the meshes (the candidates stay the spheres' rests).
     pub closing: OcclusionOptions,
     /// A direction across the arch (world; e.g. the patient's left), perpendicular to the
     /// closing axis or not (its part along the axis is dropped): the starts are spread along
@@ -233,11 +236,17 @@ pub fn occlude_free(
     let info = b.info();
     let com = info.center_of_mass;
     let starts = spread_starts(from, com, axis, lateral, opts);
+    // The search runs on the spheres (microseconds a step); with mesh contact the chosen rest
+    // then settles on the meshes.
+    let spheres = OcclusionOptions {
+        contact: ContactSource::Spheres,
+        ..opts.closing
+    };
     let rests: Vec<Result<Rest>> = starts
         .par_iter()
         .map(|s| {
             let mut pair = Pair::new(a, b);
-            let o = occlude(&mut pair, pose_a, s, &opts.closing)?;
+            let o = occlude(&mut pair, pose_a, s, &spheres)?;
             let (on, off) = sides(&o.patches, o.pose.transform_point(com), lateral);
             Ok(Rest {
                 o,
@@ -277,6 +286,10 @@ pub fn occlude_free(
         })
         .collect();
     let closing = match clusters.into_iter().next() {
+        Some(k) if opts.closing.contact == ContactSource::Mesh => {
+            let mut pair = Pair::new(a, b);
+            occlude(&mut pair, pose_a, &k.o.pose, &opts.closing)?
+        }
         Some(k) => k.o,
         None => first.expect("at least one start"),
     };

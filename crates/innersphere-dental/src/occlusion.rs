@@ -11,6 +11,7 @@ use innersphere::query::{Pair, Patch, PenetrationOptions};
 use innersphere_haptic::body::{rotation_between, BodyState, RigidBody, TOOTH_DENSITY};
 use innersphere_haptic::mat6::Mat6;
 use innersphere_haptic::step::{add_block, contact_damping, implicit_step, Wrench};
+use innersphere_haptic::ContactSource;
 
 /// `[r]×`.
 fn cross(r: DVec3) -> DMat3 {
@@ -52,6 +53,12 @@ pub struct OcclusionOptions {
     /// Joints that hold points of B near points of A (see [`Joints`]); `None`: B is a free
     /// body.
     pub joints: Option<Joints>,
+    /// Where the contact comes from: the sphere packings' volume (default), or the meshes'
+    /// own (both trees need their meshes). With the meshes B first closes on the spheres,
+    /// then settles on the meshes from that rest: a mesh query costs milliseconds in
+    /// contact, and the spheres bring B within a fraction of a millimetre of it in
+    /// microseconds a step.
+    pub contact: ContactSource,
 }
 
 /// Compliant joints of B: each point of B (its model frame) is pulled towards an anchor in
@@ -85,6 +92,7 @@ impl Default for OcclusionOptions {
             rest_window: 100,
             max_seconds: 30.0,
             joints: None,
+            contact: ContactSource::Spheres,
         }
     }
 }
@@ -103,7 +111,8 @@ pub struct Occlusion {
     pub seconds: f64,
     /// Penetration volume at the final pose (mm³).
     pub volume: f64,
-    /// Deepest leaf-pair overlap at the final pose (mm).
+    /// Deepest leaf-pair overlap at the final pose (mm); with mesh contact the largest mean
+    /// depth of a patch of the meshes' intersection.
     pub max_depth: f64,
     /// Contact regions at the final pose (world).
     pub patches: Vec<Patch>,
@@ -131,6 +140,77 @@ pub fn occlude(
     opts: &OcclusionOptions,
 ) -> Result<Occlusion> {
     check(opts, from)?;
+    if opts.contact == ContactSource::Spheres {
+        return close(pair, pose_a, from, opts, 0);
+    }
+    if pair.tree_a().mesh().is_none() || pair.tree_b().mesh().is_none() {
+        return Err(Error::InvalidOption(
+            "mesh contact needs both trees' meshes (SharedTree::with_mesh)".into(),
+        ));
+    }
+    // The spheres first: a rest, or how that closing failed (through A, away, out of time).
+    let spheres = OcclusionOptions {
+        contact: ContactSource::Spheres,
+        ..*opts
+    };
+    let near = close(pair, pose_a, from, &spheres, 0)?;
+    if near.status != OcclusionStatus::Converged {
+        return Ok(near);
+    }
+    close(pair, pose_a, &near.pose, opts, near.steps)
+}
+
+/// One step's contact, of the spheres or the meshes (`source`).
+struct StepContact {
+    volume: f64,
+    max_depth: f64,
+    force: DVec3,
+    torque: DVec3,
+    stiffness: Mat6,
+}
+
+fn contact_at(
+    pair: &mut Pair,
+    pose_a: &Pose,
+    pose: &Pose,
+    popts: &PenetrationOptions,
+    source: ContactSource,
+) -> Result<StepContact> {
+    Ok(match source {
+        ContactSource::Spheres => {
+            let p = pair.penetration_with(pose_a, pose, popts);
+            StepContact {
+                volume: p.volume,
+                max_depth: p.max_depth,
+                force: p.force,
+                torque: p.torque_b,
+                stiffness: p.stiffness.to_matrix6(),
+            }
+        }
+        ContactSource::Mesh => {
+            let m = pair.mesh_penetration_with(pose_a, pose, popts)?;
+            StepContact {
+                volume: m.volume,
+                max_depth: m.max_depth,
+                force: m.force,
+                torque: m.torque_b,
+                stiffness: m.stiffness.to_matrix6(),
+            }
+        }
+    })
+}
+
+/// [`occlude`] on the options' contact alone, from `from`, `steps_before` steps already
+/// taken (they count against the time limit and in the answer).
+// Over 120 lines: the step loop reads the contact, the joints, the rest test and the
+// bounds in one place, in the order the implicit step needs them.
+fn close(
+    pair: &mut Pair,
+    pose_a: &Pose,
+    from: &Pose,
+    opts: &OcclusionOptions,
+    steps_before: usize,
+) -> Result<Occlusion> {
     let body = RigidBody::from_tree(pair.tree_b(), opts.density)?;
     let axis = unit(opts.axis).expect("checked");
     let mut state = BodyState::at_rest(*from);
@@ -147,15 +227,15 @@ pub fn occlude(
         BALANCE * opts.force,
         BALANCE * opts.force * gyration2.sqrt(),
     );
-    let mut steps = 0;
+    let mut steps = steps_before;
     let status = loop {
-        let p = pair.penetration_with(pose_a, &state.pose, &popts);
+        let p = contact_at(pair, pose_a, &state.pose, &popts, opts.contact)?;
         let com = state.pose.transform_point(body.center_of_mass);
         if let Some(gone) = bounds.left(com) {
             break gone;
         }
         // The contact's stiffness, then the joints' springs added to it.
-        let kc: Mat6 = p.stiffness.to_matrix6();
+        let kc: Mat6 = p.stiffness;
         let mut k = kc;
         let joints = match &opts.joints {
             Some(j) => add_joints(j, &state.pose, com, &mut k),
@@ -164,7 +244,7 @@ pub fn occlude(
         // What pushes B, but for its damping: balanced at rest.
         let pushed = Wrench {
             force: axis * opts.force + joints.force + p.force,
-            torque: p.torque_b + joints.torque,
+            torque: p.torque + joints.torque,
         };
         let still = rest.at_rest(com, state.pose.rotation);
         if still && pushed.force.length() <= balance.0 && pushed.torque.length() <= balance.1 {
@@ -175,7 +255,7 @@ pub fn occlude(
                 OcclusionStatus::NoContact
             };
         }
-        if steps == max_steps {
+        if steps >= max_steps {
             break OcclusionStatus::TimeLimit;
         }
         // The damping: B's own, and the contact's (β·K of the contact, not of the joints).
@@ -196,7 +276,7 @@ pub fn occlude(
         }
         steps += 1;
     };
-    let p = pair.penetration_with(pose_a, &state.pose, &popts);
+    let p = contact_at(pair, pose_a, &state.pose, &popts, opts.contact)?;
     Ok(Occlusion {
         pose: state.pose,
         status,

@@ -18,6 +18,7 @@ pub mod bench;
 pub mod demo;
 pub mod haptic;
 pub mod histogram;
+pub mod mesh_reference;
 /// Motions (their own crate, [`innersphere_motion`]), re-exported under the name the harness
 /// has always used.
 pub use innersphere_motion as motion;

@@ -20,7 +20,9 @@
 
 use crate::motion::Motion;
 use innersphere::exact::{self, ExactDistance, ExactMesh, ExactScratch};
-use innersphere::{MultipointOptions, Pair, Pose, RefineOptions, SharedTree};
+use innersphere::{MultipointOptions, Pair, PenetrationOptions, Pose, RefineOptions, SharedTree};
+
+pub use crate::mesh_reference::{MeshAccuracy, MeshReference};
 use std::time::Instant;
 
 /// The query kinds a replay can run.
@@ -38,6 +40,9 @@ pub enum QueryKind {
     /// The sphere distance refined to the meshes ([`Pair::refined_distance`]; the trees
     /// need their meshes, [`SharedTree::with_mesh`]).
     RefinedDistance,
+    /// The meshes' own penetration ([`Pair::mesh_penetration_with`]; the trees need their
+    /// meshes).
+    MeshPenetration,
 }
 
 impl QueryKind {
@@ -49,8 +54,10 @@ impl QueryKind {
         QueryKind::Penetration,
     ];
 
-    /// Every kind a replay can time, the refined distance last.
-    pub const WITH_REFINED: [QueryKind; KINDS] = [
+    /// The sphere kinds and the refined distance (what `ist replay --query all` times when
+    /// the trees carry their meshes; the meshes' penetration, milliseconds a frame in deep
+    /// contact, only when asked for).
+    pub const WITH_REFINED: [QueryKind; 5] = [
         QueryKind::Distance,
         QueryKind::Contact,
         QueryKind::Multipoint,
@@ -60,7 +67,7 @@ impl QueryKind {
 }
 
 /// How many query kinds a replay can time (the length of the per-frame arrays).
-pub const KINDS: usize = 5;
+pub const KINDS: usize = 6;
 
 /// Options of a replay.
 #[derive(Debug, Clone)]
@@ -84,6 +91,9 @@ pub struct ReplayOptions {
     pub passes: usize,
     /// Options of the refined distance.
     pub refine: RefineOptions,
+    /// A reference for the meshes' penetration (an independent mesh boolean's volumes and
+    /// gradients: `tools/mesh-volume-check`), compared frame by frame when that kind runs.
+    pub mesh_reference: Option<MeshReference>,
 }
 
 impl Default for ReplayOptions {
@@ -96,6 +106,7 @@ impl Default for ReplayOptions {
             deep: 0.1,
             passes: 1,
             refine: RefineOptions::default(),
+            mesh_reference: None,
         }
     }
 }
@@ -288,6 +299,8 @@ pub struct FrameRow {
     pub exact_us: f64,
     /// Whether the refined distance's local search ran out of its budget (first pass).
     pub refine_incomplete: bool,
+    /// The meshes' penetration's volume gradient (first pass; zero when not run).
+    pub mesh_gradient: [f64; 3],
 }
 
 /// What one query kind answered on one frame.
@@ -299,10 +312,12 @@ pub struct KindAnswer {
     pub in_contact: bool,
     /// Distance: the sphere-set distance (0 when overlapping). Contact and multipoint: 0 in
     /// contact, else their proved lower bound on the separation. Penetration: the penetration
-    /// volume (model units³). Refined distance: the refined distance (0 in contact).
+    /// volume (model units³). Refined distance: the refined distance (0 in contact). Mesh
+    /// penetration: the meshes' intersection volume.
     pub value: f64,
     /// Multipoint: contacts found. Penetration: overlapping leaf pairs. Distance and contact:
-    /// 1 in contact, else 0. Refined distance: triangle pairs measured.
+    /// 1 in contact, else 0. Refined distance: triangle pairs measured. Mesh penetration:
+    /// triangle pairs that cross.
     pub count: usize,
 }
 
@@ -327,6 +342,11 @@ impl KindAnswer {
                 "refined_distance",
                 "refined_distance_triangle_pairs",
             ],
+            QueryKind::MeshPenetration => &[
+                "mesh_penetration_in_contact",
+                "mesh_penetration_volume",
+                "mesh_penetration_crossing_pairs",
+            ],
         }
     }
 
@@ -336,7 +356,7 @@ impl KindAnswer {
         match kind {
             QueryKind::Distance | QueryKind::Contact => vec![c, self.value.to_string()],
             QueryKind::Multipoint => vec![c, self.count.to_string(), self.value.to_string()],
-            QueryKind::Penetration | QueryKind::RefinedDistance => {
+            QueryKind::Penetration | QueryKind::RefinedDistance | QueryKind::MeshPenetration => {
                 vec![c, self.value.to_string(), self.count.to_string()]
             }
         }
@@ -355,6 +375,8 @@ pub struct ReplayReport {
     pub kinds: Vec<KindStats>,
     /// Accuracy against the exact reference, when meshes were given.
     pub accuracy: Option<Accuracy>,
+    /// The meshes' penetration against its reference, when both ran.
+    pub mesh_accuracy: Option<MeshAccuracy>,
     /// Per-frame rows.
     #[serde(skip)]
     pub rows: Vec<FrameRow>,
@@ -379,6 +401,7 @@ impl ReplayReport {
         for &k in &kinds {
             let k = match k {
                 QueryKind::RefinedDistance => "refined_distance".to_string(),
+                QueryKind::MeshPenetration => "mesh_penetration".to_string(),
                 k => format!("{k:?}").to_lowercase(),
             };
             head.push(format!("{k}_us_1pass"));
@@ -536,6 +559,9 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
             if kind == QueryKind::RefinedDistance {
                 row.refine_incomplete = first_answers[i].incomplete;
             }
+            if kind == QueryKind::MeshPenetration {
+                row.mesh_gradient = first_answers[i].gradient;
+            }
             if kind == QueryKind::Distance {
                 row.distance = first_answers[i].answer.value;
                 row.contact = Some(first_answers[i].answer.in_contact);
@@ -571,11 +597,21 @@ pub fn replay_with_clock<C: FnMut() -> f64>(
         });
     }
     let accuracy = exact.map(|meshes| accuracy(a, b, meshes, motion, opts, &mut rows, clock));
+    let mesh_slot = opts
+        .kinds
+        .iter()
+        .take(KINDS)
+        .position(|&k| k == QueryKind::MeshPenetration);
+    let mesh_accuracy = match (&opts.mesh_reference, mesh_slot) {
+        (Some(r), Some(slot)) => Some(r.compare(&rows, slot)),
+        _ => None,
+    };
     ReplayReport {
         frames: n,
         passes,
         kinds,
         accuracy,
+        mesh_accuracy,
         rows,
     }
 }
@@ -734,6 +770,8 @@ struct Answer {
     visits: u64,
     /// The refined distance's search ran out of budget.
     incomplete: bool,
+    /// The meshes' penetration's volume gradient.
+    gradient: [f64; 3],
 }
 
 impl PartialEq for Answer {
@@ -782,6 +820,7 @@ fn replay_pass<C: FnMut() -> f64>(
                         },
                         visits: r.visits,
                         incomplete: false,
+                        gradient: [0.0; 3],
                     },
                     t1,
                 )
@@ -798,6 +837,7 @@ fn replay_pass<C: FnMut() -> f64>(
                         },
                         visits: r.visits,
                         incomplete: false,
+                        gradient: [0.0; 3],
                     },
                     t1,
                 )
@@ -814,6 +854,7 @@ fn replay_pass<C: FnMut() -> f64>(
                         },
                         visits: r.visits,
                         incomplete: false,
+                        gradient: [0.0; 3],
                     },
                     t1,
                 )
@@ -830,6 +871,7 @@ fn replay_pass<C: FnMut() -> f64>(
                         },
                         visits: r.visits,
                         incomplete: false,
+                        gradient: [0.0; 3],
                     },
                     t1,
                 )
@@ -846,6 +888,7 @@ fn replay_pass<C: FnMut() -> f64>(
                         },
                         visits: r.spheres.visits + r.node_pairs,
                         incomplete: !r.complete,
+                        gradient: [0.0; 3],
                     },
                     // Trees without meshes: no answer (`ist replay` refuses this first).
                     Err(_) => Answer {
@@ -856,6 +899,39 @@ fn replay_pass<C: FnMut() -> f64>(
                         },
                         visits: 0,
                         incomplete: true,
+                        gradient: [0.0; 3],
+                    },
+                };
+                (answer, t1)
+            }
+            QueryKind::MeshPenetration => {
+                let r = std::hint::black_box(pair.mesh_penetration_with(
+                    &id,
+                    &pb,
+                    &PenetrationOptions::default(),
+                ));
+                let t1 = clock();
+                let answer = match r {
+                    Ok(m) => Answer {
+                        answer: KindAnswer {
+                            in_contact: m.contact,
+                            value: m.volume,
+                            count: m.crossing_pairs,
+                        },
+                        visits: m.crossing_pairs as u64,
+                        incomplete: false,
+                        gradient: m.gradient.to_array(),
+                    },
+                    // Trees without meshes: no answer (`ist replay` refuses this first).
+                    Err(_) => Answer {
+                        answer: KindAnswer {
+                            in_contact: false,
+                            value: f64::NAN,
+                            count: 0,
+                        },
+                        visits: 0,
+                        incomplete: true,
+                        gradient: [0.0; 3],
                     },
                 };
                 (answer, t1)

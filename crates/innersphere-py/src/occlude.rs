@@ -16,15 +16,17 @@ use pyo3::prelude::*;
 /// (less its wall time and landmarks): `pose` (7 numbers), `status` (`"converged"` only at
 /// rest in contact; `"no_contact"`, `"time_limit"`, `"passed_through"`, `"escaped"`),
 /// `converged` (status is converged), `steps`, `seconds`, `volume`, `max_depth`, `patches`,
-/// `axis`, `force`, `contact_stiffness`, `joints`, `frame`, `candidates`, `closings` (free:
-/// the closings per status). Options default and are limited as in `ist occlude`; what
+/// `axis`, `force`, `contact_stiffness`, `contact`, `joints`, `frame`, `candidates`,
+/// `closings` (free: the closings per status). `contact="mesh"` rests B on the meshes' own
+/// contact (both trees need their meshes: Tree.with_mesh). Options default and are limited as in `ist occlude`; what
 /// cannot make a bite (options out of range, arches that do not face each other, a start
 /// far open, beside A, beyond it or turned) raises ValueError. Runs with the interpreter
 /// released (free: on all cores).
 #[pyfunction]
 #[pyo3(signature = (tree_a, tree_b, from_pose, *, free=false, axis=None, force=None,
                     contact_stiffness=None, max_seconds=None, reference=None,
-                    joint_stiffness=None, starts=None, spread=None, seed=None))]
+                    joint_stiffness=None, starts=None, spread=None, seed=None,
+                    contact="spheres"))]
 #[allow(clippy::too_many_arguments)]
 pub fn occlude<'py>(
     py: Python<'py>,
@@ -41,6 +43,7 @@ pub fn occlude<'py>(
     starts: Option<usize>,
     spread: Option<f64>,
     seed: Option<u64>,
+    contact: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     let from = pose(from_pose, "from_pose")?;
     let d = BiteOptions::default();
@@ -55,6 +58,7 @@ pub fn occlude<'py>(
         starts: starts.unwrap_or(d.starts),
         spread: spread.unwrap_or(d.spread),
         seed: seed.unwrap_or(d.seed),
+        contact: contact.parse().map_err(error)?,
     };
     let (a, b) = (tree_a.get().shared.clone(), tree_b.get().shared.clone());
     let found = py.detach(|| bite(&a, &b, &from, &opts)).map_err(error)?;

@@ -122,3 +122,23 @@ def test_bad_options_are_value_errors(jaws):
             innersphere.occlude(a, b, START, **kw)
     with pytest.raises(ValueError, match="from_pose"):
         innersphere.occlude(a, b, [0, 0, 0, 0, 0, 0, 0])
+
+
+def test_the_bite_on_the_meshes_equals_ist_occlude_contact_mesh(jaws, ist, tmp_path):
+    """contact="mesh": the same answer as `ist occlude --contact mesh`, resting on the meshes'
+    own overlap (carrying part of the 5 N closing force, the joints the rest: at most
+    5 N / 10 N/mm³); refused without the meshes."""
+    from helpers import write_obj
+
+    a, b, pa, pb = jaws
+    ma, mb = tmp_path / "a.obj", tmp_path / "b.obj"
+    write_obj(ma, *arch(8.0))
+    write_obj(mb, *arch(0.0))
+    with pytest.raises(ValueError, match="meshes"):
+        innersphere.occlude(a, b, START, contact="mesh")
+    with pytest.raises(ValueError, match="spheres"):
+        innersphere.occlude(a, b, START, contact="voxels")
+    got = innersphere.occlude(a.with_mesh(str(ma)), b.with_mesh(str(mb)), START, contact="mesh")
+    assert got == cli(ist, pa, pb, "--contact", "mesh", "--meshes", ma, mb)
+    assert got["status"] == "converged" and got["contact"] == "mesh"
+    assert 0.05 < got["volume"] <= 0.5 * 1.05

@@ -609,8 +609,10 @@ function showContact(s) {
   if (s.distance_refined !== undefined) {
     $('distance-label').textContent = s.distance_refined ? 'distance (meshes)' : 'distance (spheres)';
   }
-  $('volume').textContent = `${num(s.volume)} mm³`;
-  $('max-depth').textContent = `${num(s.max_depth)} mm`;
+  // The meshes' own contact (`--contact mesh`): their exact volume and the patches' mean depth.
+  const of = s.contact_source === 'mesh' ? ' (meshes)' : '';
+  $('volume').textContent = `${num(s.volume)} mm³${of}`;
+  $('max-depth').textContent = `${num(s.max_depth)} mm${of}`;
   $('force').textContent = `${num(len3(s.force))} N`;
   $('force').title = `(${s.force.map((x) => num(x, 3)).join(', ')})`;
   $('torque').textContent = `${num(len3(s.torque))} N·mm`;

@@ -34,6 +34,7 @@ pub(crate) fn state(s: &LoopState, motion_seconds: Option<f64>) -> Value {
         "point_b": v3(s.point_b),
         "volume": s.volume,
         "max_depth": s.max_depth,
+        "contact_source": s.contact_source,
         "force": v3(s.force),
         "torque": v3(s.torque),
         "patches": &s.patches[..s.patch_count],

@@ -20,6 +20,7 @@ use hyper::header::{HeaderValue, CACHE_CONTROL, CONTENT_LENGTH, CONTENT_TYPE};
 use hyper::{Method, Request, Response, StatusCode};
 use hyper_util::rt::{TokioIo, TokioTimer};
 use innersphere::{DistanceOptions, Pair, PenetrationOptions, Pose};
+use innersphere_haptic::ContactSource;
 use serde_json::{json, Value};
 use std::convert::Infallible;
 use std::net::SocketAddr;
@@ -65,6 +66,9 @@ pub struct ServeOptions {
     pub body_timeout: Duration,
     /// Start with the contact map on (both meshes needed).
     pub contact_map: bool,
+    /// Where the readout's and the haptic mode's contact comes from: the sphere packings'
+    /// volume, or the meshes' own (the trees must carry their meshes).
+    pub contact: ContactSource,
 }
 
 impl Default for ServeOptions {
@@ -77,6 +81,7 @@ impl Default for ServeOptions {
             header_timeout: HEADER_TIMEOUT,
             body_timeout: BODY_TIMEOUT,
             contact_map: false,
+            contact: ContactSource::Spheres,
         }
     }
 }
@@ -158,6 +163,12 @@ pub fn serve(
     if opts.contact_map && !meshes {
         return Err("the contact map needs both meshes (--mesh-a and --mesh-b)".into());
     }
+    if opts.contact == ContactSource::Mesh && (scene.a.mesh().is_none() || scene.b.mesh().is_none())
+    {
+        return Err(
+            "mesh contact needs both meshes, the trees' own (--mesh-a and --mesh-b)".into(),
+        );
+    }
     if opts.max_connections == 0 {
         return Err("the server must take at least one connection".into());
     }
@@ -211,10 +222,10 @@ pub fn serve(
     };
     {
         let (a, b, m) = (scene.a.clone(), scene.b.clone(), scene.motion.clone());
-        let (k, rate) = (opts.stiffness, opts.rate);
+        let (k, rate, contact) = (opts.stiffness, opts.rate, opts.contact);
         std::thread::Builder::new()
             .name("ist-view-loop".into())
-            .spawn(move || sim::run(a, b, m, k, rate, io))
+            .spawn(move || sim::run(a, b, m, k, rate, contact, io))
             .map_err(|e| format!("cannot start the loop thread: {e}"))?;
     }
     let app = Arc::new(App {
@@ -562,16 +573,35 @@ fn pose(app: &App, v: &Value) -> Resp {
     let r = crate::sim::refined(&mut Pair::new(app.scene.a.clone(), app.scene.b.clone()), &p);
     let mut penetration = serde_json::to_value(q).expect("answers serialize");
     penetration["patches"] = json!(pair.patches());
+    // The meshes' own penetration, a fresh pair's too, where the trees carry their meshes.
+    let mut meshes = Pair::new(app.scene.a.clone(), app.scene.b.clone());
+    let mesh_penetration = meshes
+        .mesh_penetration_with(
+            &id,
+            &p,
+            &PenetrationOptions {
+                stiffness: app.opts.stiffness,
+                ..Default::default()
+            },
+        )
+        .ok()
+        .map(|m| {
+            let mut v = serde_json::to_value(m).expect("answers serialize");
+            v["patches"] = json!(meshes.patches());
+            v
+        });
     json_response(
         200,
         &json!({
             "pose_b": p.to_array(),
             // Each answer in its serde form, as `ist query --json` prints it: the sphere
-            // distance, the penetration with its patches, and the refined distance where the
-            // trees carry their meshes (else null).
+            // distance, the penetration with its patches, and the refined distance and the
+            // meshes' penetration with its patches where the trees carry their meshes (else
+            // null).
             "distance": d,
             "penetration": penetration,
             "refined_distance": r,
+            "mesh_penetration": mesh_penetration,
         }),
     )
 }

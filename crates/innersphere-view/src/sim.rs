@@ -5,7 +5,9 @@
 
 use innersphere::glam::DVec3;
 use innersphere::{DistanceOptions, Pair, Patch, PenetrationOptions, Pose, SharedTree};
-use innersphere_haptic::{CollisionOptions, DeviceClass, HapticOptions, MultirateLoop};
+use innersphere_haptic::{
+    CollisionOptions, ContactModel, ContactSource, DeviceClass, HapticOptions, MultirateLoop,
+};
 use innersphere_motion::Motion;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -114,6 +116,8 @@ pub struct LoopState {
     pub collision_rate_hz: f64,
     /// Haptic mode: age of the contact model this tick used (µs).
     pub model_age_us: f64,
+    /// Where the volume, depth, force and patches come from.
+    pub contact_source: ContactSource,
 }
 
 const NO_PATCH: Patch = Patch {
@@ -156,6 +160,7 @@ impl LoopState {
             realtime: false,
             collision_rate_hz: 0.0,
             model_age_us: 0.0,
+            contact_source: ContactSource::Spheres,
         }
     }
 }
@@ -174,6 +179,7 @@ pub(crate) fn run(
     motion: Option<Motion>,
     stiffness: f64,
     rate: f64,
+    contact: ContactSource,
     mut io: LoopIo,
 ) {
     let mut pair = Pair::new(a.clone(), b.clone());
@@ -186,6 +192,7 @@ pub(crate) fn run(
     let start = clock.now();
     let mut deadline = start;
     let mut state = LoopState::initial(io.control.read().target);
+    state.contact_source = contact;
     let mut stats = TickStats::new();
     let mut last_mode = Mode::Free;
     let mut seek_id = 0u64;
@@ -211,7 +218,10 @@ pub(crate) fn run(
                 Pose::IDENTITY,
                 target,
                 haptic_opts,
-                CollisionOptions::default(),
+                CollisionOptions {
+                    contact,
+                    ..Default::default()
+                },
             )
             .ok()
         });
@@ -227,7 +237,16 @@ pub(crate) fn run(
                 (target, DVec3::ZERO)
             }
         };
-        observe(&mut pair, &pose_b, &pen, &dist, &mut state);
+        match contact {
+            ContactSource::Spheres => observe(&mut pair, &pose_b, &pen, &dist, &mut state),
+            ContactSource::Mesh => {
+                let model = match (c.mode, haptic.as_ref()) {
+                    (Mode::Haptic, Some(h)) => Some(*h.model()),
+                    _ => None,
+                };
+                observe_meshes(&mut pair, &pose_b, &pen, model.as_ref(), &mut state);
+            }
+        }
         state.mode = c.mode;
         state.pose_b = pose_b;
         state.target_b = target;
@@ -315,6 +334,54 @@ fn observe(
     state.patch_count = pair.patches().len().min(PATCHES);
     for (s, q) in state.patches.iter_mut().zip(pair.patches()) {
         *s = *q;
+    }
+}
+
+/// [`observe`] on the meshes' own contact: their penetration at `pose_b` (the loop runs
+/// slower than its rate where that takes longer than a tick), or in haptic mode the model the
+/// collision thread published (`model`: the query is its, not the loop's); the refined
+/// distance while apart.
+fn observe_meshes(
+    pair: &mut Pair,
+    pose_b: &Pose,
+    pen: &PenetrationOptions,
+    model: Option<&ContactModel>,
+    state: &mut LoopState,
+) {
+    let (contact, volume, max_depth, force, torque) = match model {
+        Some(m) => (m.volume > 0.0, m.volume, m.max_depth, m.force, m.torque),
+        None => match pair.mesh_penetration_with(&Pose::IDENTITY, pose_b, pen) {
+            Ok(m) => (m.contact, m.volume, m.max_depth, m.force, m.torque_b),
+            Err(_) => Default::default(),
+        },
+    };
+    state.contact = contact;
+    state.volume = volume;
+    state.max_depth = max_depth;
+    state.force = force;
+    state.torque = torque;
+    // The patches are the loop's own query's (none when the collision thread answered).
+    state.patch_count = if model.is_none() && contact {
+        pair.patches().len().min(PATCHES)
+    } else {
+        0
+    };
+    for (s, q) in state.patches.iter_mut().zip(pair.patches()) {
+        *s = *q;
+    }
+    if contact {
+        state.distance = 0.0;
+        let c = state.patches[..state.patch_count]
+            .first()
+            .map_or(DVec3::ZERO, |q| q.point);
+        state.point_a = c;
+        state.point_b = c;
+    } else if let Some(r) = refined(pair, pose_b) {
+        state.distance = r.distance;
+        state.contact = r.intersecting;
+        state.point_a = r.point_a;
+        state.point_b = r.point_b;
+        state.distance_refined = true;
     }
 }
 

@@ -7,6 +7,7 @@ use innersphere::{Pose, SharedTree};
 use innersphere_dental::contact_map::Teeth;
 use innersphere_dental::{bite, BiteOptions, OcclusionStatus};
 use innersphere_eval::haptic::{check_landmarks, crown_centres};
+use innersphere_haptic::ContactSource;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -88,9 +89,23 @@ pub struct Args {
     /// With --free: the seed of the spread.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Where the contact comes from: `spheres` (the packings' volume) or `mesh` (the meshes'
+    /// own exact intersection: B closes on the spheres first, then settles on the meshes;
+    /// needs the meshes as `ist query --query mesh-penetration` does). docs/OCCLUSION.md
+    /// says what each gives.
+    #[arg(long, default_value = "spheres", value_parser = parse_contact)]
+    contact: ContactSource,
+    /// The meshes of A and B for --contact mesh (default: the bodies' own when given as
+    /// meshes, else the meshes their tree files name as their source).
+    #[arg(long, num_args = 2, value_names = ["MESH_A", "MESH_B"])]
+    meshes: Option<Vec<PathBuf>>,
     /// Print JSON.
     #[arg(long)]
     json: bool,
+}
+
+fn parse_contact(s: &str) -> Result<ContactSource, String> {
+    s.parse().map_err(|e: innersphere::Error| e.to_string())
 }
 
 /// Runs the subcommand; returns the process exit code.
@@ -114,7 +129,12 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         starts: args.starts,
         spread: args.spread,
         seed: args.seed,
+        contact: args.contact,
     };
+    anyhow::ensure!(
+        args.contact == ContactSource::Mesh || args.meshes.is_none(),
+        "--meshes gives the meshes of --contact mesh"
+    );
     // Refused before the bodies are built.
     opts.validate()?;
     // Read before the bodies are built, so that a bad file fails at once; checked against B
@@ -137,8 +157,12 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         }
         None => vec![],
     };
-    drop((mesh_a, mesh_b));
-    let (a, b) = (SharedTree::new(a), SharedTree::new(b));
+    let (mut a, mut b) = (SharedTree::new(a), SharedTree::new(b));
+    if args.contact == ContactSource::Mesh {
+        let given = args.meshes.as_deref().unwrap_or(&[]);
+        a = crate::bodies::with_mesh(a, given.first(), mesh_a, "A", args.body.unit.unit)?;
+        b = crate::bodies::with_mesh(b, given.get(1), mesh_b, "B", args.body.unit.unit)?;
+    }
     let t0 = std::time::Instant::now();
     let found = bite(&a, &b, &from, &opts)?;
     let mut landmarks = vec![("incisal".to_string(), found.frame.incisal)];

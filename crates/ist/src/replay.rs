@@ -20,8 +20,8 @@ pub struct Args {
     /// translations in model units, mm for the jaw scans).
     #[arg(long)]
     motion: PathBuf,
-    /// Query kind to time (`all`: every kind, the refined distance too when --exact gives
-    /// the meshes).
+    /// Query kind to time (`all`: every sphere kind, the refined distance too when --exact
+    /// gives the meshes; the meshes' penetration only by name).
     #[arg(long, value_enum, default_value = "all")]
     query: Kind,
     /// Compare with the exact mesh distance of these meshes (A's, then B's); the refined
@@ -54,6 +54,11 @@ pub struct Args {
     /// larger voxel size of the two trees).
     #[arg(long)]
     refine_margin: Option<f64>,
+    /// With --query mesh-penetration: compare with this reference, a CSV of `frame,volume`
+    /// and optionally `gx,gy,gz` from an independent mesh boolean
+    /// (`tools/mesh-volume-check/check.py A B --motion MOTION --reference OUT.csv`).
+    #[arg(long)]
+    reference: Option<PathBuf>,
     /// Write one row per frame to this CSV file.
     #[arg(long)]
     csv: Option<PathBuf>,
@@ -70,6 +75,9 @@ enum Kind {
     Penetration,
     /// The sphere distance refined to the meshes' triangles (needs --exact).
     RefinedDistance,
+    /// The meshes' own penetration: exact intersection volume and its gradient (needs
+    /// --exact; --reference compares it).
+    MeshPenetration,
     All,
 }
 
@@ -98,10 +106,20 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         inputs.extend(args.exact.iter().flatten().map(|p| p.as_path()));
         crate::files::check_outputs(&[(csv, crate::files::PLAIN_CSV)], &inputs)?;
     }
+    let on_meshes = matches!(args.query, Kind::RefinedDistance | Kind::MeshPenetration);
     anyhow::ensure!(
-        args.query != Kind::RefinedDistance || args.exact.is_some(),
-        "--query refined-distance needs the meshes: --exact MESH_A MESH_B"
+        !on_meshes || args.exact.is_some(),
+        "--query refined-distance and mesh-penetration need the meshes: --exact MESH_A MESH_B"
     );
+    anyhow::ensure!(
+        args.reference.is_none() || args.query == Kind::MeshPenetration,
+        "--reference compares the meshes' penetration: --query mesh-penetration"
+    );
+    let mesh_reference = args
+        .reference
+        .as_deref()
+        .map(innersphere_eval::mesh_reference::MeshReference::load)
+        .transpose()?;
     let mut a = innersphere::SharedTree::new(crate::bodies::load(&args.a, &args.body)?);
     let mut b = innersphere::SharedTree::new(crate::bodies::load(&args.b, &args.body)?);
     let motion = innersphere_eval::motion::Motion::load(&args.motion)?;
@@ -136,8 +154,8 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
                 b = b.with_exact_mesh(eb.clone())?;
             } else {
                 anyhow::ensure!(
-                    args.query != Kind::RefinedDistance,
-                    "--query refined-distance needs the meshes the trees were built from"
+                    !on_meshes,
+                    "--query refined-distance and mesh-penetration need the meshes the trees were built from"
                 );
             }
             Some((ea, eb, refine))
@@ -150,6 +168,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         Kind::Multipoint => vec![QueryKind::Multipoint],
         Kind::Penetration => vec![QueryKind::Penetration],
         Kind::RefinedDistance => vec![QueryKind::RefinedDistance],
+        Kind::MeshPenetration => vec![QueryKind::MeshPenetration],
         Kind::All if matches!(exact, Some((_, _, true))) => QueryKind::WITH_REFINED.to_vec(),
         Kind::All => QueryKind::ALL.to_vec(),
     };
@@ -164,9 +183,15 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             margin: args.refine_margin.unwrap_or(-1.0),
             ..Default::default()
         },
+        mesh_reference,
         ..Default::default()
     };
-    let meshes = exact.as_ref().map(|(x, y, _)| (&**x, &**y));
+    // The meshes' penetration has its own reference (--reference): the exact distance's
+    // comparison, milliseconds a frame, is left out.
+    let meshes = exact
+        .as_ref()
+        .filter(|_| args.query != Kind::MeshPenetration)
+        .map(|(x, y, _)| (&**x, &**y));
     let report = replay(&a, &b, &motion, meshes, &opts);
     if let Some(path) = &args.csv {
         innersphere::output::write_atomic(path, |w| report.write_csv(w))?;
@@ -250,5 +275,14 @@ fn print_text(report: &ReplayReport, deep: f64) {
         if !acc.exact_passes_agree {
             eprintln!("warning: the exact method's passes did not all give the same answers");
         }
+    }
+    if let Some(m) = &report.mesh_accuracy {
+        println!(
+            "the meshes' penetration against the reference on {} frames ({} overlapping): volume within 2 % (or {} units³) on {} ({:.1} %), median ratio {:.5}; missed contacts {} (reference ≥ {} units³), invented {}; gradient direction on {} frames: p95 {:.3}°, max {:.3}°",
+            m.frames, m.contact_frames, innersphere_eval::mesh_reference::TINY, m.within_bar,
+            100.0 * m.within_bar_fraction, m.median_ratio, m.missed_contacts,
+            innersphere_eval::mesh_reference::TINY, m.invented_contacts, m.direction_frames,
+            m.direction_err_p95_deg, m.direction_err_max_deg
+        );
     }
 }

@@ -4,6 +4,7 @@ use anyhow::Context;
 use innersphere::SharedTree;
 use innersphere_dental::contact_map::Teeth;
 use innersphere_eval::motion::Motion;
+use innersphere_haptic::ContactSource;
 use innersphere_view::{serve, Scene, ServeOptions};
 use std::path::PathBuf;
 
@@ -36,6 +37,12 @@ pub struct Args {
     /// Penetration force per unit volume (force unit per model unit³; 1 = ist query's).
     #[arg(long, default_value_t = 1.0)]
     stiffness: f64,
+    /// Where the readout's volume, depth, force and patches and the haptic mode's contact
+    /// come from: `spheres` (the packings') or `mesh` (the meshes' own exact intersection,
+    /// milliseconds a query in deep contact: the loop slows there; needs --mesh-a and
+    /// --mesh-b, the trees' own meshes).
+    #[arg(long, default_value = "spheres", value_parser = parse_contact)]
+    contact: ContactSource,
     /// The built-in scene instead of files: the generated tooth pair with a chewing motion.
     #[arg(long)]
     demo: bool,
@@ -59,6 +66,10 @@ pub struct Args {
     /// starts, else beside A).
     #[arg(long, allow_hyphen_values = true)]
     pose_b: Option<String>,
+}
+
+fn parse_contact(s: &str) -> Result<ContactSource, String> {
+    s.parse().map_err(|e: innersphere::Error| e.to_string())
 }
 
 /// Runs the subcommand; returns the process exit code (it serves until interrupted).
@@ -120,6 +131,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         port: args.port,
         stiffness: args.stiffness,
         contact_map: args.contact_map,
+        contact: args.contact,
         ..ServeOptions::default()
     };
     let open = args.open;

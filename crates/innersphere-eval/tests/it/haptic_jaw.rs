@@ -21,6 +21,7 @@ struct Jaw {
     a: SharedTree,
     b: SharedTree,
     frame: AnatomicalFrame,
+    meshes: (Mesh, Mesh),
 }
 
 fn jaw() -> &'static Jaw {
@@ -39,6 +40,7 @@ fn jaw() -> &'static Jaw {
             a: build(&ma),
             b: build(&mb),
             frame: AnatomicalFrame::from_meshes(&ma, &mb).unwrap(),
+            meshes: (ma, mb),
         }
     })
 }
@@ -313,6 +315,110 @@ fn free_occlusion_finds_the_scanned_bite_from_random_open_starts() {
         );
         assert!(f.closing.converged());
         assert!(secs <= 10.0, "{secs} s");
+        assert!(
+            worst <= 0.5,
+            "a crown centre {worst} mm from the scanned bite"
+        );
+    }
+}
+
+/// The free bite on the meshes' own contact (`contact: Mesh`: the search on the spheres, the
+/// chosen rest settled on the meshes) from 8 open starts of a seed no other test draws:
+/// every crown centre of the mandible within 0.5 mm of the scanned bite (the spheres' bar; the
+/// issue's 0.25 mm is not met: docs/OCCLUSION.md). Prints the scanned bite's own overlap of
+/// the meshes beside it (2.1 mm³: the scans interpenetrate there, which a stiff contact does
+/// not allow) and the distance to that bite opened until it does.
+#[test]
+#[ignore = "real data: run with --ignored"]
+fn free_occlusion_on_the_meshes_finds_the_scanned_bite() {
+    let _serial = serial();
+    let j = jaw();
+    let (a, b) = (
+        j.a.clone().with_mesh(&j.meshes.0).unwrap(),
+        j.b.clone().with_mesh(&j.meshes.1).unwrap(),
+    );
+    let (up, left, ant) = (j.frame.up, j.frame.left, j.frame.anterior);
+    let crowns: Vec<_> =
+        crown_centres(&Teeth::load(&common::data("jaw/ofj_p26_teeth_axes_mandible.json")).unwrap())
+            .into_iter()
+            .map(|(_, c)| c)
+            .collect();
+    let centre = crowns.iter().sum::<innersphere::glam::DVec3>() / crowns.len() as f64;
+    let scanned = innersphere::Pair::new(&a, &b)
+        .mesh_penetration_with(&Pose::IDENTITY, &Pose::IDENTITY, &Default::default())
+        .unwrap();
+    // The scanned bite opened along "up" until the meshes overlap by no more than the
+    // closing force over the contact stiffness (5 N / 1000 N/mm³): the bite a rigid contact
+    // can rest in, nearest the scan.
+    let rest_volume = 5.0 / 1000.0;
+    let mut probe = innersphere::Pair::new(&a, &b);
+    let mut volume_at = |s: f64| {
+        probe
+            .mesh_penetration_with(
+                &Pose::IDENTITY,
+                &Pose::from_translation(-up * s),
+                &Default::default(),
+            )
+            .unwrap()
+            .volume
+    };
+    let (mut lo, mut hi) = (0.0, 1.0);
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if volume_at(mid) > rest_volume {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let lifted = Pose::from_translation(-up * hi);
+    eprintln!(
+        "the scanned bite: the meshes overlap by {:.3} mm³ in {} patches (mean depth up to {:.3} mm); opened {:.3} mm along up they overlap by {rest_volume} mm³",
+        scanned.volume, scanned.patch_count, scanned.max_depth, hi
+    );
+    let mut state = 0x5eed_0058_u64;
+    let mut draw = |lo: f64, hi: f64| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
+    };
+    let opts = FreeOcclusionOptions {
+        closing: OcclusionOptions {
+            axis: up,
+            contact_stiffness: 1000.0,
+            max_seconds: 20.0,
+            contact: innersphere_haptic::ContactSource::Mesh,
+            ..Default::default()
+        },
+        lateral: left,
+        ..Default::default()
+    };
+    for _ in 0..8 {
+        let open = draw(1.0, 4.0);
+        let t = -up * open + left * draw(-1.5, 1.5) + ant * draw(-1.5, 1.5);
+        let q = DQuat::from_axis_angle(up, draw(-3.0, 3.0).to_radians())
+            * DQuat::from_axis_angle(ant, draw(-2.0, 2.0).to_radians())
+            * DQuat::from_axis_angle(left, draw(-2.0, 2.0).to_radians());
+        let from = Pose::new(t + centre - q * centre, q).unwrap();
+        let t0 = std::time::Instant::now();
+        let f = occlude_free(&a, &b, &Pose::IDENTITY, &from, &opts).unwrap();
+        let secs = t0.elapsed().as_secs_f64();
+        let worst = crowns
+            .iter()
+            .map(|p| (f.closing.pose.transform_point(*p) - *p).length())
+            .fold(0.0, f64::max);
+        let worst_lifted = crowns
+            .iter()
+            .map(|p| (f.closing.pose.transform_point(*p) - lifted.transform_point(*p)).length())
+            .fold(0.0, f64::max);
+        let along = (f.closing.pose.transform_point(centre) - centre).dot(up);
+        eprintln!(
+            "open {open:.2}: {} candidates, {secs:.2} s, the meshes overlap by {:.3} mm³ at rest, {along:.3} mm along up; crowns within {worst:.3} mm of the scanned bite, {worst_lifted:.3} mm of it opened to rest",
+            f.candidates.len(),
+            f.closing.volume
+        );
+        assert!(f.closing.converged(), "{:?}", f.closing.status);
         assert!(
             worst <= 0.5,
             "a crown centre {worst} mm from the scanned bite"

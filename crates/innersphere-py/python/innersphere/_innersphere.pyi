@@ -549,6 +549,7 @@ def occlude(
     starts: Optional[int] = None,
     spread: Optional[float] = None,
     seed: Optional[int] = None,
+    contact: str = "spheres",
 ) -> Dict[str, Any]:
     """B (``tree_b``: the lower jaw or a free cut segment, built by this version so that it
     holds its mass properties) closed onto A (``tree_a``, fixed at the identity) from
@@ -565,8 +566,11 @@ def occlude(
     numbers), ``status`` (``"converged"``: at rest in contact; ``"no_contact"``,
     ``"time_limit"``, ``"passed_through"``, ``"escaped"``), ``converged`` (status is
     ``"converged"``), ``steps``, ``seconds``, ``volume``, ``max_depth``, ``patches``,
-    ``axis``, ``force``, ``contact_stiffness``, ``joints``, ``frame``, ``candidates``,
-    ``closings`` (free: how many closings ended in each status). Raises ValueError for
+    ``axis``, ``force``, ``contact_stiffness``, ``contact``, ``joints``, ``frame``,
+    ``candidates``, ``closings`` (free: how many closings ended in each status).
+    ``contact="mesh"`` rests B on the meshes' own contact (both trees need their meshes:
+    ``Tree.with_mesh``; a free search runs on the spheres, its chosen rest then settles on
+    the meshes). Raises ValueError for
     options out of range, poses that cannot bite (far open, beside A, beyond it, turned),
     arches that do not face each other (B is not the lower arch in A's frame), or a tree B
     without mass properties."""

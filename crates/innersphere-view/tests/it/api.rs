@@ -133,7 +133,61 @@ fn a_posted_pose_is_answered_as_a_fresh_pair_answers() {
             .unwrap();
         assert_eq!(v["refined_distance"], form(&r), "{v}");
         assert!(r.distance <= d.distance.max(0.0));
+        // And the meshes' own penetration with its patches.
+        let mut meshes = Pair::new(s.scene.a.clone(), s.scene.b.clone());
+        let m = meshes
+            .mesh_penetration_with(&Pose::IDENTITY, &pose, &Default::default())
+            .unwrap();
+        let mut want = form(&m);
+        want["patches"] = serde_json::json!(meshes.patches());
+        assert_eq!(v["mesh_penetration"], want, "{v}");
     }
+}
+
+/// `--contact mesh`: the loop's readout is the meshes' own penetration (the state says so),
+/// and a scene whose trees do not carry their meshes is refused.
+#[test]
+fn mesh_contact_reads_out_the_meshes_volume() {
+    let s = server();
+    let opts = ServeOptions {
+        contact: innersphere_haptic::ContactSource::Mesh,
+        ..Default::default()
+    };
+    let addr = serve_scene(s.scene.clone(), opts);
+    assert_eq!(
+        request_to(addr, "POST", "/api/mode", r#"{"mode":"free"}"#).0,
+        200
+    );
+    // B pressed into A: the pose the loop then answers for.
+    let p7 = [0.0, 0.0, -0.05, 1.0, 0.0, 0.0, 0.0];
+    let body = format!("{{\"pose_b\": {}}}", serde_json::to_string(&p7).unwrap());
+    let (code, _) = request_to(addr, "POST", "/api/pose", &body);
+    assert_eq!(code, 200);
+    let pose = Pose::from_array(p7).unwrap();
+    let want = Pair::new(s.scene.a.clone(), s.scene.b.clone())
+        .mesh_penetration_with(&Pose::IDENTITY, &pose, &Default::default())
+        .unwrap();
+    assert!(want.contact, "{want:?}");
+    let end = std::time::Instant::now() + Duration::from_secs(30);
+    loop {
+        let (_, b) = request_to(addr, "GET", "/api/state", "");
+        let v: Value = serde_json::from_slice(&b).unwrap();
+        assert_eq!(v["contact_source"], "mesh", "{v}");
+        if v["pose_b"] == serde_json::json!(p7) && close(&v["volume"], want.volume) {
+            assert_eq!(v["contact"], true);
+            assert!(close(&v["max_depth"], want.max_depth), "{v}");
+            break;
+        }
+        assert!(
+            std::time::Instant::now() < end,
+            "never the meshes' volume: {v}"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let mut bare = s.scene.clone();
+    bare.a = innersphere::SharedTree::new(bare.a.tree().clone());
+    let err = serve(bare, opts, |_| {}).unwrap_err();
+    assert!(err.contains("mesh contact needs both meshes"), "{err}");
 }
 
 #[test]

@@ -250,6 +250,49 @@ typedef struct ist_penetration_result {
 } ist_penetration_result;
 
 /*
+ Result of ist_mesh_penetration (world frame): the penetration of the meshes themselves.
+ */
+typedef struct ist_mesh_penetration_result {
+  /*
+   1 when the solids overlap, else 0.
+   */
+  int contact;
+  /*
+   Volume of the intersection of the two solids (model units³), exact.
+   */
+  double volume;
+  /*
+   Unit direction B is pushed: the one that loses overlap fastest (zero without contact).
+   */
+  double normal[3];
+  /*
+   Penalty force on B: stiffness × volume × normal (the force on A is its opposite).
+   */
+  double force[3];
+  /*
+   Torque on A about A's centre of mass.
+   */
+  double torque_a[3];
+  /*
+   Torque on B about B's centre of mass.
+   */
+  double torque_b[3];
+  /*
+   Area of B's surface inside A.
+   */
+  double area;
+  /*
+   The largest thickness of a patch along the direction it pushes B.
+   */
+  double max_depth;
+  /*
+   Connected pieces of the intersection; read them with ist_penetration_patch (the 8
+   largest).
+   */
+  size_t patch_count;
+} ist_mesh_penetration_result;
+
+/*
  Settings of a haptic loop. Units: mm, N, s, kg; torques in N·mm.
  */
 typedef struct ist_haptic_params {
@@ -469,49 +512,6 @@ typedef struct ist_budgeted_result {
 } ist_budgeted_result;
 
 /*
- Result of ist_mesh_penetration (world frame): the penetration of the meshes themselves.
- */
-typedef struct ist_mesh_penetration_result {
-  /*
-   1 when the solids overlap, else 0.
-   */
-  int contact;
-  /*
-   Volume of the intersection of the two solids (model units³), exact.
-   */
-  double volume;
-  /*
-   Unit direction B is pushed: the one that loses overlap fastest (zero without contact).
-   */
-  double normal[3];
-  /*
-   Penalty force on B: stiffness × volume × normal (the force on A is its opposite).
-   */
-  double force[3];
-  /*
-   Torque on A about A's centre of mass.
-   */
-  double torque_a[3];
-  /*
-   Torque on B about B's centre of mass.
-   */
-  double torque_b[3];
-  /*
-   Area of B's surface inside A.
-   */
-  double area;
-  /*
-   The largest thickness of a patch along the direction it pushes B.
-   */
-  double max_depth;
-  /*
-   Connected pieces of the intersection; read them with ist_penetration_patch (the 8
-   largest).
-   */
-  size_t patch_count;
-} ist_mesh_penetration_result;
-
-/*
  One contact patch of the last ist_penetration (world frame).
  */
 typedef struct ist_patch {
@@ -644,6 +644,17 @@ int ist_contact_many(const struct ist_tree *a, const struct ist_tree *b, const s
  Every pointer is NULL or valid for its count.
  */
 int ist_penetration_many(const struct ist_tree *a, const struct ist_tree *b, const struct ist_pose *poses_a, size_t n_a, const struct ist_pose *poses_b, size_t n, double stiffness, size_t threads, size_t chunk, struct ist_penetration_result *out);
+
+/*
+ ist_mesh_penetration for `n` poses of B, as ist_distance_many: `out[i]` (its patch_count
+ is given; the patches of a batch are not kept). Both trees need their meshes
+ (ist_tree_with_mesh); without them, or with a bad stiffness, IST_ERR_INVALID_ARGUMENT
+ before any query. Allocates.
+
+ # Safety
+ Every pointer is NULL or valid for its count.
+ */
+int ist_mesh_penetration_many(const struct ist_tree *a, const struct ist_tree *b, const struct ist_pose *poses_a, size_t n_a, const struct ist_pose *poses_b, size_t n, double stiffness, size_t threads, size_t chunk, struct ist_mesh_penetration_result *out);
 
 /*
  The message of the last failing call on this thread ("" when none failed yet). The

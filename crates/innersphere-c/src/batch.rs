@@ -6,7 +6,8 @@ use crate::error::{status, Fail};
 use crate::reference;
 use crate::tree::ist_tree;
 use crate::types::{
-    ist_penetration_result, ist_pose, ist_refine_options, ist_refined_distance_result,
+    ist_mesh_penetration_result, ist_penetration_result, ist_pose, ist_refine_options,
+    ist_refined_distance_result,
 };
 use innersphere::query::batch::{self, BatchOptions};
 use innersphere::{PenetrationOptions, Pose, SharedTree};
@@ -188,6 +189,44 @@ pub unsafe extern "C" fn ist_penetration_many(
             .zip(batch::penetration_many(ta, tb, &pa, &pb, &q, &o)?)
         {
             *o = ist_penetration_result::from(&p);
+        }
+        Ok(())
+    })
+}
+
+/// ist_mesh_penetration for `n` poses of B, as ist_distance_many: `out[i]` (its patch_count
+/// is given; the patches of a batch are not kept). Both trees need their meshes
+/// (ist_tree_with_mesh); without them, or with a bad stiffness, IST_ERR_INVALID_ARGUMENT
+/// before any query. Allocates.
+///
+/// # Safety
+/// Every pointer is NULL or valid for its count.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn ist_mesh_penetration_many(
+    a: *const ist_tree,
+    b: *const ist_tree,
+    poses_a: *const ist_pose,
+    n_a: usize,
+    poses_b: *const ist_pose,
+    n: usize,
+    stiffness: f64,
+    threads: usize,
+    chunk: usize,
+    out: *mut ist_mesh_penetration_result,
+) -> c_int {
+    status(|| {
+        let ((ta, tb, pa, pb), out) = unsafe { batch_args(a, b, poses_a, n_a, poses_b, n, out) }?;
+        let q = PenetrationOptions {
+            stiffness,
+            ..Default::default()
+        };
+        let o = BatchOptions { threads, chunk };
+        for (o, m) in out
+            .iter_mut()
+            .zip(batch::mesh_penetration_many(ta, tb, &pa, &pb, &q, &o)?)
+        {
+            *o = ist_mesh_penetration_result::from(&m);
         }
         Ok(())
     })

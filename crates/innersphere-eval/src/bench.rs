@@ -138,8 +138,8 @@ pub fn perturbed_poses(
         .collect()
 }
 
-/// Times the batch of `query` ("distance", "refined-distance" (both trees with their
-/// meshes), "contact" or "penetration") over `poses` on each thread count of `threads`, the
+/// Times the batch of `query` ("distance", "refined-distance" or "mesh-penetration" (both
+/// trees with their meshes), "contact" or "penetration") over `poses` on each thread count of `threads`, the
 /// best of `repeats`, and checks that every count answers the first's bits.
 pub fn bench_batch(
     a: &innersphere::SharedTree,
@@ -179,9 +179,21 @@ pub fn bench_batch(
                     ]
                 })
                 .collect(),
+            "mesh-penetration" => {
+                batch::mesh_penetration_many(a, b, &id, poses, &Default::default(), &o)?
+                    .iter()
+                    .flat_map(|m| {
+                        [
+                            m.volume.to_bits(),
+                            m.force.x.to_bits(),
+                            m.torque_b.z.to_bits(),
+                        ]
+                    })
+                    .collect()
+            }
             other => {
                 return Err(innersphere::Error::InvalidOption(format!(
-                    "query must be distance, refined-distance, contact or penetration, not {other}"
+                    "query must be distance, refined-distance, contact, penetration or mesh-penetration, not {other}"
                 )))
             }
         })

@@ -530,6 +530,41 @@ impl Pair {
         columns(py, &out, &Default::default())
     }
 
+    /// Pair.mesh_penetration for each pose of B (an (N, 7) or (N, 4, 4) array), in order, on
+    /// `threads` threads in chunks of `chunk` as distance_many. Both trees need their meshes
+    /// (Tree.with_mesh): ValueError otherwise, or for a bad stiffness, before any query.
+    /// Returns the keys of mesh_penetration but the patches as numpy columns over the poses
+    /// (convert::columns). Interpreter released.
+    #[pyo3(signature = (poses, stiffness=1.0, *, pose_a=None, threads=None, chunk=1024))]
+    fn mesh_penetration_many<'py>(
+        &self,
+        py: Python<'py>,
+        poses: &Bound<'py, PyAny>,
+        stiffness: f64,
+        pose_a: Option<&Bound<'py, PyAny>>,
+        threads: Option<usize>,
+        chunk: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let Batch { pb, pa, a, b, o } = self.batch(poses, pose_a, threads, chunk)?;
+        let query = PenetrationOptions {
+            stiffness: stiffness_arg(stiffness)?,
+            ..Default::default()
+        };
+        let out: Vec<innersphere::MeshPenetration> = py
+            .detach(|| {
+                innersphere::query::batch::mesh_penetration_many(
+                    &a,
+                    &b,
+                    pa.as_slice(),
+                    &pb,
+                    &query,
+                    &o,
+                )
+            })
+            .map_err(error)?;
+        columns(py, &out, &Default::default())
+    }
+
     fn __repr__(&self, py: Python<'_>) -> String {
         let (a, b) = (self.a.bind(py).get(), self.b.bind(py).get());
         format!(

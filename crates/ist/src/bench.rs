@@ -55,11 +55,11 @@ struct BenchBatch {
     /// Seed of the poses.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Query kind: distance, refined-distance, contact or penetration.
+    /// Query kind: distance, refined-distance, contact, penetration or mesh-penetration.
     #[arg(long, default_value = "distance")]
     query: String,
-    /// Refined distance: the meshes of A and B (default: the meshes the trees were built
-    /// from, where those files still hold them).
+    /// Refined distance and mesh penetration: the meshes of A and B (default: the meshes the
+    /// trees were built from, where those files still hold them).
     #[arg(long, num_args = 2, value_names = ["MESH_A", "MESH_B"])]
     meshes: Option<Vec<PathBuf>>,
     #[command(flatten)]
@@ -212,7 +212,7 @@ fn batch(args: BenchBatch) -> anyhow::Result<i32> {
     }
     let mut ta = innersphere::SharedTree::new(crate::files::load_tree(&a)?);
     let mut tb = innersphere::SharedTree::new(crate::files::load_tree(&b)?);
-    if query == "refined-distance" {
+    if query == "refined-distance" || query == "mesh-penetration" {
         let given = meshes.as_deref().unwrap_or(&[]);
         ta = crate::bodies::with_mesh(ta, given.first(), None, "A", unit.unit)?;
         tb = crate::bodies::with_mesh(tb, given.get(1), None, "B", unit.unit)?;

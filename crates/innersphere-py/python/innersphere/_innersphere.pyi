@@ -384,6 +384,17 @@ class Pair:
         ``PenetrationResult.to_dict()`` but the patches, each a column over the poses:
         numbers (N,), vectors (N, 3) (torque_b on B, torque_a on A), stiffness a dict of
         (N, 9) arrays."""
+    def mesh_penetration_many(
+        self,
+        poses: _PosesLike,
+        stiffness: float = 1.0,
+        *,
+        pose_a: Optional[Union[_PoseLike, _PosesLike]] = None,
+        threads: Optional[int] = None,
+        chunk: int = 1024,
+    ) -> Dict[str, npt.NDArray[Any]]:
+        """``mesh_penetration`` for each pose of B in order (both trees need their meshes:
+        ``Tree.with_mesh``): its keys but the patches, each a column over the poses."""
 
 @final
 class Tick:

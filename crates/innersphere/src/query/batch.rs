@@ -1,5 +1,5 @@
 //! Many poses at once on all cores: [`distance_many`], [`refined_distance_many`],
-//! [`contact_many`], [`penetration_many`] and the generic [`map`].
+//! [`contact_many`], [`penetration_many`], [`mesh_penetration_many`] and the generic [`map`].
 //!
 //! The poses of B are cut into fixed chunks of [`BatchOptions::chunk`] poses. Each chunk
 //! starts from a fresh state ([`Pair::reset`]) and carries the temporal coherence from pose
@@ -12,8 +12,8 @@
 
 use super::refined::missing_meshes;
 use super::{
-    ContactResult, Distance, Pair, Penetration, PenetrationOptions, RefineOptions, RefinedDistance,
-    SharedTree,
+    ContactResult, Distance, MeshPenetration, Pair, Penetration, PenetrationOptions, RefineOptions,
+    RefinedDistance, SharedTree,
 };
 use crate::error::{Error, Result};
 use crate::pose::Pose;
@@ -168,4 +168,27 @@ pub fn penetration_many(
     map(a, b, poses_a, poses_b, opts, |p, pa, pb| {
         p.penetration_with(pa, pb, query)
     })
+}
+
+/// [`Pair::mesh_penetration_with`] for each pose of B ([`map`]): the meshes' own penetration,
+/// for accuracy sweeps and data sets. Fails up front, before any query, for bad options or
+/// trees without their meshes ([`SharedTree::with_mesh`]). The patches of a batch are not
+/// kept.
+pub fn mesh_penetration_many(
+    a: &SharedTree,
+    b: &SharedTree,
+    poses_a: &[Pose],
+    poses_b: &[Pose],
+    query: &PenetrationOptions,
+    opts: &BatchOptions,
+) -> Result<Vec<MeshPenetration>> {
+    query.check()?;
+    if a.mesh().is_none() || b.mesh().is_none() {
+        return Err(missing_meshes("the meshes' penetration"));
+    }
+    map(a, b, poses_a, poses_b, opts, |p, pa, pb| {
+        p.mesh_penetration_with(pa, pb, query)
+    })?
+    .into_iter()
+    .collect()
 }

@@ -6,7 +6,8 @@ use glam::{DQuat, DVec3};
 use innersphere::exact::{self, ExactMesh, ExactScratch};
 use innersphere::query::batch::{self, BatchOptions};
 use innersphere::{
-    shapes, BuildOptions, Mesh, Pair, Pose, RefineOptions, Resolution, SharedTree, SphereTree,
+    shapes, BuildOptions, Mesh, Pair, PenetrationOptions, Pose, RefineOptions, Resolution,
+    SharedTree, SphereTree,
 };
 use proptest::prelude::*;
 use std::sync::{Arc, OnceLock};
@@ -336,4 +337,57 @@ fn refined_distance_many_is_a_pair_per_chunk_on_any_thread_count() {
     };
     let err = batch::refined_distance_many(&t.a, &t.b, &pa, &poses, &nan, &at(2)).unwrap_err();
     assert!(err.to_string().contains("radius_scale"), "{err}");
+}
+
+/// The meshes' penetration's batch door, as the refined distance's: the same bits on any
+/// number of threads in input order, each chunk one pair carried from a fresh state; trees
+/// without meshes and a bad stiffness refused before any query.
+#[test]
+fn mesh_penetration_many_is_a_pair_per_chunk_on_any_thread_count() {
+    let t = teeth();
+    let poses: Vec<Pose> = (0..40)
+        .map(|i| {
+            let s = i as f64 / 39.0;
+            pose_b(
+                0.3 - 0.7 * s,
+                [0.3 * s, -0.2 * s],
+                [0.02 * s, 0.0, 0.05 * s],
+            )
+        })
+        .collect();
+    let (pa, q, chunk) = ([Pose::IDENTITY], PenetrationOptions::default(), 16);
+    let at = |threads| BatchOptions { threads, chunk };
+    let bits = |m: &innersphere::MeshPenetration| {
+        let mut v = vec![m.volume.to_bits(), m.max_depth.to_bits()];
+        for x in [m.force, m.torque_a, m.torque_b, m.gradient] {
+            v.extend(x.to_array().map(f64::to_bits));
+        }
+        v.extend([m.patch_count as u64, m.crossing_pairs as u64]);
+        v
+    };
+    let one = batch::mesh_penetration_many(&t.a, &t.b, &pa, &poses, &q, &at(1)).unwrap();
+    assert_eq!(one.len(), poses.len());
+    assert!(one.iter().any(|m| m.contact) && one.iter().any(|m| !m.contact));
+    let mut pair = Pair::new(t.a.clone(), t.b.clone());
+    for (i, pb) in poses.iter().enumerate() {
+        if i % chunk == 0 {
+            pair.reset();
+        }
+        let m = pair.mesh_penetration_with(&Pose::IDENTITY, pb, &q).unwrap();
+        assert_eq!(bits(&one[i]), bits(&m), "pose {i}");
+    }
+    for threads in [2, 3, 0] {
+        let got = batch::mesh_penetration_many(&t.a, &t.b, &pa, &poses, &q, &at(threads)).unwrap();
+        let same = got.iter().zip(&one).all(|(x, y)| bits(x) == bits(y));
+        assert!(same, "{threads} threads");
+    }
+    let bare = SharedTree::new(t.a.tree().clone());
+    let err = batch::mesh_penetration_many(&bare, &t.b, &pa, &poses, &q, &at(2)).unwrap_err();
+    assert!(err.to_string().contains("meshes"), "{err}");
+    let nan = PenetrationOptions {
+        stiffness: f64::NAN,
+        ..q
+    };
+    let err = batch::mesh_penetration_many(&t.a, &t.b, &pa, &poses, &nan, &at(2)).unwrap_err();
+    assert!(err.to_string().contains("stiffness"), "{err}");
 }

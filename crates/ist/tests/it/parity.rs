@@ -124,7 +124,7 @@ fn every_batch_reaches_c_python_and_ist_bench_batch() {
         .map(|s| s.split('(').next().unwrap_or(""))
         .filter(|n| n.ends_with("_many"))
         .collect();
-    assert_eq!(batches.len(), 4, "{batches:?}");
+    assert_eq!(batches.len(), 5, "{batches:?}");
     for k in batches {
         assert!(header.contains(&format!(" ist_{k}(")), "C: ist_{k}");
         assert!(stubs.contains(&format!("def {k}(")), "Python: Pair.{k}");

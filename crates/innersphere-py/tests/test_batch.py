@@ -221,3 +221,21 @@ def test_refined_distance_many_needs_the_meshes(trees, meshes, loaded):
     with pytest.raises(ValueError, match="rel_tolerance"):
         innersphere.Pair(am, bm).refined_distance_many(loaded[1][:3], rel_tol=2.0)
     assert innersphere.Pair(am, bm).refined_distance_many(np.zeros((0, 7)))["point_a"].shape == (0, 3)
+
+
+def test_mesh_penetration_many_equals_single_calls(trees, meshes, loaded):
+    """The meshes' penetration batch is the single query pose after pose on one pair (one
+    chunk), the same bits on any thread count; refused without the meshes."""
+    with pytest.raises(ValueError, match="with_mesh"):
+        innersphere.Pair(*trees).mesh_penetration_many(loaded[1][:3])
+    am, bm = trees[0].with_mesh(meshes["box"]), trees[1].with_mesh(meshes["ellipsoid"])
+    poses = loaded[1][::4]
+    got = [innersphere.Pair(am, bm).mesh_penetration_many(poses, stiffness=2.0, threads=t) for t in (1, 2)]
+    one = innersphere.Pair(am, bm)
+    singles = [one.mesh_penetration(p, stiffness=2.0) for p in poses]
+    n = len(poses)
+    assert got[0]["volume"].shape == (n,) and got[0]["force"].shape == (n, 3)
+    for k in ("contact", "volume", "force", "torque_b", "gradient", "max_depth", "patch_count"):
+        for g in got:
+            assert np.array_equal(g[k], [s[k] for s in singles]), k
+    assert got[0]["contact"].any() and not got[0]["contact"].all()

@@ -8,6 +8,7 @@
 //! share a vertex that lies inside the other body (the triangles around it are all partly
 //! inside, around that vertex). Union–find over the parts, allocation-free once warm.
 
+use crate::mesh::union_find::UnionFind;
 use glam::{DMat3, DVec3};
 
 /// One triangle's part inside the other body (A's frame): what the volume, the gradient and
@@ -117,7 +118,7 @@ pub(super) struct Grouping {
     /// Slot → part index, per mesh (valid where the part it names has that slot and side).
     node_a: Vec<u32>,
     node_b: Vec<u32>,
-    parent: Vec<u32>,
+    sets: UnionFind,
     patch_of: Vec<u32>,
     acc: Vec<Acc>,
     /// The pieces of the last query (A's frame), the largest volume first.
@@ -128,7 +129,7 @@ impl Grouping {
     /// Forgets the last query's parts.
     pub(super) fn clear(&mut self) {
         self.parts.clear();
-        self.parent.clear();
+        self.sets.clear();
     }
 
     /// Records a part (`tris`: the triangles of its mesh).
@@ -144,7 +145,7 @@ impl Grouping {
         }
         map[rec.slot as usize] = i;
         self.parts.push(rec);
-        self.parent.push(i);
+        self.sets.push();
     }
 
     /// The part of triangle `slot` of A (`of_b` false) or B in this query, if it has one.
@@ -156,25 +157,6 @@ impl Grouping {
         (r.slot == slot && r.of_b == of_b).then_some(i)
     }
 
-    fn find(&mut self, mut i: u32) -> u32 {
-        while self.parent[i as usize] != i {
-            let up = self.parent[self.parent[i as usize] as usize];
-            self.parent[i as usize] = up;
-            i = up;
-        }
-        i
-    }
-
-    fn union(&mut self, x: u32, y: u32) {
-        let (x, y) = (self.find(x), self.find(y));
-        if x != y {
-            // The smaller index is the root: the grouping does not depend on the order of
-            // the unions.
-            let (lo, hi) = if x < y { (x, y) } else { (y, x) };
-            self.parent[hi as usize] = lo;
-        }
-    }
-
     /// Joins the parts of the triangles in `slots` (all around one inside vertex).
     pub(super) fn join_around(&mut self, of_b: bool, slots: &[u32]) {
         let mut first = None;
@@ -182,7 +164,9 @@ impl Grouping {
             if let Some(i) = self.node(of_b, t) {
                 match first {
                     None => first = Some(i),
-                    Some(f) => self.union(f, i),
+                    Some(f) => {
+                        self.sets.union(f, i);
+                    }
                 }
             }
         }
@@ -191,7 +175,7 @@ impl Grouping {
     /// Joins A's part of `slot_a` and B's of `slot_b` (they cross).
     pub(super) fn join_crossing(&mut self, slot_a: u32, slot_b: u32) {
         if let (Some(x), Some(y)) = (self.node(false, slot_a), self.node(true, slot_b)) {
-            self.union(x, y);
+            self.sets.union(x, y);
         }
     }
 
@@ -203,7 +187,7 @@ impl Grouping {
         self.patch_of.clear();
         self.patch_of.resize(self.parts.len(), u32::MAX);
         for i in 0..self.parts.len() as u32 {
-            let root = self.find(i) as usize;
+            let root = self.sets.find(i) as usize;
             if self.patch_of[root] == u32::MAX {
                 self.patch_of[root] = self.acc.len() as u32;
                 self.acc.push(Acc {

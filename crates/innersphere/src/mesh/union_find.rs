@@ -1,9 +1,9 @@
-//! Union-find over vertex indices: the connected parts of a mesh (components, contact
-//! spots, vertices on one side of a surface).
+//! Union-find over indices: the connected parts of a mesh (components, contact spots, vertices
+//! on one side of a surface), and the connected pieces of two meshes' overlap.
 
 /// Disjoint sets of `0..n`; a set's root is its smallest member, so the roots (and what is
 /// counted by them) do not depend on the order of the unions.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct UnionFind {
     parent: Vec<u32>,
 }
@@ -14,6 +14,18 @@ impl UnionFind {
         UnionFind {
             parent: (0..n as u32).collect(),
         }
+    }
+
+    /// No sets (the memory kept, for [`push`](Self::push) to refill without allocating).
+    pub fn clear(&mut self) {
+        self.parent.clear();
+    }
+
+    /// A new singleton set; returns its member.
+    pub fn push(&mut self) -> u32 {
+        let v = self.parent.len() as u32;
+        self.parent.push(v);
+        v
     }
 
     /// The root of `v`'s set (with path halving).
@@ -52,5 +64,13 @@ mod tests {
         );
         assert_eq!(u.union(3, 5), 1);
         assert_eq!(u.find(5), 1);
+        // Grown one at a time after a clear: the same sets.
+        u.clear();
+        for v in 0..6 {
+            assert_eq!(u.push(), v);
+        }
+        u.union(4, 2);
+        assert_eq!(u.find(4), 2);
+        assert_eq!(u.find(5), 5);
     }
 }

@@ -71,7 +71,8 @@ impl Stamps {
 
 /// Records where the edges of `t_in` (vertex ids `ids`, points in the common frame) cross
 /// the triangle `t_other` (slot `other`, outward normal from its winding), and the crossing
-/// points in `points`.
+/// points in `points`. Returns whether a crossing was decided at a coincidence
+/// ([`SidesOf::segment_or_coincident`]).
 pub(super) fn edge_crossings(
     ids: [u32; 3],
     t_in: &[DVec3; 3],
@@ -79,12 +80,13 @@ pub(super) fn edge_crossings(
     t_other: &[DVec3; 3],
     out: &mut Vec<EdgeCrossing>,
     points: &mut Vec<DVec3>,
-) {
+) -> bool {
     // The corners' sides of the other plane, once for the three edges (the exact segment
     // test of each edge reads them).
     let Some(sides) = SidesOf::new(t_other, t_in) else {
-        return;
+        return false;
     };
+    let mut coincident = false;
     let n = (t_other[1] - t_other[0]).cross(t_other[2] - t_other[0]);
     for k in 0..3 {
         let (mut u, mut v) = (ids[k], ids[(k + 1) % 3]);
@@ -98,7 +100,9 @@ pub(super) fn edge_crossings(
             std::mem::swap(&mut pu, &mut pv);
             std::mem::swap(&mut ku, &mut kv);
         }
-        if !sides.segment(pu, pv, ku, kv) {
+        let (meets, at_coincidence) = sides.segment_or_coincident(pu, pv, ku, kv);
+        coincident |= at_coincidence;
+        if !meets {
             continue;
         }
         let du = n.dot(pu - t_other[0]);
@@ -117,4 +121,5 @@ pub(super) fn edge_crossings(
             dir: dv - du,
         });
     }
+    coincident
 }

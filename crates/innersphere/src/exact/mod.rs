@@ -70,7 +70,7 @@ pub(crate) use intersects::brute_force_intersects;
 pub use intersects::intersects;
 pub use mesh::ExactMesh;
 pub use overlap_patches::{AreaMoments, OverlapPatch};
-pub use overlap_volume::{intersection_volume, MeshOverlap};
+pub use overlap_volume::{intersection_volume, MeshOverlap, NUDGE};
 pub use penetration::{penetration, penetration_depth, Body, ExactPenetration};
 pub use scratch::{ExactScratch, ExactStats};
 #[cfg(test)]

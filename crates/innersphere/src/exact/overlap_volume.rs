@@ -22,9 +22,9 @@
 //! joined by edges that do not cross, decided by their crossings on a closed surface, by one
 //! winding number each otherwise). Meant for closed,
 //! outward-facing meshes: on an open mesh the winding number still decides which vertices are
-//! inside, but the volume is that of a solid the surface does not close. Degenerate contact
-//! (an edge through another edge or vertex, coplanar faces) is resolved per crossing and may
-//! err by the area such a coincidence touches.
+//! inside, but the volume is that of a solid the surface does not close. A crossing decided at
+//! a coincidence (an edge through another edge or vertex, coplanar faces) makes the query
+//! answer at B nudged by [`NUDGE`] of the bodies' size (see [`intersection_volume`]).
 
 use super::crossings::{barriers, edge_crossings, edge_key, EdgeCrossing, Stamps};
 use super::frame::Frame;
@@ -206,6 +206,13 @@ fn part(
 /// (world poses), with its gradient with respect to B's translation and to B's rotation
 /// about `center_b` (a point in B's own frame, e.g. its centre of mass). See the module
 /// docs. A non-finite pose gives zero.
+///
+/// Where a crossing is decided at a coincidence (a corner on the other surface, an edge
+/// through another's edge or corner, coplanar faces: common in CAD models and generated
+/// grids, rare in scans), the boundary built from it need not close and the volume could err
+/// by the area it touches. The query then answers at B moved by [`NUDGE`] of the bodies'
+/// size along a fixed generic direction (up to three directions): the exact answer of a pose
+/// that close, instead of an inexact one at the pose itself.
 pub fn intersection_volume(
     a: &ExactMesh,
     pose_a: &Pose,
@@ -214,13 +221,60 @@ pub fn intersection_volume(
     center_b: DVec3,
     scratch: &mut ExactScratch,
 ) -> MeshOverlap {
+    let (answer, coincident) = volume_at(a, pose_a, b, pose_b, center_b, scratch);
+    if !coincident {
+        return answer;
+    }
+    let size = match (a.bvh().bounds(), b.bvh().bounds()) {
+        (Some((la, ha)), Some((lb, hb))) => (ha - la).length().max((hb - lb).length()),
+        _ => return answer,
+    };
+    for d in NUDGE_DIRECTIONS {
+        let moved = Pose {
+            translation: pose_b.translation + DVec3::from_array(d).normalize() * (NUDGE * size),
+            rotation: pose_b.rotation,
+        };
+        let (nudged, coincident) = volume_at(a, pose_a, b, &moved, center_b, scratch);
+        if !coincident {
+            return nudged;
+        }
+    }
+    answer
+}
+
+/// How far a query that met a coincidence moves B, as a fraction of the larger body's
+/// bounding-box diagonal: 1e-12, 6e-11 mm on a 60 mm jaw arch, far below any mesh's own
+/// precision and still thousands of rounding steps of its coordinates. (A pose that puts the
+/// bodies a million sizes from the origin rounds the nudge away; the query then answers at
+/// the pose itself.)
+pub const NUDGE: f64 = 1e-12;
+
+/// The directions of the nudge, tried in turn: generic (no two components in a simple ratio),
+/// so that no grid, axis or face of a model is along them.
+const NUDGE_DIRECTIONS: [[f64; 3]; 3] = [
+    [0.5773502691896258, 0.6180339887498949, 0.5303300858899107],
+    [-0.7, 0.3819660112501051, 0.6004673596133295],
+    [0.2679491924311228, -0.8660254037844387, 0.4142135623730951],
+];
+
+/// [`intersection_volume`] at exactly these poses, and whether a crossing was decided at a
+/// coincidence.
+fn volume_at(
+    a: &ExactMesh,
+    pose_a: &Pose,
+    b: &ExactMesh,
+    pose_b: &Pose,
+    center_b: DVec3,
+    scratch: &mut ExactScratch,
+) -> (MeshOverlap, bool) {
     let rel = Pose::relative(pose_a, pose_b);
     let f = Frame::new(&rel, a.bvh(), b.bvh());
     let g = Frame::new(&rel.inverse(), b.bvh(), a.bvh());
     if !(f.is_finite() && g.is_finite()) {
-        return MeshOverlap::default();
+        return (MeshOverlap::default(), false);
     }
     let s = &mut scratch.vol;
+    let mut coincident = false;
     s.cross_a.clear();
     s.cross_b.clear();
     s.segments.clear();
@@ -237,8 +291,8 @@ pub fn intersection_volume(
             .front
             .overlap_pairs(a, b, &rel, &f, warm, |sa, sb, x, y| {
                 points.clear();
-                edge_crossings(a.slot_vertices(sa), x, sb, y, cross_a, points);
-                edge_crossings(b.slot_vertices(sb), y, sa, x, cross_b, points);
+                coincident |= edge_crossings(a.slot_vertices(sa), x, sb, y, cross_a, points);
+                coincident |= edge_crossings(b.slot_vertices(sb), y, sa, x, cross_b, points);
                 if points.len() >= 2 {
                     // The two points farthest apart (two, unless the contact is degenerate).
                     let (mut p, mut q, mut best) = (points[0], points[1], -1.0);
@@ -305,7 +359,7 @@ pub fn intersection_volume(
         .group
         .group(s.segments.iter().map(|seg| (seg.slot_a, seg.slot_b)));
     let r = glam::DMat3::from_quat(pose_a.rotation);
-    MeshOverlap {
+    let answer = MeshOverlap {
         volume: (volume / 3.0).max(0.0),
         gradient: pose_a.transform_vector(grad),
         rotation_gradient: pose_a.transform_vector(rot),
@@ -315,7 +369,8 @@ pub fn intersection_volume(
         max_depth,
         patch_count: s.group.patches.len(),
         moments: moments.rotated(r),
-    }
+    };
+    (answer, coincident)
 }
 
 /// Records the part inside `outer` of every triangle of `inner` in `s.group` (A's frame;

@@ -187,6 +187,32 @@ impl<'t> SidesOf<'t> {
         }
         segment_triangle_with_sides(p, q, self.side[k], self.side[j], *self.t)
     }
+
+    /// [`segment`](Self::segment), and whether the decision met a coincidence: `t` is a
+    /// line, an end of the segment lies on `t`'s plane, or the segment's line passes through
+    /// an edge or corner of `t` (an orientation exactly 0). Such a crossing is decided, but a
+    /// boundary built from it may not close.
+    #[inline]
+    pub(crate) fn segment_or_coincident(
+        &self,
+        p: DVec3,
+        q: DVec3,
+        k: usize,
+        j: usize,
+    ) -> (bool, bool) {
+        let (op, oq) = (self.side[k], self.side[j]);
+        if self.collinear || op == 0.0 || oq == 0.0 {
+            let meets = self.segment(p, q, k, j);
+            return (meets, meets);
+        }
+        if (op > 0.0) == (oq > 0.0) {
+            return (false, false);
+        }
+        let [a, b, c] = *self.t;
+        let s = [o3(p, q, a, b), o3(p, q, b, c), o3(p, q, c, a)];
+        let meets = s.iter().all(|&x| x >= 0.0) || s.iter().all(|&x| x <= 0.0);
+        (meets, meets && s.contains(&0.0))
+    }
 }
 
 /// [`segment_triangle_intersect`] for a non-degenerate triangle, with the orientations of

@@ -78,6 +78,31 @@ fn subdivided(mut m: Mesh, k: u32) -> Mesh {
     m
 }
 
+/// A cube sunk into a box of fine triangles where everything coincides: its corners on the
+/// grid's vertices, its edges along grid lines, its faces in the box's planes. Resolved per
+/// crossing this erred by up to 77 %; the query now answers a pose 1e-12 of the size away.
+#[test]
+fn coincident_contact_gives_the_closed_form() {
+    let a = ExactMesh::new(&subdivided(shapes::cuboid(DVec3::new(4.0, 4.0, 1.0)), 4)).unwrap();
+    let b = ExactMesh::new(&shapes::cuboid(DVec3::splat(0.5))).unwrap();
+    for (x, y) in [(-1.0, 0.5), (-0.75, 0.25), (0.0, 0.0), (-1.0, 0.5377)] {
+        for d in [0.25, 0.5, 1.0] {
+            // d = 1: the cube's top in the box's top plane, wholly inside.
+            let pb = pose(DVec3::new(x, y, 1.5 - d), DQuat::IDENTITY);
+            let v = volume(&a, &Pose::IDENTITY, &b, &pb);
+            assert!((v.volume - d).abs() < 1e-9, "at ({x}, {y}) sunk {d}: {v:?}");
+        }
+    }
+    // Face to face: the cube's bottom on the box's top, no overlap.
+    let v = volume(
+        &a,
+        &Pose::IDENTITY,
+        &b,
+        &pose(DVec3::new(-1.0, 0.5, 1.5), DQuat::IDENTITY),
+    );
+    assert!(v.volume < 1e-9, "{v:?}");
+}
+
 /// Two cubes side by side sunk by different depths into a box of fine triangles: two
 /// pieces, each with its own volume, depth and centre, their volumes summing to the whole.
 /// (Pieces that share a triangle of the other
@@ -95,25 +120,26 @@ fn separate_contacts_are_separate_patches() {
         .extend(cube.triangles.iter().map(|t| t.map(|i| i + n)));
     let b = ExactMesh::new(&two).unwrap();
     let d = 0.4;
-    // Off the box's grid lines (an edge through an edge is a degenerate contact).
-    let pb = pose(DVec3::new(-0.9731, 0.5377, 1.5 - d), DQuat::IDENTITY);
+    // The cubes' corners on the box's grid vertices: every vertical edge through a corner of
+    // the box's top (coincidences, answered at a pose 1e-12 of the size away).
+    let pb = pose(DVec3::new(-1.0, 0.5, 1.5 - d), DQuat::IDENTITY);
     let mut s = ExactScratch::new();
     let v = intersection_volume(&a, &Pose::IDENTITY, &b, &pb, DVec3::ZERO, &mut s);
     // The first cube sunk by 0.4, the second (0.3 higher) by 0.1.
-    assert!((v.volume - 0.5).abs() < 1e-12, "{v:?}");
+    assert!((v.volume - 0.5).abs() < 1e-9, "{v:?}");
     assert_eq!(v.patch_count, 2);
     let p = s.patches();
     assert!(
-        (p[0].volume - 0.4).abs() < 1e-12 && (p[1].volume - 0.1).abs() < 1e-12,
+        (p[0].volume - 0.4).abs() < 1e-9 && (p[1].volume - 0.1).abs() < 1e-9,
         "{p:?}"
     );
     assert!(
-        (p[0].depth - 0.4).abs() < 1e-12 && (p[1].depth - 0.1).abs() < 1e-12,
+        (p[0].depth - 0.4).abs() < 1e-9 && (p[1].depth - 0.1).abs() < 1e-9,
         "{p:?}"
     );
-    assert!((v.max_depth - 0.4).abs() < 1e-12);
+    assert!((v.max_depth - 0.4).abs() < 1e-9);
     for q in p {
-        assert!((q.normal - DVec3::Z).length() < 1e-12, "{q:?}");
+        assert!((q.normal - DVec3::Z).length() < 1e-9, "{q:?}");
         assert!(q.pairs > 0);
     }
     // Each centre is that of its cube's surface inside the box: the bottom face and the
@@ -123,10 +149,10 @@ fn separate_contacts_are_separate_patches() {
         let z = ((1.0 - d) + 4.0 * d * (1.0 - d / 2.0)) / (1.0 + 4.0 * d);
         DVec3::new(c.x, c.y, z)
     };
-    let c0 = DVec3::new(-0.9731, 0.5377, 0.0);
-    assert!((p[0].point - centre(c0, 0.4)).length() < 1e-12, "{p:?}");
+    let c0 = DVec3::new(-1.0, 0.5, 0.0);
+    assert!((p[0].point - centre(c0, 0.4)).length() < 1e-8, "{p:?}");
     assert!(
-        (p[1].point - centre(c0 + DVec3::new(2.0, 0.0, 0.0), 0.1)).length() < 1e-12,
+        (p[1].point - centre(c0 + DVec3::new(2.0, 0.0, 0.0), 0.1)).length() < 1e-8,
         "{p:?}"
     );
 }

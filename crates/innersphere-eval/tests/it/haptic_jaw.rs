@@ -259,6 +259,38 @@ fn the_final_splint_at_the_found_bite_seats_on_both_arches() {
     innersphere_testkit::splint::assert_seats(&a, &b, &pose, &s_opts, &s);
 }
 
+/// The mandible's crown centres (its teeth-axes file).
+fn mandible_crowns() -> Vec<innersphere::glam::DVec3> {
+    crown_centres(&Teeth::load(&common::data("jaw/ofj_p26_teeth_axes_mandible.json")).unwrap())
+        .into_iter()
+        .map(|(_, c)| c)
+        .collect()
+}
+
+/// 8 open starts drawn from `seed` (xorshift64: drawn, not picked): 1–4 mm open along the
+/// pair's "up", ±1.5 mm sideways and forwards, ±3° yaw, ±2° roll and pitch about `centre`.
+/// Each with how far open it is.
+fn open_starts(j: &Jaw, centre: innersphere::glam::DVec3, seed: u64) -> Vec<(f64, Pose)> {
+    let (up, left, ant) = (j.frame.up, j.frame.left, j.frame.anterior);
+    let mut state = seed;
+    let mut draw = |lo: f64, hi: f64| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
+    };
+    (0..8)
+        .map(|_| {
+            let open = draw(1.0, 4.0);
+            let t = -up * open + left * draw(-1.5, 1.5) + ant * draw(-1.5, 1.5);
+            let q = DQuat::from_axis_angle(up, draw(-3.0, 3.0).to_radians())
+                * DQuat::from_axis_angle(ant, draw(-2.0, 2.0).to_radians())
+                * DQuat::from_axis_angle(left, draw(-2.0, 2.0).to_radians());
+            (open, Pose::new(t + centre - q * centre, q).unwrap())
+        })
+        .collect()
+}
+
 /// A free segment (no joints) from 8 random open starts (1–4 mm open along the pair's "up",
 /// ±1.5 mm sideways and forwards, ±3° yaw, ±2° roll and pitch about the crowns' centre, drawn
 /// from a seed): `occlude_free` chooses a pose with every crown centre of the mandible within
@@ -268,21 +300,9 @@ fn the_final_splint_at_the_found_bite_seats_on_both_arches() {
 fn free_occlusion_finds_the_scanned_bite_from_random_open_starts() {
     let _serial = serial();
     let j = jaw();
-    let (up, left, ant) = (j.frame.up, j.frame.left, j.frame.anterior);
-    let crowns: Vec<_> =
-        crown_centres(&Teeth::load(&common::data("jaw/ofj_p26_teeth_axes_mandible.json")).unwrap())
-            .into_iter()
-            .map(|(_, c)| c)
-            .collect();
+    let (up, left) = (j.frame.up, j.frame.left);
+    let crowns = mandible_crowns();
     let centre = crowns.iter().sum::<innersphere::glam::DVec3>() / crowns.len() as f64;
-    // xorshift64: the starts are drawn, not picked.
-    let mut state = 0x5eed_0005_u64;
-    let mut draw = |lo: f64, hi: f64| {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
-    };
     let opts = FreeOcclusionOptions {
         closing: OcclusionOptions {
             axis: up,
@@ -293,13 +313,7 @@ fn free_occlusion_finds_the_scanned_bite_from_random_open_starts() {
         lateral: left,
         ..Default::default()
     };
-    for _ in 0..8 {
-        let open = draw(1.0, 4.0);
-        let t = -up * open + left * draw(-1.5, 1.5) + ant * draw(-1.5, 1.5);
-        let q = DQuat::from_axis_angle(up, draw(-3.0, 3.0).to_radians())
-            * DQuat::from_axis_angle(ant, draw(-2.0, 2.0).to_radians())
-            * DQuat::from_axis_angle(left, draw(-2.0, 2.0).to_radians());
-        let from = Pose::new(t + centre - q * centre, q).unwrap();
+    for (open, from) in open_starts(j, centre, 0x5eed_0005) {
         let t0 = std::time::Instant::now();
         let f = occlude_free(&j.a, &j.b, &Pose::IDENTITY, &from, &opts).unwrap();
         let secs = t0.elapsed().as_secs_f64();
@@ -337,12 +351,8 @@ fn free_occlusion_on_the_meshes_finds_the_scanned_bite() {
         j.a.clone().with_mesh(&j.meshes.0).unwrap(),
         j.b.clone().with_mesh(&j.meshes.1).unwrap(),
     );
-    let (up, left, ant) = (j.frame.up, j.frame.left, j.frame.anterior);
-    let crowns: Vec<_> =
-        crown_centres(&Teeth::load(&common::data("jaw/ofj_p26_teeth_axes_mandible.json")).unwrap())
-            .into_iter()
-            .map(|(_, c)| c)
-            .collect();
+    let (up, left) = (j.frame.up, j.frame.left);
+    let crowns = mandible_crowns();
     let centre = crowns.iter().sum::<innersphere::glam::DVec3>() / crowns.len() as f64;
     let scanned = innersphere::Pair::new(&a, &b)
         .mesh_penetration_with(&Pose::IDENTITY, &Pose::IDENTITY, &Default::default())
@@ -376,13 +386,6 @@ fn free_occlusion_on_the_meshes_finds_the_scanned_bite() {
         "the scanned bite: the meshes overlap by {:.3} mm³ in {} patches (mean depth up to {:.3} mm); opened {:.3} mm along up they overlap by {rest_volume} mm³",
         scanned.volume, scanned.patch_count, scanned.max_depth, hi
     );
-    let mut state = 0x5eed_0058_u64;
-    let mut draw = |lo: f64, hi: f64| {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
-    };
     let opts = FreeOcclusionOptions {
         closing: OcclusionOptions {
             axis: up,
@@ -394,13 +397,7 @@ fn free_occlusion_on_the_meshes_finds_the_scanned_bite() {
         lateral: left,
         ..Default::default()
     };
-    for _ in 0..8 {
-        let open = draw(1.0, 4.0);
-        let t = -up * open + left * draw(-1.5, 1.5) + ant * draw(-1.5, 1.5);
-        let q = DQuat::from_axis_angle(up, draw(-3.0, 3.0).to_radians())
-            * DQuat::from_axis_angle(ant, draw(-2.0, 2.0).to_radians())
-            * DQuat::from_axis_angle(left, draw(-2.0, 2.0).to_radians());
-        let from = Pose::new(t + centre - q * centre, q).unwrap();
+    for (open, from) in open_starts(j, centre, 0x5eed_0058) {
         let t0 = std::time::Instant::now();
         let f = occlude_free(&a, &b, &Pose::IDENTITY, &from, &opts).unwrap();
         let secs = t0.elapsed().as_secs_f64();

@@ -2,7 +2,7 @@
 //! how far along it, and in which direction, from the exact segment–triangle test. What the
 //! penetration depth's flood fill and the intersection volume's boundary both read.
 
-use super::tri_tri::SidesOf;
+use super::tri_tri::{PlaneSides, SidesOf};
 use glam::DVec3;
 
 /// An edge's key: its vertex ids, the smaller first.
@@ -71,19 +71,20 @@ impl Stamps {
 
 /// Records where the edges of `t_in` (vertex ids `ids`, points in the common frame) cross
 /// the triangle `t_other` (slot `other`, outward normal from its winding), and the crossing
-/// points in `points`. Returns whether a crossing was decided at a coincidence
+/// points in `points`; `sides`: `t_in`'s corners against `t_other`'s plane. Returns whether a crossing was decided at a coincidence
 /// ([`SidesOf::segment_or_coincident`]).
 pub(super) fn edge_crossings(
     ids: [u32; 3],
     t_in: &[DVec3; 3],
     other: u32,
     t_other: &[DVec3; 3],
+    sides: &PlaneSides,
     out: &mut Vec<EdgeCrossing>,
     points: &mut Vec<DVec3>,
 ) -> bool {
     // The corners' sides of the other plane, once for the three edges (the exact segment
     // test of each edge reads them).
-    let Some(sides) = SidesOf::new(t_other, t_in) else {
+    let Some(sides) = SidesOf::with(t_other, t_in, sides) else {
         return false;
     };
     let mut coincident = false;

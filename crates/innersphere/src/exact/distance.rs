@@ -72,7 +72,7 @@ pub fn distance(
         None
     };
     let mut hit = None;
-    overlap_pairs(a, b, &f, &mut scratch.stack, first, |sa, sb, x, y| {
+    overlap_pairs(a, b, &f, &mut scratch.stack, first, |sa, sb, x, y, _| {
         if let Some(p) = tri_tri::intersection_point(x, y) {
             hit = Some((sa, sb, p));
             true

@@ -7,7 +7,7 @@
 
 use super::frame::Frame;
 use super::mesh::ExactMesh;
-use super::overlap::{leaf_pair, split_pair};
+use super::overlap::{leaf_pair, split_pair, PairSides};
 use crate::pose::Pose;
 use glam::{DMat3, DVec3};
 
@@ -68,7 +68,7 @@ impl PairFront {
         rel: &Pose,
         f: &Frame,
         warm: bool,
-        mut leaf: impl FnMut(u32, u32, &[DVec3; 3], &[DVec3; 3]),
+        mut leaf: impl FnMut(u32, u32, &[DVec3; 3], &[DVec3; 3], &PairSides),
     ) {
         let (ta, tb) = (a.bvh(), b.bvh());
         if ta.nodes.is_empty()
@@ -135,8 +135,8 @@ impl PairFront {
                 let (na, nb) = (&ta.nodes[ia as usize], &tb.nodes[ib as usize]);
                 if na.is_leaf() && nb.is_leaf() {
                     touched = true;
-                    leaf_pair(a, b, f, ia, ib, &mut |sa, sb, x, y| {
-                        leaf(sa, sb, x, y);
+                    leaf_pair(a, b, f, ia, ib, &mut |sa, sb, x, y, sides| {
+                        leaf(sa, sb, x, y, sides);
                         false
                     });
                     self.next.push(Entry {

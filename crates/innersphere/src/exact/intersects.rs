@@ -33,7 +33,7 @@ pub fn intersects(
         None
     };
     let mut hit = None;
-    let crossing = overlap_pairs(a, b, &f, &mut scratch.stack, first, |sa, sb, x, y| {
+    let crossing = overlap_pairs(a, b, &f, &mut scratch.stack, first, |sa, sb, x, y, _| {
         let h = tri_tri::intersection_point(x, y).is_some();
         if h {
             hit = Some((sa, sb));

@@ -4,25 +4,40 @@
 
 use super::frame::{size_sq, tri_box, Frame};
 use super::mesh::ExactMesh;
-use super::tri_tri;
+use super::tri_tri::PlaneSides;
 use crate::mesh::bvh::LEAF_SIZE;
 use glam::DVec3;
 
-/// Traverses all pairs of overlapping boxes and calls `leaf(slot_a, slot_b, tri_a, tri_b)`
-/// (B's triangle in A's frame) for every triangle pair whose boxes overlap, until it returns
-/// true. Tries `first` before anything else. Returns whether it stopped early.
+/// The corners of a triangle pair against each other's plane (see [`PlaneSides`]), given to
+/// the leaf callbacks with the pair: the crossings' exact tests start from them.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PairSides {
+    /// B's corners against A's plane.
+    pub(crate) b_on_a: PlaneSides,
+    /// A's corners against B's plane.
+    pub(crate) a_on_b: PlaneSides,
+}
+
+/// Traverses all pairs of overlapping boxes and calls `leaf(slot_a, slot_b, tri_a, tri_b,
+/// sides)` (B's triangle in A's frame) for every triangle pair whose boxes overlap, until it
+/// returns true. Tries `first` before anything else. Returns whether it stopped early.
 pub(crate) fn overlap_pairs(
     a: &ExactMesh,
     b: &ExactMesh,
     f: &Frame,
     stack: &mut Vec<(u32, u32, f64)>,
     first: Option<(u32, u32)>,
-    mut leaf: impl FnMut(u32, u32, &[DVec3; 3], &[DVec3; 3]) -> bool,
+    mut leaf: impl FnMut(u32, u32, &[DVec3; 3], &[DVec3; 3], &PairSides) -> bool,
 ) -> bool {
     let (ta, tb) = (a.bvh(), b.bvh());
     if let Some((sa, sb)) = first {
         if let (Some(x), Some(y)) = (ta.tris.get(sa as usize), tb.tris.get(sb as usize)) {
-            if leaf(sa, sb, x, &f.tri(y)) {
+            let y = f.tri(y);
+            let sides = PairSides {
+                b_on_a: PlaneSides::new(x, &y),
+                a_on_b: PlaneSides::new(&y, x),
+            };
+            if leaf(sa, sb, x, &y, &sides) {
                 return true;
             }
         }
@@ -60,7 +75,7 @@ pub(crate) fn overlap_pairs(
 }
 
 /// The triangle pairs of the leaf pair (`ia` of A, `ib` of B) whose boxes overlap and whose
-/// planes do not separate them, given to `leaf(slot_a, slot_b, tri_a, tri_b)` (B's triangle
+/// planes do not separate them, given to `leaf(slot_a, slot_b, tri_a, tri_b, sides)` (B's triangle
 /// in A's frame) until it returns true. Returns whether it stopped early.
 #[inline]
 pub(super) fn leaf_pair(
@@ -69,7 +84,7 @@ pub(super) fn leaf_pair(
     f: &Frame,
     ia: u32,
     ib: u32,
-    leaf: &mut impl FnMut(u32, u32, &[DVec3; 3], &[DVec3; 3]) -> bool,
+    leaf: &mut impl FnMut(u32, u32, &[DVec3; 3], &[DVec3; 3], &PairSides) -> bool,
 ) -> bool {
     let (ta, tb) = (a.bvh(), b.bvh());
     let (na, nb) = (&ta.nodes[ia as usize], &tb.nodes[ib as usize]);
@@ -94,11 +109,17 @@ pub(super) fn leaf_pair(
                     continue;
                 }
                 let y = &tb_buf[j];
-                if tri_tri::plane_separates(x, y) || tri_tri::plane_separates(y, x) {
+                let b_on_a = PlaneSides::new(x, y);
+                if b_on_a.separates() {
+                    continue;
+                }
+                let a_on_b = PlaneSides::new(y, x);
+                if a_on_b.separates() {
                     continue;
                 }
                 let sb = (sb0 + ci * LEAF_SIZE + j) as u32;
-                if leaf((sa0 + i) as u32, sb, x, y) {
+                let sides = PairSides { b_on_a, a_on_b };
+                if leaf((sa0 + i) as u32, sb, x, y, &sides) {
                     return true;
                 }
             }

@@ -289,10 +289,26 @@ fn volume_at(
         let warm = scratch.warm_start;
         scratch
             .front
-            .overlap_pairs(a, b, &rel, &f, warm, |sa, sb, x, y| {
+            .overlap_pairs(a, b, &rel, &f, warm, |sa, sb, x, y, sides| {
                 points.clear();
-                coincident |= edge_crossings(a.slot_vertices(sa), x, sb, y, cross_a, points);
-                coincident |= edge_crossings(b.slot_vertices(sb), y, sa, x, cross_b, points);
+                coincident |= edge_crossings(
+                    a.slot_vertices(sa),
+                    x,
+                    sb,
+                    y,
+                    &sides.a_on_b,
+                    cross_a,
+                    points,
+                );
+                coincident |= edge_crossings(
+                    b.slot_vertices(sb),
+                    y,
+                    sa,
+                    x,
+                    &sides.b_on_a,
+                    cross_b,
+                    points,
+                );
                 if points.len() >= 2 {
                     // The two points farthest apart (two, unless the contact is degenerate).
                     let (mut p, mut q, mut best) = (points[0], points[1], -1.0);

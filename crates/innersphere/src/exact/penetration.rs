@@ -212,11 +212,27 @@ pub fn penetration(
     s.cross_b.clear();
     {
         let (cross_a, cross_b, points) = (&mut s.cross_a, &mut s.cross_b, &mut s.points);
-        overlap_pairs(a, b, &f, &mut scratch.stack, None, |sa, sb, x, y| {
+        overlap_pairs(a, b, &f, &mut scratch.stack, None, |sa, sb, x, y, sides| {
             points.clear();
             // Coincidences decide per crossing here (a vertex's depth, not a closed boundary).
-            edge_crossings(b.slot_vertices(sb), y, sa, x, cross_b, points);
-            edge_crossings(a.slot_vertices(sa), x, sb, y, cross_a, points);
+            edge_crossings(
+                b.slot_vertices(sb),
+                y,
+                sa,
+                x,
+                &sides.b_on_a,
+                cross_b,
+                points,
+            );
+            edge_crossings(
+                a.slot_vertices(sa),
+                x,
+                sb,
+                y,
+                &sides.a_on_b,
+                cross_a,
+                points,
+            );
             false
         });
     }

@@ -41,10 +41,31 @@ fn c3(p: DVec3) -> Coord3D<f64> {
 }
 
 /// Exact orientation of `d` relative to the plane through `a, b, c` (sign only is exact).
-#[inline]
+///
+/// The `robust` crate's own floating-point filter, inlined (the same operations in the same
+/// order, so the same value): most calls end there, and the call into the crate cost more
+/// than the filter. The adaptive stages run only when the filter cannot decide.
+#[inline(always)]
 fn o3(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
+    let (ad, bd, cd) = (a - d, b - d, c - d);
+    let bdxcdy = bd.x * cd.y;
+    let cdxbdy = cd.x * bd.y;
+    let cdxady = cd.x * ad.y;
+    let adxcdy = ad.x * cd.y;
+    let adxbdy = ad.x * bd.y;
+    let bdxady = bd.x * ad.y;
+    let det = ad.z * (bdxcdy - cdxbdy) + bd.z * (cdxady - adxcdy) + cd.z * (adxbdy - bdxady);
+    let permanent = (bdxcdy.abs() + cdxbdy.abs()) * ad.z.abs()
+        + (cdxady.abs() + adxcdy.abs()) * bd.z.abs()
+        + (adxbdy.abs() + bdxady.abs()) * cd.z.abs();
+    if det > O3_ERRBOUND * permanent || -det > O3_ERRBOUND * permanent {
+        return det;
+    }
     orient3d(c3(a), c3(b), c3(c), c3(d))
 }
+
+/// Shewchuk's `o3derrboundA`, `(7 + 56ε)ε` with `ε = 2⁻⁵³`, as the `robust` crate has it.
+const O3_ERRBOUND: f64 = (7.0 + 56.0 * 1.1102230246251565e-16) * 1.1102230246251565e-16;
 
 /// Projection that drops coordinate `axis`.
 #[inline]
@@ -139,6 +160,60 @@ pub(crate) fn segment_triangle_intersect(p: DVec3, q: DVec3, a: DVec3, b: DVec3,
     segment_triangle_with_sides(p, q, op, oq, [a, b, c])
 }
 
+/// The corners of a triangle against the plane of another, by a floating-point filter: each
+/// corner's offset `n · (p − t₀)` (`n` the plane's unnormalised normal) and the bound on its
+/// rounding error beyond which its sign is exact. Found once per triangle pair, it both
+/// rejects the pair ([`separates`](Self::separates)) and gives the segment tests their
+/// sides ([`SidesOf::with`]) without an exact predicate where the filter decides.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PlaneSides {
+    d: [f64; 3],
+    bound: [f64; 3],
+    n: DVec3,
+    nabs: DVec3,
+}
+
+impl PlaneSides {
+    /// The corners `pts` against the plane of `t`.
+    #[inline]
+    pub(crate) fn new(t: &[DVec3; 3], pts: &[DVec3; 3]) -> Self {
+        let ab = t[1] - t[0];
+        let ac = t[2] - t[0];
+        let n = ab.cross(ac);
+        let nabs = DVec3::new(
+            (ab.y * ac.z).abs() + (ab.z * ac.y).abs(),
+            (ab.z * ac.x).abs() + (ab.x * ac.z).abs(),
+            (ab.x * ac.y).abs() + (ab.y * ac.x).abs(),
+        );
+        let mut d = [0.0; 3];
+        let mut bound = [0.0; 3];
+        for k in 0..3 {
+            let ap = pts[k] - t[0];
+            d[k] = n.dot(ap);
+            // Shewchuk's orient3d forward error bound is (7 + 56ε)ε times this permanent.
+            bound[k] = 1e-15 * ap.abs().dot(nabs);
+        }
+        PlaneSides { d, bound, n, nabs }
+    }
+
+    /// Certified: all three corners lie strictly on one side of the plane. `false` means
+    /// "not certain" (they may still be on one side).
+    #[inline]
+    pub(crate) fn separates(&self) -> bool {
+        let pos = (0..3).filter(|&k| self.d[k] > self.bound[k]).count();
+        let neg = (0..3).filter(|&k| self.d[k] < -self.bound[k]).count();
+        pos == 3 || neg == 3
+    }
+
+    /// Certified by the filter: the plane's triangle is not a line (its normal has a
+    /// component beyond the orient2d error bound, `(3 + 16ε)ε` of its permanent).
+    #[inline]
+    fn surely_not_collinear(&self) -> bool {
+        let (n, m) = (self.n.abs(), self.nabs * 1e-15);
+        n.x > m.x || n.y > m.y || n.z > m.z
+    }
+}
+
 /// The triangle `t` prepared for segment tests: whether it is degenerate and the sides of its
 /// plane of given points, found once for all of a triangle's edges. `segment(k, j)` says of
 /// the closed segment `pts[k] → pts[j]` what [`segment_triangle_intersect`] says.
@@ -151,7 +226,7 @@ pub(crate) struct SidesOf<'t> {
 impl<'t> SidesOf<'t> {
     /// The sides of `pts` of `t`'s plane (exact signs); `None` when all three lie strictly on
     /// one side, so that no segment between them meets `t`.
-    #[inline]
+    #[cfg(test)]
     pub(crate) fn new(t: &'t [DVec3; 3], pts: &[DVec3; 3]) -> Option<Self> {
         let [a, b, c] = *t;
         if is_collinear(a, b, c) {
@@ -166,6 +241,37 @@ impl<'t> SidesOf<'t> {
             o3(a, b, c, pts[1]),
             o3(a, b, c, pts[2]),
         ];
+        if side.iter().all(|&o| o > 0.0) || side.iter().all(|&o| o < 0.0) {
+            return None;
+        }
+        Some(SidesOf {
+            t,
+            collinear: false,
+            side,
+        })
+    }
+
+    /// [`new`](Self::new) from the filtered sides of `pts` (`sides`, found for the same
+    /// `t` and `pts`): exact predicates only where the filter cannot decide. The same signs,
+    /// so the same answers.
+    #[inline]
+    pub(crate) fn with(t: &'t [DVec3; 3], pts: &[DVec3; 3], sides: &PlaneSides) -> Option<Self> {
+        let [a, b, c] = *t;
+        if !sides.surely_not_collinear() && is_collinear(a, b, c) {
+            return Some(SidesOf {
+                t,
+                collinear: true,
+                side: [0.0; 3],
+            });
+        }
+        // o3(a, b, c, p) = −n · (p − a) in exact arithmetic.
+        let side = std::array::from_fn(|k| {
+            if sides.d[k].abs() > sides.bound[k] {
+                -sides.d[k]
+            } else {
+                o3(a, b, c, pts[k])
+            }
+        });
         if side.iter().all(|&o| o > 0.0) || side.iter().all(|&o| o < 0.0) {
             return None;
         }
@@ -385,28 +491,7 @@ pub(crate) fn segment_segment_closest(
 /// the plane of `t`. `false` means "not certain" (they may still be on one side).
 #[inline]
 pub(crate) fn plane_separates(t: &[DVec3; 3], pts: &[DVec3; 3]) -> bool {
-    let ab = t[1] - t[0];
-    let ac = t[2] - t[0];
-    let n = ab.cross(ac);
-    let nabs = DVec3::new(
-        (ab.y * ac.z).abs() + (ab.z * ac.y).abs(),
-        (ab.z * ac.x).abs() + (ab.x * ac.z).abs(),
-        (ab.x * ac.y).abs() + (ab.y * ac.x).abs(),
-    );
-    let mut pos = 0;
-    let mut neg = 0;
-    for &p in pts {
-        let ap = p - t[0];
-        let d = n.dot(ap);
-        // Shewchuk's orient3d forward error bound is (7 + 56ε)ε times this permanent.
-        let bound = 1e-15 * ap.abs().dot(nabs);
-        if d > bound {
-            pos += 1;
-        } else if d < -bound {
-            neg += 1;
-        }
-    }
-    pos == 3 || neg == 3
+    PlaneSides::new(t, pts).separates()
 }
 
 #[cfg(test)]
@@ -711,7 +796,7 @@ mod tests {
         #[test]
         fn sides_of_agrees_with_the_segment_test(
             s in (v3(1.0), v3(1.0), v3(1.0)), t in (v3(1.0), v3(1.0), v3(1.0)),
-            degenerate in 0u8..7, u in 0.0..1.0f64,
+            degenerate in 0u8..8, u in 0.0..1.0f64,
         ) {
             let mut s = [s.0, s.1, s.2];
             let mut t = [t.0, t.1, t.2];
@@ -721,9 +806,21 @@ mod tests {
                 3 => { s[0] = t[1]; s[1] = t[0] + (t[2] - t[0]) * u; }
                 4 => s[2] = s[0],
                 5 => s = [t[0] + (t[1] - t[0]) * u, t[2], t[0] * (1.0 - u) + t[2] * u],
+                // Within rounding of t's plane: the filter cannot decide, the exact test does.
+                6 => s = [
+                    t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * 0.3,
+                    t[1] * (1.0 - u) + t[2] * u,
+                    t[0] * 0.25 + t[1] * 0.5 + t[2] * 0.25 - (t[1] - t[0]) * u,
+                ],
                 _ => {}
             }
             let sides = SidesOf::new(&t, &s);
+            let filtered = PlaneSides::new(&t, &s);
+            let with = SidesOf::with(&t, &s, &filtered);
+            prop_assert_eq!(sides.is_none(), with.is_none());
+            if filtered.separates() {
+                prop_assert!(sides.is_none());
+            }
             for k in 0..3 {
                 let j = (k + 1) % 3;
                 let want = segment_triangle_intersect(s[k], s[j], t[0], t[1], t[2]);
@@ -731,6 +828,10 @@ mod tests {
                 let back = sides.as_ref().is_some_and(|x| x.segment(s[j], s[k], j, k));
                 prop_assert_eq!(got, want);
                 prop_assert_eq!(back, want);
+                // The filtered sides decide as the exact ones, coincidences too.
+                let exact = sides.as_ref().map(|x| x.segment_or_coincident(s[k], s[j], k, j));
+                let fast = with.as_ref().map(|x| x.segment_or_coincident(s[k], s[j], k, j));
+                prop_assert_eq!(exact, fast);
             }
         }
 

@@ -32,6 +32,39 @@ pub(super) fn barriers(cross: &[EdgeCrossing], out: &mut Vec<(u64, f64, f64)>) {
     }
 }
 
+/// Where each edge's crossings lie in a list sorted by edge ([`EdgeCrossing::key`]): a hash
+/// map from the edge's key to its run. A triangle's part looks up each of its three edges,
+/// mostly finding none; a binary search over thousands of crossings cost a dozen dependent
+/// loads each. Its memory is kept from query to query (no allocation once warm).
+#[derive(Debug, Clone, Default)]
+pub(super) struct EdgeRuns {
+    runs: std::collections::HashMap<u64, (u32, u32), ahash::RandomState>,
+}
+
+impl EdgeRuns {
+    /// Indexes `cross` (sorted by key).
+    pub(super) fn index(&mut self, cross: &[EdgeCrossing]) {
+        self.runs.clear();
+        let mut start = 0;
+        for run in cross.chunk_by(|x, y| x.key == y.key) {
+            self.runs
+                .insert(run[0].key, (start as u32, run.len() as u32));
+            start += run.len();
+        }
+    }
+
+    /// The crossings of edge `key` in the indexed list `cross` (sorted along the edge).
+    #[inline]
+    pub(super) fn of<'c>(&self, cross: &'c [EdgeCrossing], key: u64) -> &'c [EdgeCrossing] {
+        match self.runs.get(&key) {
+            Some(&(start, len)) => cross
+                .get(start as usize..(start + len) as usize)
+                .unwrap_or(&[]),
+            None => &[],
+        }
+    }
+}
+
 /// Marks over a mesh's vertices or triangles, cleared in O(1) per use: a mark is the current
 /// generation's number.
 #[derive(Debug, Clone, Default)]

@@ -26,7 +26,7 @@
 //! a coincidence (an edge through another edge or vertex, coplanar faces) makes the query
 //! answer at B nudged by [`NUDGE`] of the bodies' size (see [`intersection_volume`]).
 
-use super::crossings::{barriers, edge_crossings, edge_key, EdgeCrossing, Stamps};
+use super::crossings::{barriers, edge_crossings, edge_key, EdgeCrossing, EdgeRuns, Stamps};
 use super::frame::Frame;
 use super::mesh::ExactMesh;
 use super::overlap_patches::{AreaMoments, Grouping, PartRec};
@@ -78,6 +78,9 @@ struct PairSegment {
 pub(crate) struct VolumeScratch {
     cross_a: Vec<EdgeCrossing>,
     cross_b: Vec<EdgeCrossing>,
+    /// Each edge's run in `cross_a`, `cross_b`.
+    runs_a: EdgeRuns,
+    runs_b: EdgeRuns,
     segments: Vec<PairSegment>,
     /// One triangle pair's crossing points.
     points: Vec<DVec3>,
@@ -102,13 +105,6 @@ fn settle(cross: &mut Vec<EdgeCrossing>) {
     cross.dedup_by(|x, y| {
         x.key == y.key && (x.dir < 0.0) == (y.dir < 0.0) && (x.t - y.t).abs() <= 1e-12
     });
-}
-
-/// The crossings of edge `key` (sorted along it).
-fn crossings_of(cross: &[EdgeCrossing], key: u64) -> &[EdgeCrossing] {
-    let lo = cross.partition_point(|c| c.key < key);
-    let hi = cross[lo..].partition_point(|c| c.key == key);
-    &cross[lo..lo + hi]
 }
 
 /// What one triangle's part inside the other body adds: its area, and its first moment
@@ -151,13 +147,15 @@ fn whole(tri: &[DVec3; 3]) -> Option<(DVec3, DVec3, Part)> {
 
 /// The part inside the other body of the triangle with vertex ids `ids` and corners `tri`
 /// (A's frame): the inside stretches of its edges (`inside`: its mesh's vertices' states;
-/// `cross`: its mesh's edge crossings) and its crossing segments `segs`, oriented. Returns
+/// `cross`: its mesh's edge crossings, indexed by `runs`) and its crossing segments `segs`,
+/// oriented. Returns
 /// its unit normal, first corner and part; `None` for a degenerate triangle.
 fn part(
     ids: [u32; 3],
     tri: &[DVec3; 3],
     inside: &[bool],
     cross: &[EdgeCrossing],
+    runs: &EdgeRuns,
     segs: impl Iterator<Item = (DVec3, DVec3)>,
 ) -> Option<(DVec3, DVec3, Part)> {
     let n = unit_normal(tri)?;
@@ -171,7 +169,7 @@ fn part(
         } else {
             (v, u, pv, pu)
         };
-        let on = crossings_of(cross, edge_key(lo, hi));
+        let on = runs.of(cross, edge_key(lo, hi));
         let mut state = inside.get(lo as usize).copied().unwrap_or(false);
         let mut from = 0.0;
         let at = |t: f64| plo + (phi - plo) * t;
@@ -342,6 +340,8 @@ fn volume_at(
     }
     settle(&mut s.cross_a);
     settle(&mut s.cross_b);
+    s.runs_a.index(&s.cross_a);
+    s.runs_b.index(&s.cross_b);
     s.by_a.clear();
     s.by_a.extend(0..s.segments.len() as u32);
     s.by_a
@@ -402,7 +402,11 @@ fn side_parts(
     pen: &mut super::penetration::PenScratch,
 ) -> f64 {
     let is_a = to_a.is_none();
-    let cross = if is_a { &s.cross_a } else { &s.cross_b };
+    let (cross, runs) = if is_a {
+        (&s.cross_a, &s.runs_a)
+    } else {
+        (&s.cross_b, &s.runs_b)
+    };
     // The barrier edges of the flood fill: the crossing edges, with the direction at the
     // crossing nearest each end (> 0: walking lo → hi leaves the other body there).
     barriers(cross, &mut pen.barrier);
@@ -444,8 +448,8 @@ fn side_parts(
             }
         }
     }
-    let slot_of = |k: &u32| {
-        let seg = &s.segments[*k as usize];
+    let slot_of = |k: u32| {
+        let seg = &s.segments[k as usize];
         if is_a {
             seg.slot_a
         } else {
@@ -454,6 +458,8 @@ fn side_parts(
     };
     let tris = inner.bvh().tris.len();
     let mut area = 0.0;
+    // The crossing triangles come in `by`'s order: each one's segments are the next run.
+    let mut next = 0;
     for (i, &t) in s.touched.iter().enumerate() {
         let tri = &inner.bvh().tris[t as usize];
         let tri = to_a.map_or(*tri, |f| f.tri(tri));
@@ -467,9 +473,12 @@ fn side_parts(
             }
             continue;
         }
-        let lo = by.partition_point(|k| slot_of(k) < t);
-        let hi = lo + by[lo..].partition_point(|k| slot_of(k) == t);
-        let segs = by[lo..hi].iter().map(|&k| {
+        // The triangles touched after the crossing ones have no segment.
+        let lo = next;
+        while next < by.len() && i < crossing && slot_of(by[next]) == t {
+            next += 1;
+        }
+        let segs = by[lo..next].iter().map(|&k| {
             let seg = &s.segments[k as usize];
             // On A's triangle along n_A × n_B; on B's the reverse.
             if is_a {
@@ -478,7 +487,7 @@ fn side_parts(
                 (seg.q, seg.p)
             }
         });
-        if let Some((nrm, p0, p)) = part(ids, &tri, &s.inside, cross, segs) {
+        if let Some((nrm, p0, p)) = part(ids, &tri, &s.inside, cross, runs, segs) {
             area += p.area;
             s.group.push(rec(t, !is_a, nrm, p0, p), tris);
         }

@@ -7,6 +7,7 @@
 //!   [`free_occlusion`]: a free segment's, from many starts; [`bite`](mod@bite): either, set
 //!   up from the jaw pair's own frame, refusing bodies and poses that cannot bite (`reach`);
 //! - [`contact_map`]: every vertex's signed gap to the other arch, per tooth;
+//! - [`case`]: one patient's plan in one file, run from scans to wafers and a report;
 //! - [`splint`]: the occlusal splint (surgical wafer) between two arches at a pose, over the
 //!   per-column surfaces of [`columns`].
 //!
@@ -16,6 +17,7 @@
 
 pub mod anatomy;
 pub mod bite;
+pub mod case;
 pub mod columns;
 pub mod contact_map;
 pub mod free_occlusion;

@@ -15,6 +15,7 @@ mod inspect;
 mod motion;
 mod occlude;
 mod occlusion_map;
+mod plan;
 mod print;
 mod progress;
 mod query;
@@ -61,6 +62,9 @@ enum Command {
     /// Both arches coloured by their exact signed gap to each other (PLY), with the contacts
     /// per tooth.
     OcclusionMap(occlusion_map::Args),
+    /// Plan a case: one case file from the scans to the bite, the contact map, the wafers
+    /// and a report (docs/PLAN.md).
+    Plan(plan::Args),
     /// The occlusal splint (surgical wafer) between two arches at a planned pose, as a
     /// watertight binary STL.
     Splint(splint::Args),
@@ -90,6 +94,7 @@ fn main() {
         Command::Haptic(a) => haptic::run(a),
         Command::Occlude(a) => occlude::run(a),
         Command::OcclusionMap(a) => occlusion_map::run(a),
+        Command::Plan(a) => plan::run(a),
         Command::Splint(a) => splint::run(a),
         Command::View(a) => view::run(a),
     };

@@ -5,15 +5,18 @@
 //! The gaps are exact: every vertex's f64 distance to the other mesh's nearest triangle,
 //! negative inside it ([`vertex_gaps`]). The files: `teeth` (regions from a teeth-axes
 //! JSON, its one parser), `check` (whether a teeth file fits the arch it labels), `summary`
-//! (per-region minimum gap, contact areas, spots), `colour` (the colour scale), `ply` (the
+//! (per-region minimum gap, contact areas, spots), `arch_regions` (regions of the arch
+//! without a teeth file, and the left/right balance), `colour` (the colour scale), `ply` (the
 //! coloured mesh as a PLY file).
 
+mod arch_regions;
 mod check;
 mod colour;
 mod ply;
 mod summary;
 mod teeth;
 
+pub use arch_regions::{arch_region_of, arch_regions, ArchRegion, Balance, ARCH_REGIONS};
 pub use check::{check_pair, ArchContext, TeethFit, TEETH_BOX_MARGIN};
 pub use colour::{gap_colour, LEGEND};
 pub use ply::{save_ply, write_ply, MAP_FILE};

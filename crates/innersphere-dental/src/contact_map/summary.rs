@@ -31,6 +31,25 @@ pub struct RegionSummary {
 /// The summary of every tooth of `teeth` on `mesh` with per-vertex `gaps` and `region`s
 /// ([`Teeth::regions`]), in tooth order.
 pub fn summarise(mesh: &Mesh, gaps: &[f64], teeth: &Teeth, region: &[u32]) -> Vec<RegionSummary> {
+    region_stats(mesh, gaps, region, teeth.teeth.len())
+        .into_iter()
+        .zip(&teeth.teeth)
+        .map(|(s, t)| RegionSummary {
+            tooth: t.number,
+            ..s
+        })
+        .collect()
+}
+
+/// The summary of each of `count` regions (`region[v]`: vertex `v`'s, `u32::MAX` or beyond
+/// `count` for none), `tooth` left 0: what [`summarise`] gives per tooth and
+/// [`arch_regions`](super::arch_regions) per region of the arch.
+pub(crate) fn region_stats(
+    mesh: &Mesh,
+    gaps: &[f64],
+    region: &[u32],
+    count: usize,
+) -> Vec<RegionSummary> {
     let n = mesh.vertices.len().min(gaps.len()).min(region.len());
     let mut area = vec![0.0f64; n];
     for t in &mesh.triangles {
@@ -44,7 +63,7 @@ pub fn summarise(mesh: &Mesh, gaps: &[f64], teeth: &Teeth, region: &[u32]) -> Ve
             area[v] += third;
         }
     }
-    // Spots: union-find over the edges whose ends are both in contact and on one tooth.
+    // Spots: union-find over the edges whose ends are both in contact and in one region.
     let mut sets = UnionFind::new(n);
     let contact = |v: usize| gaps[v] <= SPOT_GAP;
     for t in &mesh.triangles {
@@ -55,18 +74,17 @@ pub fn summarise(mesh: &Mesh, gaps: &[f64], teeth: &Teeth, region: &[u32]) -> Ve
             }
         }
     }
-    let mut out: Vec<RegionSummary> = teeth
-        .teeth
-        .iter()
-        .map(|t| RegionSummary {
-            tooth: t.number,
+    let mut out = vec![
+        RegionSummary {
+            tooth: 0,
             vertices: 0,
             min_gap: f64::INFINITY,
             area_within_0_1: 0.0,
             area_within_0_2: 0.0,
             spots: 0,
-        })
-        .collect();
+        };
+        count
+    ];
     for v in 0..n {
         let Some(s) = out.get_mut(region[v] as usize) else {
             continue;

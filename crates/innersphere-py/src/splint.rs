@@ -19,7 +19,8 @@ type SplintOut<'py> = (
 /// `trimesh.Trimesh`: the vertices and faces of its closed, outward-facing surface in A's
 /// frame and a dict of its measurements (the JSON of `ist splint`, with `opened` and
 /// `pose`). `open`: an incisal opening about the hinge (mm) applied after the pose, or
-/// "auto" for the least that leaves room for the wafer. Options default as in `ist splint`.
+/// "auto" for the least that leaves room for the wafer. Options default as in `ist splint`
+/// (`max_triangles`: simplified down to it; 0 for as extracted).
 /// `unit`: the meshes' unit (mm, cm, m, in), converted to mm; the wafer is in mm.
 /// A wafer that fails one of its guarantees (the report's `checks`) raises ValueError
 /// unless `keep_unfit` (then it is returned, and written, with `fit` false).
@@ -28,7 +29,8 @@ type SplintOut<'py> = (
 /// released.
 #[pyfunction]
 #[pyo3(signature = (a, b, pose_b=None, open=None, clearance=None, coverage=None,
-                    min_thickness=None, rim=None, voxel=None, out=None, keep_unfit=false,
+                    min_thickness=None, rim=None, voxel=None, max_triangles=None, out=None,
+                    keep_unfit=false,
                     unit="mm"))]
 #[allow(clippy::too_many_arguments)]
 pub fn splint<'py>(
@@ -42,6 +44,7 @@ pub fn splint<'py>(
     min_thickness: Option<f64>,
     rim: Option<f64>,
     voxel: Option<f64>,
+    max_triangles: Option<usize>,
     out: Option<&Bound<'py, PyAny>>,
     keep_unfit: bool,
     unit: &str,
@@ -54,6 +57,7 @@ pub fn splint<'py>(
         min_thickness: min_thickness.unwrap_or(d.min_thickness),
         rim: rim.unwrap_or(d.rim),
         voxel: voxel.unwrap_or(d.voxel),
+        max_triangles: max_triangles.unwrap_or(d.max_triangles),
     };
     opts.validate().map_err(error)?;
     let opening = match open {

@@ -42,6 +42,10 @@ pub struct Args {
     /// Grid spacing (mm).
     #[arg(long, default_value_t = SplintOptions::default().voxel)]
     voxel: f64,
+    /// The most triangles the wafer is written with: simplified down to it within a quarter
+    /// of --voxel (0: as extracted, a million or more on a full arch).
+    #[arg(long, default_value_t = SplintOptions::default().max_triangles)]
+    max_triangles: usize,
     /// Output: the splint in A's frame, as binary STL (`.stl`) or OBJ (`.obj`), gzip-compressed
     /// when the name ends in `.gz`.
     #[arg(short, long)]
@@ -81,6 +85,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         min_thickness: args.min_thickness,
         rim: args.rim,
         voxel: args.voxel,
+        max_triangles: args.max_triangles,
     };
     opts.validate()?;
     let a = crate::files::load_mesh(&args.a, args.unit.unit)?;

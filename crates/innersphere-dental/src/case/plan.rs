@@ -346,7 +346,7 @@ pub const UPPER_MAP: &str = "upper_map.ply";
 /// The contact map's file of the lower arch (at the bite, in the upper's frame).
 pub const LOWER_MAP: &str = "lower_map.ply";
 
-/// The bite of `case` on trees `a`, `b`: given, or closed ([`bite`](crate::bite())) from the
+/// The bite of `case` on trees `a`, `b`: given, or closed ([`bite`](crate::bite::bite)) from the
 /// case's start or the scanned pose opened [`DEFAULT_START_OPENING`] along the pair's up.
 /// A closing that does not converge is an error naming how it ended.
 fn find_bite(case: &Case, a: &SharedTree, b: &SharedTree) -> Result<PlanBite> {
@@ -373,14 +373,14 @@ fn find_bite(case: &Case, a: &SharedTree, b: &SharedTree) -> Result<PlanBite> {
             Pose::from_translation(-frame.up * (DEFAULT_START_OPENING * frame.scale))
         }
     };
-    let opts = crate::BiteOptions {
+    let opts = crate::bite::BiteOptions {
         free: case.bite.method == BiteMethod::Free,
         starts: case.bite.starts,
         seed: case.bite.seed,
         contact: case.bite.contact,
-        ..crate::BiteOptions::default()
+        ..crate::bite::BiteOptions::default()
     };
-    let found = crate::bite(a, b, &from, &opts)?;
+    let found = crate::bite::bite(a, b, &from, &opts)?;
     let o = &found.occlusion;
     if !o.converged() {
         return Err(Error::InvalidOption(format!(

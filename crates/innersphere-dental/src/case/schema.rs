@@ -122,11 +122,11 @@ pub struct BiteSpec {
 pub const DEFAULT_START_OPENING: f64 = 2.0;
 
 fn default_starts() -> usize {
-    crate::BiteOptions::default().starts
+    crate::bite::BiteOptions::default().starts
 }
 
 fn default_seed() -> u64 {
-    crate::BiteOptions::default().seed
+    crate::bite::BiteOptions::default().seed
 }
 
 impl Default for BiteSpec {
@@ -213,6 +213,9 @@ pub struct SplintSpec {
     /// Grid spacing (mm).
     #[serde(default = "d_voxel")]
     pub voxel: f64,
+    /// The most triangles it is written with (0: as extracted).
+    #[serde(default = "d_max_triangles")]
+    pub max_triangles: usize,
 }
 
 fn d_clearance() -> f64 {
@@ -230,6 +233,9 @@ fn d_rim() -> f64 {
 fn d_voxel() -> f64 {
     SplintOptions::default().voxel
 }
+fn d_max_triangles() -> usize {
+    SplintOptions::default().max_triangles
+}
 
 impl SplintSpec {
     /// Its shape's options.
@@ -240,6 +246,7 @@ impl SplintSpec {
             min_thickness: self.min_thickness,
             rim: self.rim,
             voxel: self.voxel,
+            max_triangles: self.max_triangles,
         }
     }
 }
@@ -386,12 +393,12 @@ impl Case {
         if let Some(p) = &b.pose {
             pose_of("pose", p)?;
         }
-        let opts = crate::BiteOptions {
+        let opts = crate::bite::BiteOptions {
             free: b.method == BiteMethod::Free,
             starts: b.starts,
             seed: b.seed,
             contact: b.contact,
-            ..crate::BiteOptions::default()
+            ..crate::bite::BiteOptions::default()
         };
         opts.validate()?;
         if self.splints.len() > MAX_SPLINTS {

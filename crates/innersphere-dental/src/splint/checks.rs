@@ -20,7 +20,8 @@ pub const MIN_COVERAGE: f64 = 0.85;
 /// One guarantee and whether the written wafer keeps it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Check {
-    /// `solid`, `clearance_a`, `clearance_b`, `no_arch_inside`, `thickness` or `coverage`.
+    /// `solid`, `no_self_intersection`, `clearance_a`, `clearance_b`, `no_arch_inside`,
+    /// `thickness`, `coverage` or `triangles`.
     pub name: &'static str,
     /// Kept.
     pub ok: bool,
@@ -43,6 +44,15 @@ pub fn judge(r: &SplintReport, opts: &SplintOptions) -> Vec<Check> {
                 r.watertight,
                 r.manifold,
                 r.winding_consistent
+            ),
+        },
+        Check {
+            name: "no_self_intersection",
+            ok: r.self_intersections == 0,
+            detail: format!(
+                "no two triangles meet away from a shared corner (exact): {} pair{} found",
+                r.self_intersections,
+                if r.self_intersections == 1 { "" } else { "s" }
             ),
         },
         Check {
@@ -86,6 +96,18 @@ pub fn judge(r: &SplintReport, opts: &SplintOptions) -> Vec<Check> {
                 100.0 * r.coverage_a,
                 100.0 * r.coverage_b
             ),
+        },
+        Check {
+            name: "triangles",
+            ok: opts.max_triangles == 0 || r.triangles <= opts.max_triangles,
+            detail: if opts.max_triangles == 0 {
+                format!("{} triangles, as extracted (no cap asked)", r.triangles)
+            } else {
+                format!(
+                    "at most {} triangles for the lab: {} (simplified from {} within {:.4} mm)",
+                    opts.max_triangles, r.triangles, r.extracted_triangles, r.simplify_error
+                )
+            },
         },
     ]
 }

@@ -62,8 +62,18 @@ pub struct SplintReport {
     pub dropped_parts: usize,
     /// Specks of a few cells apart from the wafer, left out of the mesh.
     pub dropped_specks: usize,
-    /// Vertices pushed out to the clearance after extraction.
+    /// Vertices pushed out to the clearance after extraction (and after simplification).
     pub moved_vertices: usize,
+    /// Triangles the surface had before it was simplified down to
+    /// [`SplintOptions::max_triangles`] (equal to `triangles` when it was not).
+    pub extracted_triangles: usize,
+    /// The simplification's geometric error bound reached (model units; 0 when not
+    /// simplified).
+    pub simplify_error: f64,
+    /// Pairs of triangles that meet away from a shared corner (exact; counted up to
+    /// [`SELF_INTERSECTIONS_COUNTED`](super::SELF_INTERSECTIONS_COUNTED)): 0 for a wafer
+    /// a slicer reads unambiguously.
+    pub self_intersections: usize,
     /// Vertices moved apart by a few `f32` steps because they would have coincided in the
     /// file ([`written`](super::written)).
     pub separated_vertices: usize,
@@ -199,6 +209,9 @@ pub fn report(
         pose: [0.0; 7],
         dropped_specks: 0,
         moved_vertices: 0,
+        extracted_triangles: mesh.triangles.len(),
+        simplify_error: 0.0,
+        self_intersections: 0,
         separated_vertices: 0,
         fit: false,
         checks: Vec::new(),
@@ -282,12 +295,26 @@ pub fn pinched_vertices(m: &Mesh) -> usize {
         .count()
 }
 
-/// Thickness of the wafer along the insertion axis `up`: from each vertex that faces down
-/// (or up, within 45°) the distance along `up` (or `-up`) to the surface across, past the triangles
-/// around the vertex; returns the least and the 1st percentile. This is the plate's
-/// thickness between the imprints that `min_thickness` asks for; steep walls, whose
-/// thickness is across rather than along the axis, are not measured.
+/// Thickness of the wafer along the insertion axis `up` ([`vertex_thickness`]): the least
+/// and the 1st percentile.
 fn thickness(m: &Mesh, bvh: &TriangleBvh, up: DVec3) -> (f64, f64) {
+    let mut t: Vec<f64> = vertex_thickness(m, bvh, up)
+        .into_iter()
+        .map(|x| x.1)
+        .collect();
+    if t.is_empty() {
+        return (0.0, 0.0);
+    }
+    t.sort_by(f64::total_cmp);
+    (t[0], t[t.len() / 100])
+}
+
+/// Thickness of the wafer along the insertion axis `up`, per vertex that faces down (or up,
+/// within 45°): the distance along `up` (or `-up`) to the surface across, past the
+/// triangles around the vertex. This is the plate's thickness between the imprints that
+/// `min_thickness` asks for; steep walls, whose thickness is across rather than along the
+/// axis, are not measured. `bvh` is `m`'s.
+pub(super) fn vertex_thickness(m: &Mesh, bvh: &TriangleBvh, up: DVec3) -> Vec<(u32, f64)> {
     // Measured from the vertices whose normal is within 45° of the axis.
     const FLAT: f64 = std::f64::consts::FRAC_1_SQRT_2;
     let n = m.vertices.len();
@@ -300,7 +327,7 @@ fn thickness(m: &Mesh, bvh: &TriangleBvh, up: DVec3) -> (f64, f64) {
         }
     }
     let (start, around) = triangles_around(m);
-    let mut t: Vec<f64> = (0..n)
+    (0..n)
         .into_par_iter()
         .filter_map(|v| {
             let facing = normal[v].normalize_or_zero().dot(up);
@@ -315,12 +342,7 @@ fn thickness(m: &Mesh, bvh: &TriangleBvh, up: DVec3) -> (f64, f64) {
             bvh.first_hit(m.vertices[v], dir, 0.0, f64::INFINITY, |tri| {
                 own.contains(&tri)
             })
-            .map(|h| h.t)
+            .map(|h| (v as u32, h.t))
         })
-        .collect();
-    if t.is_empty() {
-        return (0.0, 0.0);
-    }
-    t.sort_by(f64::total_cmp);
-    (t[0], t[t.len() / 100])
+        .collect()
 }

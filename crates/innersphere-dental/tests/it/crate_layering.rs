@@ -1,4 +1,4 @@
-//! The crate's modules import one way, down a ladder: anatomy, columns, occlusion_status ← contact_map ← the bite (occlusion, its limits, reach, bite, free_occlusion) ← splint. Reads every `crate::…` path in
+//! The crate's modules import one way, down a ladder: anatomy, columns, occlusion_status ← contact_map ← the bite (occlusion, its limits, reach, bite, free_occlusion) ← splint ← case. Reads every `crate::…` path in
 //! the sources (outside their `#[cfg(test)]` modules) and fails on an import from a rung above,
 //! or through the crate root's re-exports.
 
@@ -9,6 +9,7 @@ fn layer(module: &str) -> Option<u32> {
         "contact_map" => 1,
         "occlusion" | "occlusion_limits" | "reach" | "bite" | "free_occlusion" => 2,
         "splint" => 3,
+        "case" => 4,
         _ => return None,
     })
 }

@@ -24,11 +24,13 @@
 //!   vertex of one body inside the other (both ways).
 //! * [`vertex_gaps`]: the signed distance of every vertex of one body to the other's
 //!   surface (negative inside), what a contact map colours.
+//! * [`self_intersections`]: the triangle pairs of one mesh that meet away from a shared
+//!   corner (a printable solid has none).
 //! * `brute_force_distance` / `brute_force_intersects` (tests only): O(n·m) references.
 //!
 //! The files: `mesh` ([`ExactMesh`]), `scratch` ([`ExactScratch`]), `frame` (B's frame in
 //! A's), `overlap` (the traversal of overlapping node pairs), `bnb` (the branch and bound),
-//! `containment`, `distance`, `gaps`, `intersects`, `penetration`, `overlap_volume` (the
+//! `containment`, `distance`, `gaps`, `intersects`, `self_intersections`, `penetration`, `overlap_volume` (the
 //! meshes' intersection volume and its gradient), `overlap_patches` (its connected pieces),
 //! `front` (the node-pair front it carries), `crossings` (edge–triangle crossings), `bound`
 //! (node shapes) and `tri_tri` (triangle pairs).
@@ -58,6 +60,7 @@ mod overlap_patches;
 mod overlap_volume;
 mod penetration;
 mod scratch;
+mod self_intersections;
 // Triangle–triangle primitives: the kernels of the exact queries.
 pub(crate) mod tri_tri;
 
@@ -73,6 +76,7 @@ pub use overlap_patches::{AreaMoments, OverlapPatch};
 pub use overlap_volume::{intersection_volume, MeshOverlap, NUDGE};
 pub use penetration::{penetration, penetration_depth, Body, ExactPenetration};
 pub use scratch::{ExactScratch, ExactStats};
+pub use self_intersections::self_intersections;
 #[cfg(test)]
 pub(crate) use tri_tri::{
     segment_segment_closest, segment_triangle_intersect, triangle_distance, triangles_intersect,

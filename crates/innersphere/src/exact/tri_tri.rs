@@ -77,6 +77,20 @@ fn proj(p: DVec3, axis: usize) -> Coord<f64> {
     }
 }
 
+/// True when `c` and `d` lie strictly on the same side of the line `a b` in the plane they
+/// all lie in (exact; false when the four points are not coplanar or either lies on the
+/// line): two triangles `a b c` and `a b d` sharing the edge `a b` then fold onto each other.
+pub(crate) fn same_side_coplanar(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> bool {
+    if o3(a, b, c, d) != 0.0 {
+        return false;
+    }
+    (0..3).any(|k| {
+        let (pa, pb) = (proj(a, k), proj(b, k));
+        let (sc, sd) = (orient2d(pa, pb, proj(c, k)), orient2d(pa, pb, proj(d, k)));
+        (sc > 0.0 && sd > 0.0) || (sc < 0.0 && sd < 0.0)
+    })
+}
+
 /// True when `a, b, c` are exactly collinear (every coordinate projection has zero area).
 #[inline]
 pub(crate) fn is_collinear(a: DVec3, b: DVec3, c: DVec3) -> bool {
@@ -146,7 +160,6 @@ pub(crate) fn segments_intersect(p: DVec3, q: DVec3, r: DVec3, s: DVec3) -> bool
     (0..3).all(|k| segments_intersect_2d(proj(p, k), proj(q, k), proj(r, k), proj(s, k)))
 }
 
-#[cfg(test)]
 /// Closed segment `[p, q]` and closed triangle `a, b, c` share a point (exact; degenerate
 /// segments and triangles allowed).
 pub(crate) fn segment_triangle_intersect(p: DVec3, q: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {

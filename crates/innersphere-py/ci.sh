@@ -36,7 +36,7 @@ echo "== virtual environment in $TMP ($($PYTHON --version))"
 $PYTHON -m venv "$TMP/venv"
 PY="$TMP/venv/bin/python"
 "$PY" -m pip install -q --disable-pip-version-check --upgrade pip
-"$PY" -m pip install -q --disable-pip-version-check maturin pytest numpy trimesh networkx manifold3d mypy "dask[distributed]"
+"$PY" -m pip install -q --disable-pip-version-check maturin pytest numpy trimesh networkx manifold3d cgal mypy "dask[distributed]"
 
 echo "== pip install ./crates/innersphere-py (maturin, release build)"
 start=$(date +%s)

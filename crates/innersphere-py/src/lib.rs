@@ -15,6 +15,7 @@ mod haptic;
 mod motion;
 mod occlude;
 mod pair;
+mod plan;
 mod results;
 mod shapes;
 mod splint;
@@ -36,6 +37,7 @@ fn _innersphere(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(motion::load_motion, m)?)?;
     m.add_function(wrap_pyfunction!(contact_map::contact_map, m)?)?;
     m.add_function(wrap_pyfunction!(splint::splint, m)?)?;
+    m.add_function(wrap_pyfunction!(plan::plan, m)?)?;
     m.add_function(wrap_pyfunction!(shapes::arch_pair, m)?)?;
     m.add_function(wrap_pyfunction!(occlude::occlude, m)?)?;
     Ok(())

@@ -32,6 +32,8 @@ pub struct Args {
 /// Runs the subcommand; returns the process exit code.
 pub fn run(args: Args) -> anyhow::Result<i32> {
     let case = Case::load(&args.case)?;
+    // Before the work: a folder the plan may not write into is refused at once.
+    case::check_folder(&args.out)?;
     let cache = match (&args.cache, args.no_cache) {
         (_, true) => None,
         (Some(d), false) => Some(d.clone()),

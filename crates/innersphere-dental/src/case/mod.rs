@@ -24,4 +24,4 @@ pub use schema::{
     AutoWord, BiteMethod, BiteSpec, Case, OpenSpec, SplintName, SplintSpec, CASE_VERSION,
     DEFAULT_START_OPENING, MAX_CASE_BYTES, MAX_SPLINTS,
 };
-pub use write::{utc_stamp, write, CASE_FILE, MANIFEST, REPORT};
+pub use write::{check_folder, utc_stamp, write, CASE_FILE, MANIFEST, REPORT};

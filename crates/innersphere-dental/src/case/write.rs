@@ -30,6 +30,12 @@ fn plain(name: &str) -> bool {
         && name.len() <= 255
 }
 
+/// Refuses an output folder a plan may not write into (a file, or a folder of files no plan
+/// wrote): what [`write()`] checks, to be asked before the work.
+pub fn check_folder(dir: &Path) -> Result<()> {
+    previous(dir).map(|_| ())
+}
+
 /// The previous plan's files in `dir` (empty for a new or empty folder); an error for a
 /// folder holding anything else.
 fn previous(dir: &Path) -> Result<Vec<String>> {

@@ -40,6 +40,7 @@ from ._innersphere import (
     contact_map,
     load_motion,
     occlude,
+    plan,
     splint,
 )
 
@@ -55,5 +56,6 @@ __all__ = [
     "contact_map",
     "load_motion",
     "occlude",
+    "plan",
     "splint",
 ]

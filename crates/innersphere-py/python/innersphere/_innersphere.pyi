@@ -19,6 +19,7 @@ __all__ = [
     "contact_map",
     "load_motion",
     "occlude",
+    "plan",
     "splint",
 ]
 
@@ -545,6 +546,20 @@ def splint(
     ValueError unless ``keep_unfit``. ``unit``: the meshes' unit ("mm", "cm", "m", "in"),
     converted to mm; the wafer is in mm. Raises OSError for unreadable or unwritable files,
     ValueError for bad meshes, poses or options and for inputs that cannot make a wafer."""
+
+def plan(
+    case: _PathLike,
+    out: _PathLike,
+    cache: Union[_PathLike, bool, None] = None,
+) -> Dict[str, Any]:
+    """Runs the case file ``case`` (JSON, docs/PLAN.md; paths relative to it) into the folder
+    ``out`` (new, empty or a previous plan's): the contact map's PLYs, each fit wafer's STL,
+    ``report.html`` and ``case.json``, the same files as ``ist plan`` writes. Returns the plan
+    as a dict (the JSON of ``ist plan --json``: ``bite`` with its ``pose``, ``map``,
+    ``splints`` with each wafer's ``file`` and ``report``, ``fit``, ``seconds``). ``cache``:
+    the build cache's folder (default the platform's; ``False`` for none). Raises OSError for
+    unreadable or unwritable files and ValueError for a case that cannot be planned; a wafer
+    that fails a guarantee is in the dict with ``fit`` false and no file."""
 
 def occlude(
     tree_a: Tree,

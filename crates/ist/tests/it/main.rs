@@ -7,6 +7,7 @@ mod build_cache;
 mod cli;
 mod occlude;
 mod parity;
+mod plan;
 mod robust;
 mod teeth;
 mod units;

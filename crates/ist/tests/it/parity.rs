@@ -103,6 +103,7 @@ fn every_planning_tool_reaches_ist_and_python() {
         ("contact_map", "occlusion-map", "contact_map"),
         ("splint", "splint", "splint"),
         ("bite", "occlude", "occlude"),
+        ("case", "plan", "plan"),
     ] {
         assert!(lib.contains(&format!("pub mod {module};")), "{module}");
         assert!(help.contains(&format!("  {cmd} ")), "ist {cmd} missing");

@@ -9,7 +9,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 /// Runs the case file `case` (JSON, docs/PLAN.md; paths relative to it) into the folder
-/// `out` (new, empty or a previous plan's): the contact map's PLYs, each fit wafer's STL,
+/// `out` (new, empty or a previous plan's): the contact map's PLYs, each fit wafer's STL and 3MF,
 /// `report.html` and `case.json`, the same files as `ist plan` writes. Returns the plan as
 /// a dict (the JSON of `ist plan --json`). `cache`: the build cache's folder (default the
 /// platform's, as `ist`; `False` for none). Runs on all cores with the interpreter released.

@@ -1,5 +1,5 @@
 //! Writes a [`Planned`] into its output folder: the contact map's PLYs, each fit wafer's
-//! STL, `report.html`, `case.json` (the case as run, replayable) and `plan-files.txt`
+//! STL and 3MF, `report.html`, `case.json` (the case as run, replayable) and `plan-files.txt`
 //! (what this plan wrote). Every file goes through a temporary file renamed into place.
 //!
 //! The folder is the plan's: it must be new, empty, or hold a previous plan's files (its
@@ -89,6 +89,7 @@ pub fn write(p: &Planned, dir: &Path, stamp: &str) -> Result<Vec<PathBuf>> {
     for s in &p.plan.splints {
         if let Some(f) = &s.file {
             names.push(f.clone());
+            names.push(format!("{}.3mf", s.name));
         }
     }
     names.push(REPORT.into());
@@ -112,6 +113,8 @@ pub fn write(p: &Planned, dir: &Path, stamp: &str) -> Result<Vec<PathBuf>> {
     for (s, made) in p.plan.splints.iter().zip(&p.splints) {
         if let Some(f) = &s.file {
             innersphere::mesh::save(&made.mesh, &dir.join(f))?;
+            let three = crate::splint::threemf::to_3mf_bytes(&made.mesh, &s.name)?;
+            innersphere::output::write_file(&dir.join(format!("{}.3mf", s.name)), &three)?;
         }
     }
     innersphere::output::write_file(&dir.join(REPORT), report_html(p, stamp)?.as_bytes())?;

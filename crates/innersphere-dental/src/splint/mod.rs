@@ -36,6 +36,7 @@ pub mod raster;
 pub mod report;
 pub mod shape;
 pub mod simplify;
+pub mod threemf;
 pub mod written;
 
 use std::time::Instant;

@@ -553,7 +553,7 @@ def plan(
     cache: Union[_PathLike, bool, None] = None,
 ) -> Dict[str, Any]:
     """Runs the case file ``case`` (JSON, docs/PLAN.md; paths relative to it) into the folder
-    ``out`` (new, empty or a previous plan's): the contact map's PLYs, each fit wafer's STL,
+    ``out`` (new, empty or a previous plan's): the contact map's PLYs, each fit wafer's STL and 3MF,
     ``report.html`` and ``case.json``, the same files as ``ist plan`` writes. Returns the plan
     as a dict (the JSON of ``ist plan --json``: ``bite`` with its ``pose``, ``map``,
     ``splints`` with each wafer's ``file`` and ``report``, ``fit``, ``seconds``). ``cache``:

@@ -128,7 +128,9 @@ fn a_case_from_scans_to_wafers_the_same_run_after_run_and_in_metres() {
         names,
         [
             "case.json",
+            "final.3mf",
             "final.stl",
+            "intermediate.3mf",
             "intermediate.stl",
             "lower_map.ply",
             "plan-files.txt",
@@ -142,7 +144,7 @@ fn a_case_from_scans_to_wafers_the_same_run_after_run_and_in_metres() {
     }
     for ((n1, b1), (nm, bm)) in o1.iter().zip(&om) {
         assert_eq!(n1, nm);
-        if n1.ends_with(".stl") || n1.ends_with(".ply") {
+        if n1.ends_with(".stl") || n1.ends_with(".3mf") || n1.ends_with(".ply") {
             assert!(b1 == bm, "{n1} differs from the plan in metres");
         }
     }
@@ -181,6 +183,7 @@ fn a_case_from_scans_to_wafers_the_same_run_after_run_and_in_metres() {
     let o = ist(&["plan", s(&dir.path("one.json")), "-o", s(&dir.path("out1"))]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     assert!(!dir.path("out1/intermediate.stl").exists());
+    assert!(!dir.path("out1/intermediate.3mf").exists());
     assert!(dir.path("out1/final.stl").is_file());
     assert_eq!(
         std::fs::read_to_string(dir.path("out1/notes.txt")).unwrap(),

@@ -24,8 +24,8 @@ type SplintOut<'py> = (
 /// `unit`: the meshes' unit (mm, cm, m, in), converted to mm; the wafer is in mm.
 /// A wafer that fails one of its guarantees (the report's `checks`) raises ValueError
 /// unless `keep_unfit` (then it is returned, and written, with `fit` false).
-/// `out`: also write it there, as binary STL (`.stl`) or OBJ (`.obj`), compressed when the
-/// name ends in `.gz`; another name is refused before the work. Runs on all cores with the interpreter
+/// `out`: also write it there, as binary STL (`.stl`), OBJ (`.obj`; either compressed when the
+/// name ends in `.gz`) or 3MF (`.3mf`); another name is refused before the work. Runs on all cores with the interpreter
 /// released.
 #[pyfunction]
 #[pyo3(signature = (a, b, pose_b=None, open=None, clearance=None, coverage=None,
@@ -70,7 +70,9 @@ pub fn splint<'py>(
     let out = out.map(convert::path).transpose()?;
     if let Some(p) = &out {
         // Before the work: a name that promises another format, or a folder that is missing.
-        innersphere::mesh::SAVED_MESH.check(p).map_err(error)?;
+        innersphere_dental::splint::threemf::WAFER_FILE
+            .check(p)
+            .map_err(error)?;
         innersphere::output::ensure_folder_writable(p).map_err(error)?;
     }
     let ma = mesh_like(py, a, "a", false, unit)?;
@@ -79,7 +81,7 @@ pub fn splint<'py>(
         .detach(|| -> innersphere::Result<_> {
             let s = make_opened(&ma, &mb, &pose, opening, &opts)?;
             if let Some(p) = out.as_ref().filter(|_| s.report.fit || keep_unfit) {
-                innersphere::mesh::save(&s.mesh, p)?;
+                innersphere_dental::splint::threemf::save_wafer(&s.mesh, p)?;
             }
             Ok(s)
         })

@@ -46,8 +46,8 @@ pub struct Args {
     /// of --voxel (0: as extracted, a million or more on a full arch).
     #[arg(long, default_value_t = SplintOptions::default().max_triangles)]
     max_triangles: usize,
-    /// Output: the splint in A's frame, as binary STL (`.stl`) or OBJ (`.obj`), gzip-compressed
-    /// when the name ends in `.gz`.
+    /// Output: the splint in A's frame, as binary STL (`.stl`), OBJ (`.obj`; either
+    /// gzip-compressed when the name ends in `.gz`) or 3MF (`.3mf`).
     #[arg(short, long)]
     out: PathBuf,
     /// Write the wafer even when it fails one of its guarantees, for inspection (the exit
@@ -76,7 +76,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
         },
     };
     crate::files::check_outputs(
-        &[(args.out.as_path(), innersphere::mesh::SAVED_MESH)],
+        &[(args.out.as_path(), splint::threemf::WAFER_FILE)],
         &[&args.a, &args.b],
     )?;
     let opts = SplintOptions {
@@ -94,7 +94,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let r = &s.report;
     let write = r.fit || args.keep_unfit;
     if write {
-        innersphere::mesh::save(&s.mesh, &args.out)
+        splint::threemf::save_wafer(&s.mesh, &args.out)
             .with_context(|| format!("writing {}", args.out.display()))?;
     }
     if !r.fit {

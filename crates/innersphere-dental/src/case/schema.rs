@@ -498,7 +498,7 @@ mod tests {
                 r#", "bite": {"from": [0,0,0,0,0,0,0]}"#,
                 "non-zero rotation",
             ),
-            (r#", "bite": {"starts": 0}"#, "starts"),
+            (r#", "bite": {"method": "free", "starts": 0}"#, "starts"),
             (r#", "splints": [{"name": "a/b", "open": 1}]"#, "name"),
             (
                 r#", "splints": [{"name": "w", "open": "wide"}]"#,

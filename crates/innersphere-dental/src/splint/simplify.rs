@@ -124,13 +124,10 @@ pub fn rounded_to_f32(m: &Mesh) -> Mesh {
 /// each direction.
 pub fn surface_defects(m: &Mesh) -> Result<Vec<[DVec3; 3]>> {
     let rounded = rounded_to_f32(m);
-    let mut bad: Vec<u32> = innersphere::exact::self_intersections(
-        &innersphere::exact::ExactMesh::new(&rounded)?,
-        10_000,
-    )
-    .into_iter()
-    .flatten()
-    .collect();
+    let mut bad: Vec<u32> = innersphere::exact::mesh_self_intersections(&rounded, 10_000)?
+        .into_iter()
+        .flatten()
+        .collect();
     let mut edges: std::collections::HashMap<(u32, u32), (u32, u32)> =
         std::collections::HashMap::with_capacity(3 * m.triangles.len());
     for (t, tri) in m.triangles.iter().enumerate() {

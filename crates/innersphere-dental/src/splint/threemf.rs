@@ -47,6 +47,28 @@ fn model(mesh: &Mesh, name: &str) -> String {
     x
 }
 
+/// What a wafer may be written as: binary STL, OBJ (each optionally gzip-compressed) or 3MF.
+pub const WAFER_FILE: innersphere::output::OutputKind = innersphere::output::OutputKind {
+    what: "the wafer (binary STL, OBJ or 3MF)",
+    extensions: &["stl", "stl.gz", "obj", "obj.gz", "3mf"],
+};
+
+/// Writes the wafer `mesh` in the format its name says ([`WAFER_FILE`]): 3MF here (its object
+/// titled by the file's stem), STL or OBJ by `innersphere::mesh::save`.
+pub fn save_wafer(mesh: &Mesh, path: &std::path::Path) -> Result<()> {
+    WAFER_FILE.check(path)?;
+    let name = path.to_string_lossy().to_ascii_lowercase();
+    if name.ends_with(".3mf") {
+        let title = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        innersphere::output::write_file(path, &to_3mf_bytes(mesh, &title)?)
+    } else {
+        innersphere::mesh::save(mesh, path)
+    }
+}
+
 /// The 3MF file of `mesh` (mm), its object titled `name`.
 pub fn to_3mf_bytes(mesh: &Mesh, name: &str) -> Result<Vec<u8>> {
     let fail = |e: String| Error::InvalidOption(format!("writing the 3MF file: {e}"));

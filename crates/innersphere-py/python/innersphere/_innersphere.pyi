@@ -540,8 +540,9 @@ def splint(
     ``opened`` and ``pose``). ``open``: an incisal opening about the hinge (mm) applied after
     the pose, or ``"auto"`` for the least that leaves room for the wafer. The options default
     as in ``ist splint`` (mm: clearance 0.1, coverage 2, min_thickness 1, rim 1.5, voxel
-    0.1, max_triangles 300000: simplified down to it, 0 for as extracted). ``out``: also write it there, as binary STL (``.stl``) or OBJ (``.obj``),
-    compressed when the name ends in ``.gz``. Every measurement is made on the mesh as
+    0.1, max_triangles 300000: simplified down to it, 0 for as extracted). ``out``: also
+    write it there, as binary STL (``.stl``) or OBJ (``.obj``), compressed when the name
+    ends in ``.gz``, or 3MF (``.3mf``). Every measurement is made on the mesh as
     written; a wafer that fails a guarantee (``checks`` in the dict, ``fit`` false) raises
     ValueError unless ``keep_unfit``. ``unit``: the meshes' unit ("mm", "cm", "m", "in"),
     converted to mm; the wafer is in mm. Raises OSError for unreadable or unwritable files,

@@ -76,7 +76,7 @@ pub use overlap_patches::{AreaMoments, OverlapPatch};
 pub use overlap_volume::{intersection_volume, MeshOverlap, NUDGE};
 pub use penetration::{penetration, penetration_depth, Body, ExactPenetration};
 pub use scratch::{ExactScratch, ExactStats};
-pub use self_intersections::self_intersections;
+pub use self_intersections::{mesh_self_intersections, self_intersections};
 #[cfg(test)]
 pub(crate) use tri_tri::{
     segment_segment_closest, segment_triangle_intersect, triangle_distance, triangles_intersect,

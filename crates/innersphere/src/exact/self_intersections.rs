@@ -4,6 +4,8 @@
 
 use super::mesh::ExactMesh;
 use super::tri_tri;
+use crate::mesh::bvh::TriangleBvh;
+use crate::mesh::Mesh;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -18,7 +20,20 @@ use rayon::prelude::*;
 /// Each triangle queries the BVH for the triangles whose boxes touch its own, in parallel
 /// (rayon); the answer is the same on any number of threads.
 pub fn self_intersections(mesh: &ExactMesh, limit: usize) -> Vec<[u32; 2]> {
-    let bvh = mesh.bvh();
+    pairs(mesh.bvh(), &mesh.mesh().triangles, limit)
+}
+
+/// [`self_intersections`] of a plain mesh: only its triangle BVH is built (not the rest of
+/// an [`ExactMesh`]: what a check run many times, as a simplification's, needs). Fails on a
+/// mesh that [`Mesh::validate`] refuses.
+pub fn mesh_self_intersections(mesh: &Mesh, limit: usize) -> crate::error::Result<Vec<[u32; 2]>> {
+    mesh.validate()?;
+    Ok(pairs(&TriangleBvh::new(mesh), &mesh.triangles, limit))
+}
+
+/// The pairs of the triangles `triangles` (vertex ids) in `bvh` (built over them).
+fn pairs(bvh: &TriangleBvh, triangles: &[[u32; 3]], limit: usize) -> Vec<[u32; 2]> {
+    let ids = |slot: u32| triangles[bvh.order[slot as usize] as usize];
     if limit == 0 || bvh.nodes.is_empty() {
         return vec![];
     }
@@ -29,7 +44,7 @@ pub fn self_intersections(mesh: &ExactMesh, limit: usize) -> Vec<[u32; 2]> {
             |(mut found, mut stack): (Vec<[u32; 2]>, Vec<u32>), sa| {
                 let x = &bvh.tris[sa as usize];
                 let (lo, hi) = (x[0].min(x[1]).min(x[2]), x[0].max(x[1]).max(x[2]));
-                let u = mesh.slot_vertices(sa);
+                let u = ids(sa);
                 stack.clear();
                 stack.push(0);
                 while let Some(i) = stack.pop() {
@@ -48,7 +63,7 @@ pub fn self_intersections(mesh: &ExactMesh, limit: usize) -> Vec<[u32; 2]> {
                         if (ylo - hi).max(lo - yhi).max_element() > 0.0 {
                             continue;
                         }
-                        if improper(&u, x, &mesh.slot_vertices(sb), y) {
+                        if improper(&u, x, &ids(sb), y) {
                             let (ta, tb) = (bvh.order[sa as usize], bvh.order[sb as usize]);
                             found.push([ta.min(tb), ta.max(tb)]);
                         }
@@ -97,7 +112,6 @@ fn improper(u: &[u32; 3], x: &[DVec3; 3], v: &[u32; 3], y: &[DVec3; 3]) -> bool 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::Mesh;
     use crate::shapes;
     use glam::DVec3;
 

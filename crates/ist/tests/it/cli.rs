@@ -1302,6 +1302,28 @@ fn splint_writes_a_closed_wafer_and_refuses_bad_input() {
         "{}",
         &text[..80]
     );
+    // `-o x.3mf` writes 3MF: a zip (its local-file magic), the same wafer.
+    let three = dir.path("splint.3mf");
+    ist_json(
+        &[
+            "splint",
+            s(&a),
+            s(&b),
+            "--open",
+            "3",
+            "--voxel",
+            "0.2",
+            "-o",
+            s(&three),
+            "--json",
+        ],
+        0,
+    );
+    assert!(std::fs::read(&three).unwrap().starts_with(b"PK\x03\x04"));
+    // A name that promises another format is refused before the work.
+    let o = ist(&["splint", s(&a), s(&b), "-o", s(&dir.path("splint.ply"))]);
+    assert_eq!(code(&o), 2);
+    assert!(stderr(&o).contains(".3mf"), "{}", stderr(&o));
     // An unfit wafer (at the interlocking bite, no room for the plate: coverage falls short)
     // exits 3, says which guarantee failed, and is not written unless --keep-unfit.
     let unfit = dir.path("unfit.stl");

@@ -21,7 +21,7 @@ pub use plan::{
 };
 pub use report::report_html;
 pub use schema::{
-    AutoWord, BiteMethod, BiteSpec, Case, OpenSpec, SplintName, SplintSpec, CASE_VERSION,
-    DEFAULT_START_OPENING, MAX_CASE_BYTES, MAX_SPLINTS,
+    AutoWord, BiteMethod, BiteSpec, Case, OpenSpec, SplintName, SplintSpec, CASE_INPUT,
+    CASE_VERSION, DEFAULT_START_OPENING, MAX_CASE_BYTES, MAX_SPLINTS,
 };
 pub use write::{check_folder, utc_stamp, write, CASE_FILE, MANIFEST, REPORT};

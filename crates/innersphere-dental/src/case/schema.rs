@@ -15,6 +15,12 @@ use std::path::{Path, PathBuf};
 pub const CASE_VERSION: u32 = 1;
 /// The largest case file read (bytes): a case is a few hundred bytes of settings.
 pub const MAX_CASE_BYTES: u64 = 1 << 20;
+/// A case file as the core's bounded reader takes it ([`MAX_CASE_BYTES`]).
+pub const CASE_INPUT: innersphere::input::TextInput = innersphere::input::TextInput {
+    what: "case file (JSON)",
+    max_bytes: MAX_CASE_BYTES,
+};
+
 /// The most wafers one case makes.
 pub const MAX_SPLINTS: usize = 8;
 
@@ -332,19 +338,9 @@ impl Case {
     /// Reads `path` (at most [`MAX_CASE_BYTES`]) and [`resolve`](Self::resolve)s its paths
     /// against its folder.
     pub fn load(path: &Path) -> Result<Case> {
-        let file = std::fs::File::open(path)
-            .map_err(|e| Error::InvalidOption(format!("{}: {e}", path.display())))?;
-        let mut text = String::new();
-        use std::io::Read;
-        file.take(MAX_CASE_BYTES + 1)
-            .read_to_string(&mut text)
-            .map_err(|e| Error::InvalidOption(format!("{}: {e}", path.display())))?;
-        if text.len() as u64 > MAX_CASE_BYTES {
-            return Err(Error::InvalidOption(format!(
-                "{}: a case file is at most {MAX_CASE_BYTES} bytes",
-                path.display()
-            )));
-        }
+        // The core's bounded text reader: a device, a FIFO or a binary file is refused at
+        // its first chunk, a long file unread.
+        let text = innersphere::input::read_text(path, CASE_INPUT)?;
         let case = Case::from_json(&text)
             .map_err(|e| Error::InvalidOption(format!("{}: {e}", path.display())))?;
         Ok(case.resolve(path.parent().unwrap_or(Path::new(""))))

@@ -223,6 +223,7 @@ fn a_case_that_cannot_be_planned_is_refused_before_any_work() {
             r#"{"version": 1, "upper": "missing.stl", "lower": "l.stl"}"#,
             "missing.stl",
         ),
+        ("\u{0}\u{0}", "NUL byte"),
     ] {
         std::fs::write(dir.path("c.json"), text).unwrap();
         let o = ist(&["plan", s(&dir.path("c.json")), "-o", s(&dir.path("out"))]);

@@ -15,7 +15,7 @@ use pyo3::prelude::*;
 /// platform's, as `ist`; `False` for none). Runs on all cores with the interpreter released.
 /// Raises OSError for unreadable or unwritable files and ValueError for a case that cannot
 /// be planned (with the reason); a wafer that fails a guarantee is in the dict with `fit`
-/// false and no file.
+/// false and no file, one that cannot be made with `report` None and its `error`.
 #[pyfunction]
 #[pyo3(signature = (case, out, cache=None))]
 pub fn plan<'py>(

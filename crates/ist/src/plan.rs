@@ -9,7 +9,7 @@ use std::path::PathBuf;
 /// Arguments of `ist plan`.
 #[derive(clap::Args)]
 #[command(
-    after_help = "The case file (JSON, docs/PLAN.md): {\"version\": 1, \"upper\": \"maxilla.stl\", \"lower\": \"mandible.stl\", \"unit\": \"mm\", \"bite\": {\"method\": \"free\"}, \"splints\": [{\"name\": \"final\", \"open\": \"auto\"}, {\"name\": \"intermediate\", \"open\": 3}]}; paths relative to the case file.\nOutputs in OUTDIR: upper_map.ply and lower_map.ply (the contact map), NAME.stl and NAME.3mf per wafer fit to print, report.html (self-contained), case.json (the case as run) and plan-files.txt (what the plan wrote). OUTDIR must be new, empty or a previous plan's; nothing else in it is touched. Run twice, the files are the same bytes but for the report's \"Made\" line.\nExit codes: 0 every wafer fit to print; 3 a wafer failed a guarantee (not written; the report says which); 2 a case that cannot be planned (with the reason).\nJSON: case_version, library, unit, preset, inputs (role, file, bytes, blake3), bite (method, pose: B in A's frame, status, from, contact, volume, candidates), map (upper, lower: file, vertices, min_gap, vertices_inside, teeth, regions, balance), splints (name, file, report: as `ist splint --json`), fit, seconds."
+    after_help = "The case file (JSON, docs/PLAN.md): {\"version\": 1, \"upper\": \"maxilla.stl\", \"lower\": \"mandible.stl\", \"unit\": \"mm\", \"bite\": {\"method\": \"free\"}, \"splints\": [{\"name\": \"final\", \"open\": \"auto\"}, {\"name\": \"intermediate\", \"open\": 3}]}; paths relative to the case file.\nOutputs in OUTDIR: upper_map.ply and lower_map.ply (the contact map), NAME.stl and NAME.3mf per wafer fit to print, report.html (self-contained), case.json (the case as run) and plan-files.txt (what the plan wrote). OUTDIR must be new, empty or a previous plan's; nothing else in it is touched. Run twice, the files are the same bytes but for the report's \"Made\" line.\nExit codes: 0 every wafer fit to print; 3 a wafer failed a guarantee or could not be made (not written; the report and the JSON's `error` say why; the rest is written); 2 a case that cannot be planned (with the reason).\nJSON: case_version, library, unit, preset, inputs (role, file, bytes, blake3), bite (method, pose: B in A's frame, status, from, contact, volume, candidates), map (upper, lower: file, vertices, min_gap, vertices_inside, teeth, regions, balance), splints (name, file, report: as `ist splint --json`, or null with error: why it could not be made), fit, seconds."
 )]
 pub struct Args {
     /// The case file.
@@ -70,7 +70,14 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
             }
         }
         for s in &plan.splints {
-            let r = &s.report;
+            let Some(r) = &s.report else {
+                println!(
+                    "wafer {}: NOT made: {}",
+                    s.name,
+                    s.error.as_deref().unwrap_or("")
+                );
+                continue;
+            };
             println!(
                 "wafer {}: {} ({} triangles, opened {:.2} mm, coverage {:.1} % / {:.1} %)",
                 s.name,

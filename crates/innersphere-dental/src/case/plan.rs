@@ -92,8 +92,18 @@ pub struct PlanSplint {
     /// The STL written (`NAME.stl`), `null` when it is not fit to print (it is not written).
     pub file: Option<String>,
     /// Its measurements and guarantees ([`SplintReport`]; its times are in [`Plan::seconds`]
-    /// and zero here, so that the plan is the same, run after run).
-    pub report: SplintReport,
+    /// and zero here, so that the plan is the same, run after run); `null` when it could not
+    /// be made.
+    pub report: Option<SplintReport>,
+    /// Why it could not be made (the arches leave no room for it, ...); `null` when made.
+    pub error: Option<String>,
+}
+
+impl PlanSplint {
+    /// Made, and every guarantee kept.
+    pub fn fit(&self) -> bool {
+        self.report.as_ref().is_some_and(|r| r.fit)
+    }
 }
 
 /// Wall-clock seconds of each step (the one part of a plan that differs between runs).
@@ -151,8 +161,8 @@ pub struct Planned {
     pub frame: AnatomicalFrame,
     /// The contact map's gaps, when made.
     pub map: Option<ContactMap>,
-    /// The wafers, in the case's order.
-    pub splints: Vec<Splint>,
+    /// The wafers, in the case's order (`None` where one could not be made).
+    pub splints: Vec<Option<Splint>>,
 }
 
 /// Where the trees come from: the build cache (a folder), or built afresh.
@@ -185,8 +195,8 @@ fn hash_file(role: &'static str, path: &Path) -> Result<InputFile> {
 /// reported to `progress` (`build upper`, `build lower`, `bite`, `contact map`, `wafer
 /// NAME`). Fails with the step named: an input that cannot be read or does not fit (a
 /// teeth file of the other arch), a bite that does not converge (no wafer is made on a
-/// bite that is not one), arches that cannot make a wafer. A wafer that is made but fails
-/// a guarantee is in the plan with `fit` false and no file.
+/// bite that is not one). A wafer the arches cannot make is in the plan with its `error`;
+/// one made that fails a guarantee with its report's `fit` false; neither has a file.
 pub fn run(case: &Case, env: &PlanEnv, progress: &dyn Progress) -> Result<Planned> {
     case.check()?;
     let t0 = Instant::now();
@@ -303,19 +313,33 @@ pub fn run(case: &Case, env: &PlanEnv, progress: &dyn Progress) -> Result<Planne
         let name = spec.name.as_str();
         let t = Instant::now();
         progress.start(&format!("wafer {name}"), 1);
-        let mut s =
-            splint::make_opened(&upper, &lower, &pose, spec.open.opening(), &spec.options())
-                .map_err(|e| named(&format!("wafer \"{name}\""), e))?;
+        // A wafer the arches cannot make is one failed wafer of the plan, not a failed plan:
+        // the map and the other wafers are still made, and the report says why.
+        let made = splint::make_opened(&upper, &lower, &pose, spec.open.opening(), &spec.options());
         progress.finish();
         seconds.splints.push(t.elapsed().as_secs_f64());
-        s.report.seconds = 0.0;
-        s.report.stage_seconds = [0.0; 5];
-        answers.push(PlanSplint {
-            name: name.to_string(),
-            file: s.report.fit.then(|| format!("{name}.stl")),
-            report: s.report.clone(),
-        });
-        splints.push(s);
+        match made {
+            Ok(mut s) => {
+                s.report.seconds = 0.0;
+                s.report.stage_seconds = [0.0; 5];
+                answers.push(PlanSplint {
+                    name: name.to_string(),
+                    file: s.report.fit.then(|| format!("{name}.stl")),
+                    report: Some(s.report.clone()),
+                    error: None,
+                });
+                splints.push(Some(s));
+            }
+            Err(e) => {
+                answers.push(PlanSplint {
+                    name: name.to_string(),
+                    file: None,
+                    report: None,
+                    error: Some(e.to_string()),
+                });
+                splints.push(None);
+            }
+        }
     }
     seconds.total = t0.elapsed().as_secs_f64();
     let plan = Plan {
@@ -326,7 +350,7 @@ pub fn run(case: &Case, env: &PlanEnv, progress: &dyn Progress) -> Result<Planne
         inputs,
         bite,
         map: map_answer,
-        fit: answers.iter().all(|s| s.report.fit),
+        fit: answers.iter().all(PlanSplint::fit),
         splints: answers,
         seconds,
     };

@@ -169,7 +169,15 @@ pub fn report_html(p: &Planned, stamp: &str) -> Result<String> {
 
     // The wafers.
     for (s, made) in plan.splints.iter().zip(&p.splints) {
-        let r = &s.report;
+        let (Some(r), Some(made)) = (&s.report, made) else {
+            let _ = writeln!(
+                h,
+                "<h2>Wafer “{}”</h2>\n<p class=\"bad\">NOT made: {}</p>",
+                esc(&s.name),
+                esc(s.error.as_deref().unwrap_or("no reason given"))
+            );
+            continue;
+        };
         let _ = write!(
             h,
             "<h2>Wafer “{}”</h2>\n<p class=\"{}\">{}</p>\n",

@@ -111,7 +111,7 @@ pub fn write(p: &Planned, dir: &Path, stamp: &str) -> Result<Vec<PathBuf>> {
         save_ply(&dir.join(LOWER_MAP), &p.lower, &pose, &map.gaps_b)?;
     }
     for (s, made) in p.plan.splints.iter().zip(&p.splints) {
-        if let Some(f) = &s.file {
+        if let (Some(f), Some(made)) = (&s.file, made) {
             innersphere::mesh::save(&made.mesh, &dir.join(f))?;
             let three = crate::splint::threemf::to_3mf_bytes(&made.mesh, &s.name)?;
             innersphere::output::write_file(&dir.join(format!("{}.3mf", s.name)), &three)?;

@@ -560,7 +560,8 @@ def plan(
     ``splints`` with each wafer's ``file`` and ``report``, ``fit``, ``seconds``). ``cache``:
     the build cache's folder (default the platform's; ``False`` for none). Raises OSError for
     unreadable or unwritable files and ValueError for a case that cannot be planned; a wafer
-    that fails a guarantee is in the dict with ``fit`` false and no file."""
+    that fails a guarantee is in the dict with ``fit`` false and no file, one that cannot be
+    made with ``report`` None and its ``error``."""
 
 def occlude(
     tree_a: Tree,

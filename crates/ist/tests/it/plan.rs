@@ -232,3 +232,45 @@ fn a_case_that_cannot_be_planned_is_refused_before_any_work() {
         assert!(!dir.path("out").exists(), "{text}");
     }
 }
+
+/// Crowns without roots (open scans): the bite, the map and the intermediate wafer are made;
+/// the final wafer, for which the arches leave no room, is reported with the reason, not
+/// written, and the exit code says a wafer is missing.
+#[test]
+fn a_wafer_the_arches_cannot_make_is_reported_and_the_rest_written() {
+    let dir = TempDir::new("ist-plan", "open");
+    let (upper, lower) = shapes::arch_pair(3, 12);
+    // The root ends cut off, as `write_arches` cuts them: open boundaries.
+    let cut = |m: &Mesh, keep: &dyn Fn(f64) -> bool| {
+        let mut m = m.clone();
+        m.triangles
+            .retain(|t| keep(t.iter().map(|&i| m.vertices[i as usize].z).sum::<f64>() / 3.0));
+        m
+    };
+    innersphere::mesh::save(&cut(&upper, &|z| z < 9.0), &dir.path("upper.stl")).unwrap();
+    innersphere::mesh::save(&cut(&lower, &|z| z > -4.0), &dir.path("lower.stl")).unwrap();
+    std::fs::write(
+        dir.path("case.json"),
+        r#"{"version": 1, "upper": "upper.stl", "lower": "lower.stl",
+            "splints": [{"name": "final", "open": "auto"}, {"name": "intermediate", "open": 3}]}"#,
+    )
+    .unwrap();
+    let o = ist(&[
+        "plan",
+        s(&dir.path("case.json")),
+        "-o",
+        s(&dir.path("out")),
+        "--json",
+    ]);
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    let p = json(&o);
+    assert_eq!(p["bite"]["status"], "converged");
+    let w = &p["splints"];
+    assert!(w[0]["report"].is_null() && w[0]["file"].is_null());
+    assert!(w[0]["error"].as_str().unwrap().contains("room"), "{}", w[0]);
+    assert_eq!(w[1]["report"]["fit"], true, "{}", w[1]);
+    assert!(dir.path("out/intermediate.stl").is_file());
+    assert!(!dir.path("out/final.stl").exists());
+    let report = std::fs::read_to_string(dir.path("out/report.html")).unwrap();
+    assert!(report.contains("NOT made"));
+}

@@ -69,25 +69,7 @@ pub fn load_body(
     };
     let bars = Bars::new(false);
     let t0 = std::time::Instant::now();
-    let dir = match (&args.cache, args.no_cache) {
-        (_, true) => None,
-        (Some(d), false) => Some(d.clone()),
-        (None, false) => BuildCache::default_dir(),
-    };
-    // A cache that cannot be used (a file in its way, no permission) costs the cache, not
-    // the command.
-    let cache = dir
-        .map(|d| BuildCache::new(d, innersphere::build::cache::DEFAULT_MAX_BYTES))
-        .filter(|c| match c.prepare() {
-            Ok(()) => true,
-            Err(e) => {
-                eprintln!(
-                    "warning: the build cache cannot be used: {e}; building without it (--cache DIR or IST_CACHE name another folder, --no-cache turns the cache off)"
-                );
-                false
-            }
-        });
-    let Some(cache) = cache else {
+    let Some(cache) = build_cache(args.cache.as_ref(), args.no_cache) else {
         eprintln!(
             "{}: a mesh; building its tree with {why}, not cached",
             path.display()
@@ -122,6 +104,27 @@ pub fn load_body(
         ),
     }
     Ok((tree, Some(mesh)))
+}
+
+/// The build cache of `--cache` / `IST_CACHE` (default the platform's folder), `None` with
+/// `--no-cache`. A cache that cannot be used (a file in its way, no permission) costs the
+/// cache, not the command: a warning, and `None`.
+pub fn build_cache(dir: Option<&PathBuf>, no_cache: bool) -> Option<BuildCache> {
+    let dir = match (dir, no_cache) {
+        (_, true) => None,
+        (Some(d), false) => Some(d.clone()),
+        (None, false) => BuildCache::default_dir(),
+    };
+    dir.map(|d| BuildCache::new(d, innersphere::build::cache::DEFAULT_MAX_BYTES))
+        .filter(|c| match c.prepare() {
+            Ok(()) => true,
+            Err(e) => {
+                eprintln!(
+                    "warning: the build cache cannot be used: {e}; building without it (--cache DIR or IST_CACHE name another folder, --no-cache turns the cache off)"
+                );
+                false
+            }
+        })
 }
 
 /// `tree` with its mesh for the meshes' queries (refined distance, mesh penetration): `given` (--meshes, in `unit`), else the

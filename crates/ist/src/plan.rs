@@ -2,7 +2,6 @@
 //! (`innersphere_dental::case`).
 
 use crate::progress::Bars;
-use innersphere::build::BuildCache;
 use innersphere_dental::case::{self, Case, PlanEnv};
 use std::path::PathBuf;
 
@@ -34,19 +33,7 @@ pub fn run(args: Args) -> anyhow::Result<i32> {
     let case = Case::load(&args.case)?;
     // Before the work: a folder the plan may not write into is refused at once.
     case::check_folder(&args.out)?;
-    let cache = match (&args.cache, args.no_cache) {
-        (_, true) => None,
-        (Some(d), false) => Some(d.clone()),
-        (None, false) => BuildCache::default_dir(),
-    }
-    .map(|d| BuildCache::new(d, innersphere::build::cache::DEFAULT_MAX_BYTES))
-    .filter(|c| match c.prepare() {
-        Ok(()) => true,
-        Err(e) => {
-            eprintln!("warning: the build cache cannot be used: {e}; building without it");
-            false
-        }
-    });
+    let cache = crate::bodies::build_cache(args.cache.as_ref(), args.no_cache);
     let bars = Bars::new(false);
     let planned = case::run(&case, &PlanEnv { cache }, &bars)?;
     case::write(&planned, &args.out, &case::utc_stamp())?;

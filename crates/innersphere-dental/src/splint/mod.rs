@@ -161,15 +161,15 @@ pub fn make(a: &Mesh, b: &Mesh, pose: &Pose, opts: &SplintOptions) -> Result<Spl
         // limit are locked from the start: simplification folds thin plates first.
         let first = std::cell::Cell::new(true);
         let defects = |m: &Mesh| -> Result<Vec<[DVec3; 3]>> {
+            // Measured as written, as the report measures it; one tree for both checks.
+            let written = simplify::rounded_to_f32(m);
+            let bvh = TriangleBvh::new(&written);
             // The extracted surface has no folds (its report checks it once more).
             let (thin, mut bad) = if first.replace(false) {
                 (thin + THIN_LOCK_CELLS * opts.voxel, vec![])
             } else {
-                (thin, simplify::surface_defects(m)?)
+                (thin, simplify::surface_defects(&written, &bvh)?)
             };
-            // Measured as written, as the report measures it.
-            let written = simplify::rounded_to_f32(m);
-            let bvh = TriangleBvh::new(&written);
             bad.extend(
                 report::vertex_thickness(&written, &bvh, up)
                     .into_iter()

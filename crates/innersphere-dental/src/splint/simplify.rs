@@ -6,6 +6,7 @@
 
 use glam::DVec3;
 use innersphere::error::{Error, Result};
+use innersphere::mesh::bvh::TriangleBvh;
 use innersphere::mesh::Mesh;
 
 /// Rounds of [`simplify`] at most: each locks the original vertices around the defects of
@@ -118,13 +119,12 @@ pub fn rounded_to_f32(m: &Mesh) -> Mesh {
     }
 }
 
-/// The triangles of `m` with a defect as written (its coordinates rounded to `f32`, as an
-/// STL holds them: two sheets closer than that rounding cross once written): in a pair
-/// that meets away from a shared corner (exact), or on an edge not used exactly once in
-/// each direction.
-pub fn surface_defects(m: &Mesh) -> Result<Vec<[DVec3; 3]>> {
-    let rounded = rounded_to_f32(m);
-    let mut bad: Vec<u32> = innersphere::exact::mesh_self_intersections(&rounded, 10_000)?
+/// The triangles of `m` with a defect: in a pair that meets away from a shared corner
+/// (exact), or on an edge not used exactly once in each direction. `bvh` is `m`'s. Asked of
+/// the mesh as written ([`rounded_to_f32`]: two sheets closer than that rounding cross once
+/// written).
+pub fn surface_defects(m: &Mesh, bvh: &TriangleBvh) -> Result<Vec<[DVec3; 3]>> {
+    let mut bad: Vec<u32> = innersphere::exact::mesh_self_intersections(m, bvh, 10_000)?
         .into_iter()
         .flatten()
         .collect();
@@ -243,6 +243,12 @@ mod tests {
         m
     }
 
+    /// The surface's defects as written.
+    fn as_written(m: &Mesh) -> Result<Vec<[DVec3; 3]>> {
+        let w = rounded_to_f32(m);
+        surface_defects(&w, &TriangleBvh::new(&w))
+    }
+
     /// Every edge used once in each direction.
     fn closed(m: &Mesh) -> bool {
         let mut uses: HashMap<(u32, u32), i32> = HashMap::new();
@@ -262,7 +268,7 @@ mod tests {
         let fine = fine_box(DVec3::new(10.0, 6.0, 4.0), 24);
         assert!(closed(&fine));
         let before = fine.triangles.len();
-        let (coarse, err, left) = simplify(&fine, 500, 0.5, 0.1, &surface_defects).unwrap();
+        let (coarse, err, left) = simplify(&fine, 500, 0.5, 0.1, &as_written).unwrap();
         assert_eq!(left, 0);
         assert!(before > 5000, "{before}");
         assert!(coarse.triangles.len() <= 500, "{}", coarse.triangles.len());
@@ -271,7 +277,7 @@ mod tests {
         assert!((vol(&coarse) - 240.0).abs() < 1e-6, "{}", vol(&coarse));
         assert!(closed(&coarse));
         // Under the cap already: unchanged.
-        let (same, e0, _) = simplify(&coarse, 500, 0.5, 0.1, &surface_defects).unwrap();
+        let (same, e0, _) = simplify(&coarse, 500, 0.5, 0.1, &as_written).unwrap();
         assert_eq!(same, coarse);
         assert_eq!(e0, 0.0);
     }

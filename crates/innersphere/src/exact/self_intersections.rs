@@ -23,12 +23,24 @@ pub fn self_intersections(mesh: &ExactMesh, limit: usize) -> Vec<[u32; 2]> {
     pairs(mesh.bvh(), &mesh.mesh().triangles, limit)
 }
 
-/// [`self_intersections`] of a plain mesh: only its triangle BVH is built (not the rest of
-/// an [`ExactMesh`]: what a check run many times, as a simplification's, needs). Fails on a
-/// mesh that [`Mesh::validate`] refuses.
-pub fn mesh_self_intersections(mesh: &Mesh, limit: usize) -> crate::error::Result<Vec<[u32; 2]>> {
+/// [`self_intersections`] of a plain mesh over its triangle BVH `bvh` (`TriangleBvh::new`
+/// of it), not the rest of an [`ExactMesh`]: what a check run many times, as a
+/// simplification's, needs, sharing the BVH with its other measurements. Fails on a mesh
+/// that [`Mesh::validate`] refuses or a BVH of another triangle count.
+pub fn mesh_self_intersections(
+    mesh: &Mesh,
+    bvh: &TriangleBvh,
+    limit: usize,
+) -> crate::error::Result<Vec<[u32; 2]>> {
     mesh.validate()?;
-    Ok(pairs(&TriangleBvh::new(mesh), &mesh.triangles, limit))
+    if bvh.len() != mesh.triangles.len() {
+        return Err(crate::error::Error::InvalidOption(format!(
+            "the triangle tree holds {} triangles, the mesh {}: not its tree",
+            bvh.len(),
+            mesh.triangles.len()
+        )));
+    }
+    Ok(pairs(bvh, &mesh.triangles, limit))
 }
 
 /// The pairs of the triangles `triangles` (vertex ids) in `bvh` (built over them).
@@ -144,6 +156,11 @@ mod tests {
         }
         assert!(!want.is_empty());
         assert_eq!(got, want);
+        assert_eq!(
+            mesh_self_intersections(&two, &TriangleBvh::new(&two), usize::MAX).unwrap(),
+            want
+        );
+        assert!(mesh_self_intersections(&two, &TriangleBvh::new(&s), 1).is_err());
         assert_eq!(
             self_intersections(&ExactMesh::new(&two).unwrap(), 3).len(),
             3
